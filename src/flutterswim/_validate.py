@@ -1,0 +1,56 @@
+"""Input checks that name the parameter, its value and what is allowed."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+
+class ParameterError(ValueError):
+    """A parameter value is outside what the model or the solver allows."""
+
+
+def finite(name: str, value: Any) -> float:
+    """Return ``value`` as float, or raise if it is not a finite real number."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name}={value!r} is not a real number; a finite float is required") from None
+    if not math.isfinite(v):
+        raise ParameterError(f"{name}={value!r} is not finite; a finite float is required")
+    return v
+
+
+def positive(name: str, value: Any) -> float:
+    """Return ``value`` as float, or raise if it is not finite and > 0."""
+    v = finite(name, value)
+    if v <= 0.0:
+        raise ParameterError(f"{name}={value!r} must be > 0")
+    return v
+
+
+def non_negative(name: str, value: Any) -> float:
+    v = finite(name, value)
+    if v < 0.0:
+        raise ParameterError(f"{name}={value!r} must be >= 0")
+    return v
+
+
+def positive_int(name: str, value: Any, minimum: int = 1) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise ParameterError(f"{name}={value!r} must be an integer >= {minimum}")
+    if value < minimum:
+        raise ParameterError(f"{name}={value!r} must be an integer >= {minimum}")
+    return int(value)
+
+
+def finite_array(name: str, value: Any, shape: tuple[int, ...] | None = None) -> np.ndarray:
+    arr = np.asarray(value, dtype=float)
+    if shape is not None and arr.shape != shape:
+        raise ParameterError(f"{name} has shape {arr.shape}; shape {shape} is required")
+    if not np.all(np.isfinite(arr)):
+        bad = int(np.count_nonzero(~np.isfinite(arr)))
+        raise ParameterError(f"{name} has {bad} non-finite entries; all entries must be finite")
+    return arr
