@@ -1,0 +1,247 @@
+"""Stroke cycles: Poincare section of the tip's lateral displacement, limit-cycle detection,
+onset time and growth rate of the oscillation envelope."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .._validate import ParameterError
+from .section import section_crossings
+from .track import Track, as_track
+
+__all__ = ["Cycles", "body_axis_angle", "lateral_signal", "detect_cycles", "sample_cycle", "tip_index"]
+
+
+def tip_index(track: Track, tip: int | str) -> int:
+    """Point index of the tip: -1/"end" (s = l, default) or 0/"start" (s = 0)."""
+    if tip in (-1, "end", track.n_points - 1):
+        return track.n_points - 1
+    if tip in (0, "start"):
+        return 0
+    raise ParameterError(f"tip={tip!r} is not allowed; use 'end' (s=l, index -1) or 'start' (s=0, index 0)")
+
+
+def body_axis_angle(track: Track) -> float:
+    """Mean direction of the body axis (s=0 -> s=l end-to-end vector summed over frames)."""
+    ex = float(np.sum(track.x[:, -1] - track.x[:, 0]))
+    ey = float(np.sum(track.y[:, -1] - track.y[:, 0]))
+    if math.hypot(ex, ey) == 0.0:
+        return 0.0
+    return math.atan2(ey, ex)
+
+
+def lateral_signal(track: Track, *, tip: int | str = "end", axis_angle: float | None = None) -> tuple[np.ndarray, float]:
+    """Lateral displacement of the tip relative to the centroid, perpendicular to the body axis
+    (drift-free). Returns (u (T,), axis angle used)."""
+    a = body_axis_angle(track) if axis_angle is None else float(axis_angle)
+    i = tip_index(track, tip)
+    xc, yc = track.centroid()
+    u = -(track.x[:, i] - xc) * math.sin(a) + (track.y[:, i] - yc) * math.cos(a)
+    return u, a
+
+
+def sample_cycle(t: np.ndarray, f: np.ndarray, t0: float, period: float, n: int, endpoint: bool = False) -> np.ndarray:
+    """Linear interpolation of f (T, ...) at n equally spaced phases of the cycle starting at t0."""
+    tq = t0 + period * np.linspace(0.0, 1.0, n, endpoint=endpoint)
+    j = np.clip(np.searchsorted(t, tq) - 1, 0, t.size - 2)
+    w = ((tq - t[j]) / (t[j + 1] - t[j]))
+    w = np.clip(w, 0.0, 1.0).reshape((-1,) + (1,) * (f.ndim - 1))
+    return (1 - w) * f[j] + w * f[j + 1]
+
+
+@dataclass(frozen=True, eq=False)
+class Cycles:
+    """Stroke cycles found by the Poincare section and the limit-cycle verdict.
+
+    starts: (K+1,) section times; cycle k spans [starts[k], starts[k+1]].
+    periods, amplitudes: (K,) duration and half peak-to-peak of the detrended section signal.
+    d_period, d_amplitude, d_shape: (K,) relative change from the previous cycle (nan for k=0).
+    converged: (K,) all three changes below tol.
+    """
+
+    starts: np.ndarray
+    periods: np.ndarray
+    amplitudes: np.ndarray
+    d_period: np.ndarray
+    d_amplitude: np.ndarray
+    d_shape: np.ndarray
+    converged: np.ndarray
+    limit_cycle: bool
+    limit_cycle_time: float
+    onset_time: float
+    transient_duration: float
+    growth_rate: float
+    growth_rate_stderr: float
+    growth_fit_window: tuple[float, float]
+    axis_angle: float
+    section_t: np.ndarray
+    section_signal: np.ndarray
+    tol: float
+    tip: int
+
+    @property
+    def n_cycles(self) -> int:
+        return int(self.periods.size)
+
+    @property
+    def mids(self) -> np.ndarray:
+        return 0.5 * (self.starts[1:] + self.starts[:-1])
+
+    def last(self, n: int) -> np.ndarray:
+        """Indices of the last n cycles (fewer if fewer exist)."""
+        return np.arange(max(0, self.n_cycles - n), self.n_cycles)
+
+    def to_dict(self) -> dict[str, Any]:
+        f = lambda v: None if not np.isfinite(v) else float(v)  # noqa: E731
+        return {
+            "n_cycles": self.n_cycles,
+            "limit_cycle": bool(self.limit_cycle),
+            "limit_cycle_time_s": f(self.limit_cycle_time),
+            "onset_time_s": f(self.onset_time),
+            "transient_duration_s": f(self.transient_duration),
+            "growth_rate_per_s": f(self.growth_rate),
+            "growth_rate_stderr_per_s": f(self.growth_rate_stderr),
+            "cycle_starts_s": [float(v) for v in self.starts],
+        }
+
+
+def _rel(a: np.ndarray) -> np.ndarray:
+    out = np.full(a.shape[0], np.nan)
+    if a.shape[0] > 1:
+        out[1:] = np.abs(np.diff(a)) / np.maximum(np.abs(a[1:]), 1e-300)
+    return out
+
+
+def detect_cycles(
+    obj: Any,
+    *,
+    tip: int | str = "end",
+    period: float | None = None,
+    hysteresis: float = 0.25,
+    tol: float = 1e-2,
+    n_consecutive: int = 3,
+    n_shape: int = 24,
+    onset_fraction: float = 0.1,
+    fit_after: float | None = None,
+    fit_max_fraction: float = 0.1,
+) -> Cycles:
+    """Find stroke cycles and decide whether a limit cycle has been reached.
+
+    Section: upward crossings of the tip's lateral displacement (relative to the centroid,
+    perpendicular to the mean body axis) through its running mean over one period.
+    A cycle is *converged* when its period, amplitude and shape (tangent angle minus its mean
+    along s, sampled at ``n_shape`` phases) each change by less than ``tol`` (relative) from
+    the previous cycle; the limit cycle is reached if the last ``n_consecutive`` cycles are
+    converged, at the start of the trailing run of converged cycles.
+
+    Onset time: when the cycle amplitude first reaches ``onset_fraction`` of the final
+    amplitude (log-linear interpolation). Growth rate: least-squares fit of log amplitude
+    against time over cycles after ``fit_after`` (default: two relaxation times when the
+    source knows tau, else after the second cycle) with amplitude below
+    ``fit_max_fraction`` of the final one.
+    """
+    tr = as_track(obj)
+    if not 0 < tol < 1:
+        raise ParameterError(f"tol={tol!r} must be in (0, 1)")
+    if isinstance(n_consecutive, bool) or not isinstance(n_consecutive, (int, np.integer)) or n_consecutive < 1:
+        raise ParameterError(f"n_consecutive={n_consecutive!r} must be an integer >= 1")
+    if not 0 < onset_fraction < 1:
+        raise ParameterError(f"onset_fraction={onset_fraction!r} must be in (0, 1)")
+    itip = tip_index(tr, tip)
+    u, axis = lateral_signal(tr, tip=itip)
+    t = tr.t
+    starts, d, _ = section_crossings(t, u, period=period, hysteresis=hysteresis)
+    K = max(starts.size - 1, 0)
+    periods = np.diff(starts)
+    amps = np.empty(K)
+    for k in range(K):
+        m = (t >= starts[k]) & (t <= starts[k + 1])
+        seg = d[m] if np.any(m) else np.zeros(1)
+        amps[k] = 0.5 * (seg.max() - seg.min())
+    # shapes: tangent angle minus mean along s, sampled at n_shape phases
+    _, th = tr.tangent_angle()
+    th = th - th.mean(axis=1, keepdims=True)
+    shapes = [sample_cycle(t, th, starts[k], periods[k], n_shape) for k in range(K)]
+    d_shape = np.full(K, np.nan)
+    for k in range(1, K):
+        num = np.linalg.norm(shapes[k] - shapes[k - 1])
+        den = max(np.linalg.norm(shapes[k]), 1e-300)
+        d_shape[k] = num / den
+    d_period, d_amp = _rel(periods), _rel(amps)
+    with np.errstate(invalid="ignore"):
+        conv = (d_period < tol) & (d_amp < tol) & (d_shape < tol)
+    conv = np.asarray(conv, bool)
+    # trailing run of converged cycles
+    run = 0
+    for c in conv[::-1]:
+        if not c:
+            break
+        run += 1
+    limit = run >= n_consecutive
+    # the first converged cycle of the run is compared with its (unconverged) predecessor:
+    # the limit cycle starts at that cycle
+    lc_time = float(starts[K - run]) if limit else math.nan
+    transient = lc_time - float(t[0]) if limit else math.nan
+
+    # onset time and growth rate from the amplitude envelope
+    mids = 0.5 * (starts[1:] + starts[:-1]) if K else np.empty(0)
+    onset = math.nan
+    rate = rate_err = math.nan
+    win = (math.nan, math.nan)
+    if K >= 1:
+        a_final = float(np.median(amps[-min(K, max(n_consecutive, 3)) :]))
+        above = np.nonzero(amps >= onset_fraction * a_final)[0]
+        if above.size:
+            k = int(above[0])
+            if k == 0:
+                onset = float(t[0]) if amps[0] >= onset_fraction * a_final else float(mids[0])
+            else:
+                la, lb = math.log(amps[k - 1]), math.log(amps[k])
+                lt = math.log(onset_fraction * a_final)
+                frac = (lt - la) / (lb - la) if lb != la else 0.0
+                onset = float(mids[k - 1] + frac * (mids[k] - mids[k - 1]))
+        if fit_after is None:
+            tau = tr.tau
+            t_after = float(t[0]) + 2.0 * tau if tau is not None else (float(starts[min(2, K)]) if K else math.inf)
+        else:
+            t_after = float(t[0]) + float(fit_after)
+        sel = (mids >= t_after) & (amps <= fit_max_fraction * a_final) & (amps > 0)
+        # only the growing part before the envelope first reaches the cut
+        first_big = np.nonzero(amps > fit_max_fraction * a_final)[0]
+        if first_big.size:
+            sel &= np.arange(K) < first_big[0]
+        if np.count_nonzero(sel) >= 3:
+            tm, la = mids[sel], np.log(amps[sel])
+            A = np.vstack([tm - tm.mean(), np.ones_like(tm)]).T
+            coef, res, *_ = np.linalg.lstsq(A, la, rcond=None)
+            rate = float(coef[0])
+            n = tm.size
+            resid = la - A @ coef
+            s2 = float(resid @ resid) / max(n - 2, 1)
+            rate_err = math.sqrt(s2 / float(np.sum((tm - tm.mean()) ** 2))) if n > 2 else math.nan
+            win = (float(tm[0]), float(tm[-1]))
+    return Cycles(
+        starts=starts,
+        periods=periods,
+        amplitudes=amps,
+        d_period=d_period,
+        d_amplitude=d_amp,
+        d_shape=d_shape,
+        converged=conv,
+        limit_cycle=bool(limit),
+        limit_cycle_time=lc_time,
+        onset_time=onset,
+        transient_duration=transient,
+        growth_rate=rate,
+        growth_rate_stderr=rate_err,
+        growth_fit_window=win,
+        axis_angle=axis,
+        section_t=t,
+        section_signal=u,
+        tol=float(tol),
+        tip=itip,
+    )

@@ -1,0 +1,178 @@
+"""Poincare section of a scalar oscillating signal: upward crossings through its running mean.
+
+Works on non-uniformly sampled signals, removes slow drifts with a running mean over one
+period, uses a Schmitt trigger (hysteresis relative to the local amplitude and to the local
+noise level) and locates each crossing to sub-frame accuracy by a local least-squares
+polynomial fit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._validate import ParameterError
+
+__all__ = ["estimate_period", "running_mean", "upward_crossings", "section_crossings"]
+
+
+def _cumint(t: np.ndarray, f: np.ndarray) -> np.ndarray:
+    out = np.zeros_like(f, dtype=float)
+    out[1:] = np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(t))
+    return out
+
+
+def running_mean(t: np.ndarray, f: np.ndarray, window: float) -> np.ndarray:
+    """Mean of f over [tc - W/2, tc + W/2]; near the ends the window is shifted to stay inside
+    the data (it keeps its full width, so a periodic signal of period W is removed exactly)."""
+    t = np.asarray(t, float)
+    f = np.asarray(f, float)
+    dur = t[-1] - t[0]
+    if window >= dur:
+        return np.full_like(f, np.trapezoid(f, t) / dur if hasattr(np, "trapezoid") else np.trapz(f, t) / dur)
+    I = _cumint(t, f)
+    tc = np.clip(t, t[0] + 0.5 * window, t[-1] - 0.5 * window)
+    return (np.interp(tc + 0.5 * window, t, I) - np.interp(tc - 0.5 * window, t, I)) / window
+
+
+def estimate_period(t: np.ndarray, u: np.ndarray) -> float:
+    """Dominant period of u from the spectrum of its time derivative (which suppresses slow
+    drifts), on a uniform resampling; at least two periods must fit in the record."""
+    t = np.asarray(t, float)
+    u = np.asarray(u, float)
+    dt = float(np.median(np.diff(t)))
+    n = int(np.floor((t[-1] - t[0]) / dt)) + 1
+    tu = t[0] + dt * np.arange(n)
+    uu = np.interp(tu, t, u)
+    du = np.diff(uu) / dt
+    du = du - du.mean()
+    m = du.size
+    nfft = 1 << int(np.ceil(np.log2(max(8 * m, 64))))
+    spec = np.abs(np.fft.rfft(du * np.hanning(m), nfft))
+    freqs = np.fft.rfftfreq(nfft, dt)
+    fmin = 2.0 / (t[-1] - t[0])
+    ok = freqs >= fmin
+    if not np.any(ok) or not np.any(spec[ok] > 0):
+        raise ParameterError(
+            f"signal of duration {t[-1] - t[0]:.4g} s has no detectable oscillation; "
+            "at least two periods are required"
+        )
+    i = int(np.argmax(np.where(ok, spec, -np.inf)))
+    if 0 < i < spec.size - 1:
+        a, b, c = np.log(spec[i - 1 : i + 2] + 1e-300)
+        den = a - 2 * b + c
+        shift = 0.5 * (a - c) / den if den != 0 else 0.0
+        f = freqs[i] + float(np.clip(shift, -0.5, 0.5)) * (freqs[1] - freqs[0])
+    else:
+        f = freqs[i]
+    return 1.0 / f
+
+
+def _local_root(t: np.ndarray, d: np.ndarray, m: int, half_window: float, deg: int) -> float:
+    """Root of d near the bracket (t[m], t[m+1]) from a local least-squares polynomial."""
+    t0, t1, d0, d1 = t[m], t[m + 1], d[m], d[m + 1]
+    tlin = t0 - d0 * (t1 - t0) / (d1 - d0) if d1 != d0 else 0.5 * (t0 + t1)
+    lo = np.searchsorted(t, tlin - half_window, side="left")
+    hi = np.searchsorted(t, tlin + half_window, side="right")
+    lo, hi = min(lo, m), max(hi, m + 2)
+    if hi - lo < deg + 2:
+        return float(tlin)
+    tt = t[lo:hi] - tlin
+    sc = max(np.max(np.abs(tt)), 1e-300)
+    coef = np.polyfit(tt / sc, d[lo:hi], deg)
+    roots = np.roots(coef)
+    roots = roots[np.abs(roots.imag) < 1e-9].real * sc
+    # keep roots inside the fitted span where the polynomial rises
+    dcoef = np.polyder(coef)
+    good = [r for r in roots if abs(r) <= half_window and np.polyval(dcoef, r / sc) > 0]
+    if not good:
+        return float(tlin)
+    r = min(good, key=abs)
+    return float(tlin + r)
+
+
+def upward_crossings(
+    t: np.ndarray,
+    d: np.ndarray,
+    threshold: np.ndarray | float,
+    *,
+    half_window: float = 0.0,
+    deg: int = 3,
+) -> np.ndarray:
+    """Times where d rises through 0, with hysteresis: d must have gone below -threshold
+    before and must reach +threshold after. Sub-frame location by a local polynomial fit of
+    degree ``deg`` over +-half_window (linear interpolation when the window holds too few
+    points)."""
+    t = np.asarray(t, float)
+    d = np.asarray(d, float)
+    h = np.broadcast_to(np.asarray(threshold, float), d.shape)
+    mark = np.where(d > h, 1, np.where(d < -h, -1, 0))
+    idx = np.where(mark != 0, np.arange(d.size), -1)
+    last = np.maximum.accumulate(idx)
+    state = np.where(last >= 0, mark[np.maximum(last, 0)], 0)
+    # upward transition: state goes from -1 to +1 at j
+    js = np.nonzero((state[1:] == 1) & (state[:-1] == -1))[0] + 1
+    out = []
+    for j in js:
+        ilow = last[j - 1]  # last index that was below -h
+        seg = d[ilow : j + 1]
+        cand = np.nonzero((seg[:-1] <= 0) & (seg[1:] > 0))[0]
+        if cand.size == 0:
+            continue
+        m = ilow + int(cand[-1])
+        out.append(_local_root(t, d, m, half_window, deg))
+    return np.asarray(out, float)
+
+
+def _noise_sigma(t: np.ndarray, u: np.ndarray, window: float) -> np.ndarray:
+    """Local standard deviation of white measurement noise from second differences."""
+    e = np.zeros_like(u)
+    e[1:-1] = u[2:] - 2 * u[1:-1] + u[:-2]
+    e[0], e[-1] = e[1], e[-2]
+    return np.sqrt(np.maximum(running_mean(t, e * e, window), 0.0) / 6.0)
+
+
+def section_crossings(
+    t: np.ndarray,
+    u: np.ndarray,
+    *,
+    period: float | None = None,
+    hysteresis: float = 0.25,
+    noise_factor: float = 4.0,
+    iterations: int = 2,
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """Upward crossings of u through its running mean over one period.
+
+    Returns (crossing times, detrended signal d = u - running mean, period used for the
+    running mean). The period is estimated from the spectrum unless given, then refined from
+    the median spacing of the crossings ``iterations`` times.
+    """
+    t = np.asarray(t, float)
+    u = np.asarray(u, float)
+    if not 0.0 <= hysteresis < 1.0:
+        raise ParameterError(f"hysteresis={hysteresis!r} must be in [0, 1) (fraction of the local amplitude)")
+    W = float(period) if period is not None else estimate_period(t, u)
+    if not (np.isfinite(W) and W > 0):
+        raise ParameterError(f"period={period!r} must be a finite number > 0")
+    cross = np.empty(0)
+    d = u - u.mean()
+    for it in range(max(1, iterations + 1)):
+        d = u - running_mean(t, u, W)
+        amp = np.sqrt(2.0 * np.maximum(running_mean(t, d * d, W), 0.0))
+        h = np.maximum(hysteresis * amp, noise_factor * _noise_sigma(t, u, W))
+        cross = upward_crossings(t, d, h, half_window=W / 12.0)
+        # drop crossings closer than half a period to the previous one (harmonics)
+        if cross.size > 1:
+            keep = [0]
+            for i in range(1, cross.size):
+                if cross[i] - cross[keep[-1]] >= 0.5 * W:
+                    keep.append(i)
+            cross = cross[keep]
+        if cross.size < 3 or it == iterations or period is not None and it == 0 and iterations == 0:
+            break
+        # refine with the period of the well-developed (later) cycles
+        dif = np.diff(cross)
+        W_new = float(np.median(dif[len(dif) // 2 :]))
+        if abs(W_new - W) < 1e-12 * W:
+            break
+        W = W_new
+    return cross, d, W
