@@ -125,6 +125,7 @@ def detect_cycles(
     tol: float = 1e-2,
     n_consecutive: int = 3,
     n_shape: int = 24,
+    n_shape_modes: int = 4,
     onset_fraction: float = 0.1,
     fit_after: float | None = None,
     fit_max_fraction: float = 0.1,
@@ -135,7 +136,8 @@ def detect_cycles(
     perpendicular to the mean body axis) through its running mean over one period.
     A cycle is *converged* when its period, amplitude and shape (tangent angle minus its mean
     along s, sampled at ``n_shape`` phases) each change by less than ``tol`` (relative) from
-    the previous cycle; the limit cycle is reached if the last ``n_consecutive`` cycles are
+    the previous cycle (shapes are projected on their ``n_shape_modes`` leading principal
+    modes first, 0 for no projection); the limit cycle is reached if the last ``n_consecutive`` cycles are
     converged, at the start of the trailing run of converged cycles.
 
     Onset time: when the cycle amplitude first reaches ``onset_fraction`` of the final
@@ -166,6 +168,12 @@ def detect_cycles(
     _, th = tr.tangent_angle()
     th = th - th.mean(axis=1, keepdims=True)
     shapes = [sample_cycle(t, th, starts[k], periods[k], n_shape) for k in range(K)]
+    if K >= 2 and n_shape_modes:
+        # compare strokes in the space of the leading principal shape modes (filters noise)
+        allsh = np.concatenate(shapes, axis=0)
+        _, _, vt = np.linalg.svd(allsh, full_matrices=False)
+        basis = vt[: int(n_shape_modes)].T
+        shapes = [sh @ basis for sh in shapes]
     d_shape = np.full(K, np.nan)
     for k in range(1, K):
         num = np.linalg.norm(shapes[k] - shapes[k - 1])

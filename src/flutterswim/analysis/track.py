@@ -218,17 +218,19 @@ class Track:
         return self.slice(i0, i1)
 
     def segment_weights(self) -> np.ndarray:
-        """(T, P) weights of the points for arc-length averages (trapezoid rule)."""
-        ds = _seg_lengths(self.x, self.y)
-        w = np.zeros_like(self.x)
-        w[:, :-1] += 0.5 * ds
-        w[:, 1:] += 0.5 * ds
-        return w / w.sum(axis=1, keepdims=True)
+        """(P,) weights of the points for arc-length averages: trapezoid rule on ``s`` (fixed
+        in time, so measurement noise in segment lengths does not enter the averages)."""
+        ds = np.diff(self.s)
+        w = np.zeros(self.n_points)
+        w[:-1] += 0.5 * ds
+        w[1:] += 0.5 * ds
+        tot = w.sum()
+        return w / tot if tot > 0 else np.full(self.n_points, 1.0 / self.n_points)
 
     def centroid(self) -> tuple[np.ndarray, np.ndarray]:
         """Arc-length weighted centroid (xc, yc), each (T,)."""
         w = self.segment_weights()
-        return (w * self.x).sum(axis=1), (w * self.y).sum(axis=1)
+        return self.x @ w, self.y @ w
 
     def tangent_angle(self) -> tuple[np.ndarray, np.ndarray]:
         """(s_mid (P-1,), theta (T, P-1)): the given theta if at midpoints, else from the polyline."""

@@ -1,0 +1,265 @@
+"""Swimming descriptors averaged over the last cycles, each with its cycle-to-cycle spread."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from .._validate import ParameterError
+from .cycles import Cycles, detect_cycles, sample_cycle
+from .intersection import self_intersections
+from .track import Track, as_track
+
+__all__ = ["Descriptors", "describe", "shape_modes", "stroke_area", "per_cycle"]
+
+
+def _std(v: np.ndarray) -> float:
+    v = np.asarray(v, float)
+    return float(np.std(v, ddof=1)) if v.size > 1 else 0.0
+
+
+def _fourier_p2p(phase: np.ndarray, q: np.ndarray, harmonics: int) -> float:
+    """Peak-to-peak of a least-squares Fourier series in phase (period 1) fitted to q."""
+    H = int(min(harmonics, max(1, (phase.size - 1) // 4)))
+    cols = [np.ones_like(phase)]
+    for h in range(1, H + 1):
+        cols += [np.cos(2 * np.pi * h * phase), np.sin(2 * np.pi * h * phase)]
+    A = np.vstack(cols).T
+    coef, *_ = np.linalg.lstsq(A, q, rcond=None)
+    ph = np.linspace(0.0, 1.0, 512, endpoint=False)
+    B = [np.ones_like(ph)]
+    for h in range(1, H + 1):
+        B += [np.cos(2 * np.pi * h * ph), np.sin(2 * np.pi * h * ph)]
+    f = np.vstack(B).T @ coef
+    return float(f.max() - f.min())
+
+
+def shape_modes(obj: Any, t0: float | None = None, t1: float | None = None, n_modes: int = 2):
+    """Principal shape modes of the body-frame shape theta(s, t) - mean_s theta over [t0, t1].
+
+    Returns (coefficients (T_w, n_modes), modes (n_modes, N), mean shape (N,), times (T_w,)).
+    """
+    tr = as_track(obj)
+    if t0 is not None or t1 is not None:
+        tr = tr.window(tr.t[0] if t0 is None else t0, tr.t[-1] if t1 is None else t1)
+    _, th = tr.tangent_angle()
+    sh = th - th.mean(axis=1, keepdims=True)
+    mean = sh.mean(axis=0)
+    X = sh - mean
+    _, sv, vt = np.linalg.svd(X, full_matrices=False)
+    modes = vt[:n_modes]
+    return X @ modes.T, modes, mean, tr.t
+
+
+def stroke_area(a1: np.ndarray, a2: np.ndarray) -> float:
+    """Signed area enclosed by the closed loop (a1, a2), normalised by pi (var a1 + var a2):
+    +-1 for a circle run once, 0 for a path that retraces itself (a reciprocal stroke)."""
+    a1 = np.asarray(a1, float) - np.mean(a1)
+    a2 = np.asarray(a2, float) - np.mean(a2)
+    area = 0.5 * float(np.sum(a1 * np.roll(a2, -1) - np.roll(a1, -1) * a2))
+    den = math.pi * float(np.mean(a1 * a1) + np.mean(a2 * a2))
+    return area / den if den > 0 else 0.0
+
+
+@dataclass(frozen=True)
+class Descriptors:
+    """Swimming descriptors over the last ``n_cycles_used`` cycles (``*_std``: cycle-to-cycle
+    standard deviation). Lengths in mm and in body lengths (bl); angles in degrees."""
+
+    n_cycles_used: int
+    n_cycles_detected: int
+    window_start_s: float
+    window_end_s: float
+    body_length_mm: float
+    period_s: float
+    period_std_s: float
+    frequency_hz: float
+    frequency_std_hz: float
+    advance_per_cycle_mm: float
+    advance_per_cycle_std_mm: float
+    advance_per_cycle_bl: float
+    advance_per_cycle_std_bl: float
+    advance_total_mm: float
+    advance_total_bl: float
+    speed_mm_s: float
+    speed_std_mm_s: float
+    speed_bl_s: float
+    speed_std_bl_s: float
+    tip_lateral_p2p_mm: float
+    tip_lateral_p2p_std_mm: float
+    tip_lateral_p2p_bl: float
+    swim_direction_deg: float
+    swim_direction_std_deg: float
+    field_direction_deg: float
+    direction_to_field_deg: float
+    towards_field: bool
+    leading_end: str
+    nonreciprocity: float
+    nonreciprocity_std: float
+    reciprocal: bool
+    self_intersecting: bool
+    self_intersection_fraction: float
+    limit_cycle: bool
+    limit_cycle_time_s: float
+    onset_time_s: float
+    transient_duration_s: float
+    growth_rate_per_s: float
+    growth_rate_stderr_per_s: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict: floats (None for NaN), ints, bools and strings."""
+        out: dict[str, Any] = {}
+        for k, v in asdict(self).items():
+            if isinstance(v, (bool, np.bool_)):
+                out[k] = bool(v)
+            elif isinstance(v, (int, np.integer)):
+                out[k] = int(v)
+            elif isinstance(v, str):
+                out[k] = v
+            else:
+                fv = float(v)
+                out[k] = fv if math.isfinite(fv) else None
+        return out
+
+
+def per_cycle(obj: Any, cycles: Cycles | None = None, *, tip: int | str = "end", harmonics: int = 6,
+              swim_angle: float | None = None) -> dict[str, np.ndarray]:
+    """Per-cycle measurements, each (K,): period, advance along the field, displacement,
+    speed, tip lateral peak-to-peak, nonreciprocity (lengths in track units)."""
+    tr = as_track(obj)
+    cyc = detect_cycles(tr, tip=tip) if cycles is None else cycles
+    st = cyc.starts
+    K = st.size - 1
+    xc, yc = tr.centroid()
+    cx, cy = CubicSpline(tr.t, xc)(st), CubicSpline(tr.t, yc)(st)
+    dx, dy = np.diff(cx), np.diff(cy)
+    fa = np.unwrap(tr.field_angle)
+    fa_c = np.array([np.interp(0.5 * (st[k] + st[k + 1]), tr.t, fa) for k in range(K)])
+    adv = dx * np.cos(fa_c) + dy * np.sin(fa_c)
+    disp = np.hypot(dx, dy)
+    if swim_angle is None:
+        swim_angle = math.atan2(float(dy.sum()), float(dx.sum())) if K else 0.0
+    nx, ny = -math.sin(swim_angle), math.cos(swim_angle)
+    q = tr.x[:, cyc.tip] * nx + tr.y[:, cyc.tip] * ny
+    p2p = np.full(K, np.nan)
+    for k in range(K):
+        m = (tr.t >= st[k]) & (tr.t < st[k + 1])
+        if np.count_nonzero(m) >= 4:
+            p2p[k] = _fourier_p2p((tr.t[m] - st[k]) / (st[k + 1] - st[k]), q[m], harmonics)
+    nrec = np.full(K, np.nan)
+    if K:
+        coef, _, _, _ = shape_modes(tr, st[0], st[-1])
+        tw = tr.window(st[0], st[-1]).t
+        for k in range(K):
+            a = sample_cycle(tw, coef, st[k], st[k + 1] - st[k], 64)
+            nrec[k] = stroke_area(a[:, 0], a[:, 1]) if a.shape[1] >= 2 else 0.0
+    return {
+        "start": st[:-1], "period": np.diff(st), "advance": adv, "dx": dx, "dy": dy,
+        "displacement": disp, "speed": disp / np.diff(st), "tip_p2p": p2p, "nonreciprocity": nrec,
+    }
+
+
+def describe(
+    obj: Any,
+    *,
+    n_last: int = 5,
+    tip: int | str = "end",
+    cycles: Cycles | None = None,
+    harmonics: int = 6,
+    reciprocal_threshold: float = 0.1,
+    **cycle_kwargs: Any,
+) -> Descriptors:
+    """Descriptors averaged over the last ``n_last`` detected cycles.
+
+    Swimming direction: net centroid displacement over those cycles; advancement: its
+    projection on the field direction; tip lateral peak-to-peak: of the tip coordinate
+    perpendicular to the swimming direction, from a Fourier fit (``harmonics``) per cycle
+    (robust to noise), averaged pooled over cycles. Nonreciprocity: signed area of the
+    stroke loop in the plane of the first two principal shape modes (:func:`stroke_area`),
+    |value| < ``reciprocal_threshold`` is reported reciprocal.
+    """
+    tr: Track = as_track(obj)
+    if isinstance(n_last, bool) or not isinstance(n_last, (int, np.integer)) or n_last < 1:
+        raise ParameterError(f"n_last={n_last!r} must be an integer >= 1")
+    cyc = detect_cycles(tr, tip=tip, **cycle_kwargs) if cycles is None else cycles
+    K = cyc.n_cycles
+    if K < 1:
+        raise ParameterError(
+            f"the track ({tr.n_frames} frames over {tr.t[-1] - tr.t[0]:.4g} s) holds no complete "
+            "stroke cycle; at least one cycle (two section crossings) is required"
+        )
+    idx = cyc.last(n_last)
+    k0, k1 = int(idx[0]), int(idx[-1])
+    sub = Cycles(**{**cyc.__dict__, "starts": cyc.starts[k0 : k1 + 2]})
+    # swimming direction over the window
+    xc, yc = tr.centroid()
+    t0, t1 = float(sub.starts[0]), float(sub.starts[-1])
+    sx, sy = CubicSpline(tr.t, xc)([t0, t1]), CubicSpline(tr.t, yc)([t0, t1])
+    swim = math.atan2(float(sy[1] - sy[0]), float(sx[1] - sx[0]))
+    pc = per_cycle(tr, sub, tip=tip, harmonics=harmonics, swim_angle=swim)
+    mm = tr.scale_m * 1e3
+    L = tr.length
+    per = pc["period"]
+    freq = 1.0 / per
+    adv = pc["advance"]
+    spd = pc["speed"]
+    p2p = pc["tip_p2p"]
+    dirs = np.arctan2(pc["dy"], pc["dx"])
+    dir_spread = float(np.degrees(np.sqrt(max(0.0, -2 * math.log(max(1e-300, abs(np.mean(np.exp(1j * dirs))))))))) if dirs.size > 1 else 0.0
+    fa = float(np.angle(np.mean(np.exp(1j * tr.window(t0, t1).field_angle))))
+    rel = math.atan2(math.sin(swim - fa), math.cos(swim - fa))
+    # leading end: the end whose position lies ahead along the swimming direction
+    e = np.array([math.cos(swim), math.sin(swim)])
+    w = tr.window(t0, t1)
+    ahead = float(np.mean((w.x[:, 0] - w.x[:, -1]) * e[0] + (w.y[:, 0] - w.y[:, -1]) * e[1]))
+    nrec = pc["nonreciprocity"]
+    nrec_mean = float(np.mean(nrec))
+    inter = self_intersections(w) > 0
+    adv_total = (xc[-1] - xc[0]) * math.cos(float(np.mean(tr.field_angle))) + (yc[-1] - yc[0]) * math.sin(
+        float(np.mean(tr.field_angle))
+    )
+    return Descriptors(
+        n_cycles_used=int(idx.size),
+        n_cycles_detected=int(K),
+        window_start_s=t0,
+        window_end_s=t1,
+        body_length_mm=L * mm,
+        period_s=float(np.mean(per)),
+        period_std_s=_std(per),
+        frequency_hz=float(np.mean(freq)),
+        frequency_std_hz=_std(freq),
+        advance_per_cycle_mm=float(np.mean(adv)) * mm,
+        advance_per_cycle_std_mm=_std(adv) * mm,
+        advance_per_cycle_bl=float(np.mean(adv)) / L,
+        advance_per_cycle_std_bl=_std(adv) / L,
+        advance_total_mm=float(adv_total) * mm,
+        advance_total_bl=float(adv_total) / L,
+        speed_mm_s=float(np.mean(spd)) * mm,
+        speed_std_mm_s=_std(spd) * mm,
+        speed_bl_s=float(np.mean(spd)) / L,
+        speed_std_bl_s=_std(spd) / L,
+        tip_lateral_p2p_mm=float(np.nanmean(p2p)) * mm,
+        tip_lateral_p2p_std_mm=_std(p2p[np.isfinite(p2p)]) * mm,
+        tip_lateral_p2p_bl=float(np.nanmean(p2p)) / L,
+        swim_direction_deg=math.degrees(swim),
+        swim_direction_std_deg=dir_spread,
+        field_direction_deg=math.degrees(fa),
+        direction_to_field_deg=math.degrees(rel),
+        towards_field=bool(math.cos(rel) > 0),
+        leading_end="s=0" if ahead > 0 else "s=l",
+        nonreciprocity=nrec_mean,
+        nonreciprocity_std=_std(nrec),
+        reciprocal=bool(abs(nrec_mean) < reciprocal_threshold),
+        self_intersecting=bool(np.any(inter)),
+        self_intersection_fraction=float(np.mean(inter)),
+        limit_cycle=cyc.limit_cycle,
+        limit_cycle_time_s=cyc.limit_cycle_time,
+        onset_time_s=cyc.onset_time,
+        transient_duration_s=cyc.transient_duration,
+        growth_rate_per_s=cyc.growth_rate,
+        growth_rate_stderr_per_s=cyc.growth_rate_stderr,
+    )
