@@ -91,7 +91,7 @@ def _roots(omega, chi, eta, lam, warm):
 
 @_jit
 def _closed(omega, chi, eta, lam):
-    """g e^{-2m}, dg/domega e^{-2m}, m, relative root separation (roots already in lam)."""
+    """g, dg/domega, dg/dchi (all times e^{-2m}), m, relative root separation (roots in lam)."""
     c = chi / (omega + 1.0)
     dc = -chi / ((omega + 1.0) * (omega + 1.0))
     m = lam[0].real
@@ -131,9 +131,10 @@ def _closed(omega, chi, eta, lam):
                 sep = abs(d)
     sep /= max(big, 1.0)
     if sep < SEP_TOL:
-        return 0j, 0j, m, sep
+        return 0j, 0j, 0j, m, sep
     g = B / V
     dg = 0j
+    dgc = 0j
     for i in range(4):
         s = 0j
         for j in range(4):
@@ -141,24 +142,27 @@ def _closed(omega, chi, eta, lam):
                 s += 1.0 / (lam[i] - lam[j])
         li = lam[i]
         l2 = li * li
-        dli = -(dc * l2 * li + eta) / (4.0 * l2 * li + 3.0 * c * l2)
-        dg += (dB[i] / V - g * s) * dli
-    return g, dg, m, sep
+        den = 4.0 * l2 * li + 3.0 * c * l2
+        dgi = dB[i] / V - g * s
+        dg += dgi * (-(dc * l2 * li + eta) / den)
+        dgc += dgi * (-(l2 * li / (omega + 1.0)) / den)
+    return g, dg, dgc, m, sep
 
 
 @_jit
 def _gval(omega, chi, eta, lam, warm):
-    """(g, dg/domega) scaled by e^{-2m}, and m; circle mean near coinciding roots."""
+    """(g, dg/domega, dg/dchi) scaled by e^{-2m}, and m; circle mean near coinciding roots."""
     if omega + 1.0 == 0:
-        return complex(np.nan, np.nan), complex(np.nan, np.nan), 0.0
+        return complex(np.nan, np.nan), complex(np.nan, np.nan), complex(np.nan, np.nan), 0.0
     ok = _roots(omega, chi, eta, lam, warm)
     if ok:
-        g, dg, m, sep = _closed(omega, chi, eta, lam)
+        g, dg, dgc, m, sep = _closed(omega, chi, eta, lam)
         if sep >= SEP_TOL and math.isfinite(abs(g)) and math.isfinite(abs(dg)):
-            return g, dg, m
+            return g, dg, dgc, m
     delta = min(1e-3 * max(abs(omega), 1.0), 0.05 * abs(omega + 1.0))
     tmp = np.empty(4, dtype=np.complex128)
     gk = np.empty(NCIRCLE, dtype=np.complex128)
+    gck = np.empty(NCIRCLE, dtype=np.complex128)
     mk = np.empty(NCIRCLE)
     zk = np.empty(NCIRCLE, dtype=np.complex128)
     mref = -np.inf
@@ -167,25 +171,29 @@ def _gval(omega, chi, eta, lam, warm):
         z = complex(math.cos(ang), math.sin(ang))
         zk[k] = z
         _cold_roots(chi / (omega + delta * z + 1.0), eta * (omega + delta * z), tmp)
-        g1, _, m1, _ = _closed(omega + delta * z, chi, eta, tmp)
+        g1, _, gc1, m1, _ = _closed(omega + delta * z, chi, eta, tmp)
         gk[k] = g1
+        gck[k] = gc1
         mk[k] = m1
         if m1 > mref:
             mref = m1
     g = 0j
     dg = 0j
+    dgc = 0j
     for k in range(NCIRCLE):
-        v = gk[k] * math.exp(2.0 * (mk[k] - mref))
+        fac = math.exp(2.0 * (mk[k] - mref))
+        v = gk[k] * fac
         g += v
         dg += v / zk[k]
-    return g / NCIRCLE, dg / (NCIRCLE * delta), mref
+        dgc += gck[k] * fac
+    return g / NCIRCLE, dg / (NCIRCLE * delta), dgc / NCIRCLE, mref
 
 
 @_jit
 def _newton(omega, chi, eta, lam, warm, tol, maxit):
     """Newton on g from omega; returns (omega, iterations) with iterations = -1 if not converged."""
     for it in range(maxit):
-        g, dg, m = _gval(omega, chi, eta, lam, warm)
+        g, dg, _, m = _gval(omega, chi, eta, lam, warm)
         warm = True
         if dg == 0 or not math.isfinite(abs(g)) or not math.isfinite(abs(dg)):
             return omega, -1
@@ -265,7 +273,65 @@ def _newton_batch(w0, chis, etas, tol, maxit, out, iters):
 
 
 @_pjit
-def _gval_batch(w, chis, etas, g, dg, m):
+def _gval_batch(w, chis, etas, g, dg, dgc, m):
     for i in prange(w.shape[0]):
         lam = np.empty(4, dtype=np.complex128)
-        g[i], dg[i], m[i] = _gval(w[i], chis[i], etas[i], lam, False)
+        g[i], dg[i], dgc[i], m[i] = _gval(w[i], chis[i], etas[i], lam, False)
+
+
+@_jit
+def _hopf_newton(chi, beta, eta, lam, warm, tol, maxit):
+    """Solve g(i beta; chi, eta) = 0 for real (chi, beta); returns (chi, beta, iterations or -1)."""
+    for it in range(maxit):
+        g, dg, dgc, m = _gval(complex(0.0, beta), chi, eta, lam, warm)
+        warm = True
+        # columns: d/dchi -> dgc, d/dbeta -> i dg
+        a11 = dgc.real
+        a21 = dgc.imag
+        db = 1j * dg
+        a12 = db.real
+        a22 = db.imag
+        det = a11 * a22 - a12 * a21
+        if det == 0 or not math.isfinite(det):
+            return chi, beta, -1
+        dchi = -(a22 * g.real - a12 * g.imag) / det
+        dbeta = -(-a21 * g.real + a11 * g.imag) / det
+        chi += dchi
+        beta += dbeta
+        if abs(dchi) <= tol * max(abs(chi), 1.0) and abs(dbeta) <= tol * max(abs(beta), 1.0):
+            return chi, abs(beta), it + 1
+    return chi, abs(beta), -1
+
+
+@_jit
+def _neutral_follow(etas, chi0, beta0, tol, maxit, chi_max, out_chi, out_beta, iters):
+    """Continue the Hopf point (chi, beta) along etas from a solution at etas[0]."""
+    lam = np.empty(4, dtype=np.complex128)
+    warm = False
+    c1 = chi0
+    b1 = beta0
+    c2 = chi0
+    b2 = beta0
+    for k in range(etas.shape[0]):
+        if k >= 2 and math.isfinite(c2):
+            r = (etas[k] - etas[k - 1]) / (etas[k - 1] - etas[k - 2])
+            cg = c1 + (c1 - c2) * r
+            bg = b1 + (b1 - b2) * r
+        else:
+            cg = c1
+            bg = b1
+        c, b, it = _hopf_newton(cg, bg, etas[k], lam, warm, tol, maxit)
+        warm = True
+        if it < 0 or not (abs(c) <= chi_max):
+            for j in range(k, etas.shape[0]):
+                out_chi[j] = np.nan
+                out_beta[j] = np.nan
+                iters[j] = -1
+            return
+        out_chi[k] = c
+        out_beta[k] = b
+        iters[k] = it
+        c2 = c1
+        b2 = b1
+        c1 = c
+        b1 = b

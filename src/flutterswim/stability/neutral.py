@@ -1,0 +1,115 @@
+"""Neutral (Hopf) curve chi_cr(eta_perp), computed directly.
+
+At each eta_perp solve g(i beta; chi, eta_perp) = 0 for the real unknowns (chi, beta) by
+Newton (g: reduced characteristic function; beta: angular frequency at onset, 1/tau), and
+continue in eta_perp from a seed located with the leading eigenvalue. The map is symmetric,
+so the curve is reported for chi > 0 (the other branch is -chi_cr).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._validate import ParameterError, finite, positive
+from . import _kernels
+from .leading import leading_eigenvalue
+
+__all__ = ["NeutralCurve", "neutral_curve", "critical_chi"]
+
+
+@dataclass(frozen=True)
+class NeutralCurve:
+    """eta_perp (n,); chi_cr (n,) > 0, NaN where no onset with chi_cr <= chi_max or eta_perp <= 0;
+    beta (n,) onset angular frequency [1/tau]; iterations (n,) Newton steps (-1: none)."""
+
+    eta_perp: np.ndarray
+    chi_cr: np.ndarray
+    beta: np.ndarray
+    iterations: np.ndarray
+
+    def to_dataset(self):
+        import xarray as xr
+
+        return xr.Dataset(
+            {"chi_cr": ("eta_perp", self.chi_cr, {"long_name": "critical chi (Hopf)"}),
+             "beta": ("eta_perp", self.beta, {"long_name": "onset angular frequency", "units": "1/tau"})},
+            coords={"eta_perp": self.eta_perp},
+        )
+
+
+def _seed(eta: float, chi_max: float, tol: float) -> tuple[float, float]:
+    """Bracket Re omega_max = 0 in chi at fixed eta, then Hopf-Newton."""
+    lo_chi, lo = 0.0, -1.0
+    chi = 1.0
+    prev = None
+    while chi <= 2 * chi_max:
+        le = leading_eigenvalue(chi, eta)
+        if le.omega.real > 0:
+            if prev is None:
+                prev = (lo_chi, leading_eigenvalue(max(lo_chi, 1e-3), eta).omega)
+            (c0, w0), (c1, w1) = prev, (chi, le.omega)
+            for _ in range(40):  # bisection on the leading eigenvalue to ~1e-3 relative
+                if c1 - c0 <= 1e-3 * c1:
+                    break
+                cm = 0.5 * (c0 + c1)
+                wm = leading_eigenvalue(cm, eta).omega
+                if wm.real > 0:
+                    c1, w1 = cm, wm
+                else:
+                    c0, w0 = cm, wm
+            t = -w0.real / (w1.real - w0.real)
+            cg, bg = c0 + t * (c1 - c0), w0.imag + t * (w1.imag - w0.imag)
+            lam = np.empty(4, dtype=np.complex128)
+            c, b, it = _kernels._hopf_newton(cg, bg, eta, lam, False, tol, 50)
+            if it < 0:
+                raise RuntimeError(f"Hopf Newton did not converge at eta_perp={eta}")
+            return c, b
+        prev = (chi, le.omega)
+        lo_chi = chi
+        chi *= 1.5
+    return np.nan, np.nan
+
+
+def critical_chi(eta_perp: float, *, chi_max: float = 1e4, tol: float = 1e-12) -> tuple[float, float]:
+    """(chi_cr, beta) at one eta_perp: smallest chi > 0 with Re omega_max = 0 (NaN if > chi_max)."""
+    eta_perp = positive("eta_perp", eta_perp)
+    return _seed(eta_perp, positive("chi_max", chi_max), tol)
+
+
+def neutral_curve(eta_perp=None, *, eta_range: tuple[float, float] = (0.0, 350.0), step: float = 0.1,
+                  chi_max: float = 1e4, tol: float = 1e-12, seed_eta: float | None = None) -> NeutralCurve:
+    """chi_cr(eta_perp) by Hopf-Newton continued along the sorted eta_perp grid.
+
+    eta_perp: 1-D increasing array, or None for arange(eta_range[0], eta_range[1] + step/2, step).
+    The seed is at ``seed_eta`` (default: the largest eta_perp); the curve is continued both
+    ways. eta_perp <= 0 (no drag, degenerate) gives NaN.
+    """
+    if eta_perp is None:
+        lo, hi = finite("eta_range[0]", eta_range[0]), finite("eta_range[1]", eta_range[1])
+        step = positive("step", step)
+        eta = np.round(np.arange(lo, hi + 0.5 * step, step), 12)
+    else:
+        eta = np.atleast_1d(np.asarray(eta_perp, dtype=float))
+    if eta.ndim != 1 or eta.size == 0 or not np.all(np.isfinite(eta)) or np.any(np.diff(eta) <= 0):
+        raise ParameterError("eta_perp must be a non-empty, finite, strictly increasing 1-D array")
+    chi_max = positive("chi_max", chi_max)
+    n = eta.size
+    chi_cr = np.full(n, np.nan)
+    beta = np.full(n, np.nan)
+    its = np.full(n, -1, dtype=np.int64)
+    valid = np.flatnonzero(eta > 0)
+    if valid.size == 0:
+        return NeutralCurve(eta, chi_cr, beta, its)
+    k0 = valid[-1] if seed_eta is None else valid[np.argmin(np.abs(eta[valid] - seed_eta))]
+    c0, b0 = _seed(float(eta[k0]), chi_max, tol)
+    if not np.isfinite(c0):
+        return NeutralCurve(eta, chi_cr, beta, its)
+    for sl in (slice(k0, valid[0] - 1 if valid[0] > 0 else None, -1), slice(k0, None)):
+        e = np.ascontiguousarray(eta[sl])
+        oc, ob = np.empty(e.size), np.empty(e.size)
+        oi = np.empty(e.size, dtype=np.int64)
+        _kernels._neutral_follow(e, c0, b0, tol, 50, chi_max, oc, ob, oi)
+        chi_cr[sl], beta[sl], its[sl] = oc, ob, oi
+    return NeutralCurve(eta, chi_cr, beta, its)

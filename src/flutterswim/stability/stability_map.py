@@ -1,0 +1,153 @@
+"""Stability map: omega_max over a (eta_perp, chi) grid by root following (paper's algorithm).
+
+The leading eigenvalue is found at (max eta_perp, max |chi|) from scratch, followed in
+eta_perp at that chi, then, for every eta_perp in parallel, followed in chi down to the
+smallest |chi| > 0. The spectrum is invariant under chi -> -chi, so negative chi reuse |chi|.
+chi = 0 is exact: omega_max = max(-1, -k_1^4/eta_perp). eta_perp <= 0 (no drag) is NaN.
+Grid steps larger than ``max_step`` are subdivided internally so that no branch is jumped.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._validate import ParameterError, finite, positive
+from . import _kernels
+from .leading import FREE_FREE_K1, leading_eigenvalue
+from .newton import _newton_numpy, follow_root, resolve_backend
+
+__all__ = ["StabilityMap", "stability_map", "load_map"]
+
+
+@dataclass(frozen=True)
+class StabilityMap:
+    """omega (n_eta, n_chi) complex leading eigenvalue, Im >= 0, units 1/tau (NaN: not computed);
+    eta_perp (n_eta,), chi (n_chi,); iterations (n_eta, n_chi) Newton steps (-1: failed)."""
+
+    eta_perp: np.ndarray
+    chi: np.ndarray
+    omega: np.ndarray
+    iterations: np.ndarray
+
+    @property
+    def growth_rate(self) -> np.ndarray:
+        return self.omega.real
+
+    @property
+    def angular_frequency(self) -> np.ndarray:
+        return self.omega.imag
+
+    def to_dataset(self):
+        """xarray Dataset with re_omega, im_omega (dims eta_perp, chi) and iterations."""
+        import xarray as xr
+
+        return xr.Dataset(
+            {
+                "re_omega": (("eta_perp", "chi"), self.omega.real, {"long_name": "Re omega_max", "units": "1/tau"}),
+                "im_omega": (("eta_perp", "chi"), self.omega.imag, {"long_name": "Im omega_max", "units": "1/tau"}),
+                "iterations": (("eta_perp", "chi"), self.iterations.astype(np.int16)),
+            },
+            coords={"eta_perp": self.eta_perp, "chi": self.chi},
+            attrs={"description": "leading eigenvalue of the straight filament (flutterswim.stability)"},
+        )
+
+    def save(self, path) -> None:
+        """Write NetCDF (h5netcdf engine)."""
+        self.to_dataset().to_netcdf(path, engine="h5netcdf")
+
+
+def load_map(path) -> StabilityMap:
+    """Read a map written by :meth:`StabilityMap.save`."""
+    import xarray as xr
+
+    with xr.open_dataset(path, engine="h5netcdf") as ds:
+        om = ds["re_omega"].values + 1j * ds["im_omega"].values
+        return StabilityMap(ds["eta_perp"].values, ds["chi"].values, om, ds["iterations"].values.astype(np.int64))
+
+
+def _refine(values: np.ndarray, hmax: float) -> tuple[np.ndarray, np.ndarray]:
+    """Insert points so consecutive gaps are <= hmax; return (fine path, indices of values)."""
+    pieces, idx, pos = [values[:1]], [0], 0
+    for a, b in zip(values[:-1], values[1:]):
+        k = max(1, int(np.ceil(abs(b - a) / hmax - 1e-9)))
+        pieces.append(a + (b - a) * np.arange(1, k + 1) / k)
+        pos += k
+        idx.append(pos)
+    return np.concatenate(pieces), np.array(idx)
+
+
+def _grid(arg, rng, step, name):
+    if arg is None:
+        lo, hi = finite(f"{name}_range[0]", rng[0]), finite(f"{name}_range[1]", rng[1])
+        step = positive("step", step)
+        v = np.round(np.arange(lo, hi + 0.5 * step, step), 12)
+    else:
+        v = np.atleast_1d(np.asarray(arg, dtype=float))
+    if v.ndim != 1 or v.size == 0 or not np.all(np.isfinite(v)) or np.any(np.diff(v) <= 0):
+        raise ParameterError(f"{name} must be a non-empty, finite, strictly increasing 1-D array")
+    return v
+
+
+def _columns_numpy(etas, chis, seeds, tol, maxit):
+    ne, nc = etas.size, chis.size
+    out = np.empty((ne, nc), dtype=complex)
+    its = np.empty((ne, nc), dtype=np.int64)
+    for j in range(nc):
+        if j == 0:
+            guess = seeds
+        elif j == 1:
+            guess = out[:, 0]
+        else:
+            r = (chis[j] - chis[j - 1]) / (chis[j - 1] - chis[j - 2])
+            guess = out[:, j - 1] + (out[:, j - 1] - out[:, j - 2]) * r
+        guess = np.where(np.isfinite(guess), guess, out[:, j - 1] if j else seeds)
+        w, it = _newton_numpy(guess, np.full(ne, chis[j]), etas, tol, maxit)
+        w = np.where(w.imag < 0, w.conj(), w)
+        out[:, j], its[:, j] = np.where(it >= 0, w, np.nan), it
+    return out, its
+
+
+def stability_map(*, eta_perp=None, chi=None, eta_range: tuple[float, float] = (0.0, 350.0),
+                  chi_range: tuple[float, float] = (-130.0, 130.0), step: float = 0.1,
+                  max_step: float = 0.25, tol: float = 1e-10, maxit: int = 30,
+                  backend: str = "auto") -> StabilityMap:
+    """Leading eigenvalue over the grid eta_perp x chi (default: the paper's [0,350]x[-130,130]
+    at ``step``; or explicit increasing 1-D arrays). Returns a :class:`StabilityMap`."""
+    backend = resolve_backend(backend)
+    eta = _grid(eta_perp, eta_range, step, "eta_perp")
+    chis = _grid(chi, chi_range, step, "chi")
+    max_step = positive("max_step", max_step)
+    omega = np.full((eta.size, chis.size), np.nan + 0j)
+    iters = np.full((eta.size, chis.size), -1, dtype=np.int64)
+    ve = np.flatnonzero(eta > 0)
+    if ve.size == 0:
+        return StabilityMap(eta, chis, omega, iters)
+    ev = eta[ve]
+    zero = chis == 0.0
+    if np.any(zero):
+        w0 = np.maximum(-1.0, -(FREE_FREE_K1**4) / ev)
+        omega[np.ix_(ve, np.flatnonzero(zero))] = w0[:, None]
+        iters[np.ix_(ve, np.flatnonzero(zero))] = 0
+    apos = np.unique(np.abs(chis[~zero]))[::-1]  # descending |chi| > 0
+    if apos.size == 0:
+        return StabilityMap(eta, chis, omega, iters)
+    # seed at (largest eta, largest |chi|), follow eta downwards at that chi
+    seed = leading_eigenvalue(float(apos[0]), float(ev[-1]), n=48).omega
+    epath, eidx = _refine(ev[::-1], max_step)
+    path = follow_root(seed, float(apos[0]), epath, tol=tol, maxit=maxit, backend=backend)
+    seeds = np.ascontiguousarray(path.omega[eidx][::-1])
+    cpath, cidx = _refine(apos, max_step)
+    if backend == "numba":
+        out = np.empty((ev.size, cpath.size), dtype=complex)
+        its = np.empty((ev.size, cpath.size), dtype=np.int64)
+        _kernels._follow_columns(np.ascontiguousarray(ev), np.ascontiguousarray(cpath), seeds, tol, maxit, out, its)
+    else:
+        out, its = _columns_numpy(ev, cpath, seeds, tol, maxit)
+    out, its = out[:, cidx], its[:, cidx]
+    col = np.searchsorted(-apos, -np.abs(chis[~zero]))
+    nz = np.flatnonzero(~zero)
+    omega[np.ix_(ve, nz)] = out[:, col]
+    iters[np.ix_(ve, nz)] = its[:, col]
+    return StabilityMap(eta, chis, omega, iters)
