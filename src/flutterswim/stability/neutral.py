@@ -15,6 +15,7 @@ import numpy as np
 from .._validate import ParameterError, finite, positive
 from . import _kernels
 from .leading import leading_eigenvalue
+from .stability_map import _uniform
 
 __all__ = ["NeutralCurve", "neutral_curve", "critical_chi"]
 
@@ -89,7 +90,7 @@ def neutral_curve(eta_perp=None, *, eta_range: tuple[float, float] = (0.0, 350.0
     if eta_perp is None:
         lo, hi = finite("eta_range[0]", eta_range[0]), finite("eta_range[1]", eta_range[1])
         step = positive("step", step)
-        eta = np.round(np.arange(lo, hi + 0.5 * step, step), 12)
+        eta = _uniform(lo, hi, step)
     else:
         eta = np.atleast_1d(np.asarray(eta_perp, dtype=float))
     if eta.ndim != 1 or eta.size == 0 or not np.all(np.isfinite(eta)) or np.any(np.diff(eta) <= 0):

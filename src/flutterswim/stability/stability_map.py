@@ -78,11 +78,19 @@ def _refine(values: np.ndarray, hmax: float) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate(pieces), np.array(idx)
 
 
+def _uniform(lo: float, hi: float, step: float) -> np.ndarray:
+    """lo + k step up to hi, rounded so that grid values such as 0 are exact."""
+    v = lo + step * np.arange(int(np.floor((hi - lo) / step + 0.5)) + 1)
+    v = np.round(v, 9)
+    v[np.abs(v) < 1e-6 * step] = 0.0
+    return v
+
+
 def _grid(arg, rng, step, name):
     if arg is None:
         lo, hi = finite(f"{name}_range[0]", rng[0]), finite(f"{name}_range[1]", rng[1])
         step = positive("step", step)
-        v = np.round(np.arange(lo, hi + 0.5 * step, step), 12)
+        v = _uniform(lo, hi, step)
     else:
         v = np.atleast_1d(np.asarray(arg, dtype=float))
     if v.ndim != 1 or v.size == 0 or not np.all(np.isfinite(v)) or np.any(np.diff(v) <= 0):

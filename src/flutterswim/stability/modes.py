@@ -1,0 +1,138 @@
+"""Eigenmodes r(s) from the kernel of the boundary matrix, bifurcation curves, animation.
+
+R(s) = sum_i c_i exp(lambda_i (s - s_i)) with s_i = 1 if Re lambda_i > 0 else 0 (a rescaling of
+the paper's basis that keeps the 4x4 boundary matrix well conditioned); c spans its kernel
+(smallest singular vector). kappa(s) = -chi/(1+omega) R'(s).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._validate import ParameterError, finite, positive, positive_int
+from .characteristic import quartic_roots
+from .leading import leading_eigenvalue
+from .newton import follow_root
+
+__all__ = ["Eigenmode", "eigenmodes", "mode_shape", "Bifurcation", "bifurcation", "animate_mode"]
+
+
+@dataclass(frozen=True)
+class Eigenmode:
+    """omega: eigenvalue [1/tau]; s (n,); r, kappa (n,) complex, normalised so that r = 1 where
+    |r| is largest; rank: 1 for the leading mode, 2 for the second; residual: smallest singular
+    value / largest of the boundary matrix (0 for an exact eigenvalue)."""
+
+    omega: complex
+    s: np.ndarray
+    r: np.ndarray
+    kappa: np.ndarray
+    rank: int
+    residual: float
+
+
+def mode_shape(omega: complex, chi: float, eta_perp: float, *, n_points: int = 201, rank: int = 1) -> Eigenmode:
+    """Mode shape for a given eigenvalue omega (kernel of the boundary-condition matrix)."""
+    chi = finite("chi", chi)
+    eta_perp = positive("eta_perp", eta_perp)
+    n_points = positive_int("n_points", n_points, minimum=2)
+    lam = quartic_roots(omega, chi, eta_perp)
+    c = chi / (omega + 1.0)
+    shift = np.where(lam.real > 0, 1.0, 0.0)
+    a = lam * (lam + c)
+    e0, e1 = np.exp(-lam * shift), np.exp(lam * (1.0 - shift))
+    Bm = np.array([a * e0, lam * a * e0, a * e1, lam * a * e1])
+    colscale = np.maximum(np.abs(Bm).max(axis=0), 1e-300)
+    _, sv, vh = np.linalg.svd(Bm / colscale)
+    coef = vh[-1].conj() / colscale
+    s = np.linspace(0.0, 1.0, n_points)
+    E = np.exp(lam[None, :] * (s[:, None] - shift[None, :]))
+    r = E @ coef
+    dr = E @ (coef * lam)
+    k = int(np.argmax(np.abs(r)))
+    norm = r[k]
+    return Eigenmode(complex(omega), s, r / norm, -c * dr / norm, rank, float(sv[-1] / sv[0]))
+
+
+def eigenmodes(chi: float, eta_perp: float, *, n_points: int = 201) -> tuple[Eigenmode, Eigenmode]:
+    """First and second eigenmodes (largest and second largest Re omega, neutral modes excluded)."""
+    le = leading_eigenvalue(chi, eta_perp)
+    if chi == 0.0:
+        raise ParameterError("chi=0: the leading eigenvalue -1 is a pure curvature mode; use chi != 0")
+    return (mode_shape(le.omega, chi, eta_perp, n_points=n_points, rank=1),
+            mode_shape(le.second, chi, eta_perp, n_points=n_points, rank=2))
+
+
+@dataclass(frozen=True)
+class Bifurcation:
+    """Leading eigenvalue along one parameter: parameter ('chi' or 'eta_perp'), values (n,),
+    omega (n,) complex [1/tau], fixed: the value of the other parameter."""
+
+    parameter: str
+    values: np.ndarray
+    omega: np.ndarray
+    fixed: float
+
+
+def bifurcation(*, parameter: str, values, fixed: float, max_step: float = 0.1) -> Bifurcation:
+    """Re/Im of omega_max vs chi (fixed eta_perp) or vs eta_perp (fixed chi), by root following
+    from the leading eigenvalue at the largest value (steps refined to <= max_step)."""
+    from .stability_map import _refine
+
+    v = np.atleast_1d(np.asarray(values, dtype=float))
+    if v.ndim != 1 or np.any(np.diff(v) <= 0) or not np.all(np.isfinite(v)):
+        raise ParameterError("values must be a finite, strictly increasing 1-D array")
+    fixed = finite("fixed", fixed)
+    if parameter == "chi":
+        if fixed <= 0:
+            raise ParameterError(f"fixed eta_perp={fixed!r} must be > 0")
+        if v[0] < 0 < v[-1] or np.any(v == 0):
+            raise ParameterError("chi values must not contain or straddle 0 (use chi > 0; symmetric)")
+    elif parameter == "eta_perp":
+        if v[0] <= 0:
+            raise ParameterError(f"eta_perp values must be > 0, got {v[0]!r}")
+        if fixed == 0:
+            raise ParameterError("fixed chi must be != 0")
+    else:
+        raise ParameterError(f"parameter={parameter!r}; choose 'chi' or 'eta_perp'")
+    order = np.argsort(-np.abs(v))
+    path, idx = _refine(v[order], max_step)
+    if parameter == "chi":
+        seed = leading_eigenvalue(float(path[0]), fixed, n=48).omega
+        res = follow_root(seed, path, fixed)
+    else:
+        seed = leading_eigenvalue(fixed, float(path[0]), n=48).omega
+        res = follow_root(seed, fixed, path)
+    om = np.empty(v.size, dtype=complex)
+    om[order] = res.omega[idx]
+    return Bifurcation(parameter, v, om, fixed)
+
+
+def animate_mode(mode: Eigenmode, path, *, frames: int = 40, amplitude: float = 0.15, fps: int = 20) -> None:
+    """GIF of the linear travelling wave r(s, t) = amplitude Re[r(s) e^{i beta t}] over one period
+    (growth removed), beta = Im omega; needs matplotlib (Agg) and pillow."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.animation import FuncAnimation, PillowWriter
+
+    beta = mode.omega.imag if mode.omega.imag != 0 else 1.0
+    t = np.linspace(0.0, 2 * np.pi / abs(beta), frames, endpoint=False)
+    fig, ax = plt.subplots(figsize=(4, 2.4))
+    (line,) = ax.plot(mode.s, amplitude * mode.r.real, lw=2)
+    ax.set_xlim(0, 1)
+    ax.set_ylim(-1.2 * amplitude, 1.2 * amplitude)
+    ax.set_aspect("equal")
+    ax.set_xlabel("s")
+    ax.set_title(f"omega = {mode.omega.real:.3f} + {mode.omega.imag:.3f}i", fontsize=8)
+
+    def update(k):
+        line.set_ydata(amplitude * (mode.r * np.exp(1j * beta * t[k])).real)
+        return (line,)
+
+    anim = FuncAnimation(fig, update, frames=frames, blit=True)
+    anim.save(str(path), writer=PillowWriter(fps=fps))
+    plt.close(fig)

@@ -1,0 +1,75 @@
+"""Figures like the paper's Fig. (stability): map, bifurcation plots, eigenmodes (matplotlib, Agg)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["plot_map", "plot_bifurcation", "plot_modes"]
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _finish(fig, path):
+    if path is not None:
+        fig.savefig(path, dpi=150, bbox_inches="tight")
+    return fig
+
+
+def plot_map(smap, *, neutral=None, path=None, ax=None):
+    """Stable vs flutter regions in (eta_perp, chi); flutter split by swimming direction (sign chi).
+    smap: StabilityMap; neutral: optional NeutralCurve drawn as +-chi_cr. Returns the figure."""
+    plt = _plt()
+    from matplotlib.colors import ListedColormap
+
+    fig, ax = (plt.subplots(figsize=(6, 4.5)) if ax is None else (ax.figure, ax))
+    re = smap.omega.real.T
+    chi = smap.chi[:, None]
+    region = np.where(np.isnan(re), np.nan, np.where(re <= 0, 0, np.where(chi > 0, 1, 2)))
+    ax.pcolormesh(smap.eta_perp, smap.chi, region, shading="auto",
+                  cmap=ListedColormap(["#dddddd", "#f4a582", "#92c5de"]), vmin=0, vmax=2, rasterized=True)
+    if neutral is not None:
+        ax.plot(neutral.eta_perp, neutral.chi_cr, "k-", lw=1)
+        ax.plot(neutral.eta_perp, -neutral.chi_cr, "k-", lw=1)
+    ax.set_xlim(smap.eta_perp[0], smap.eta_perp[-1])
+    ax.set_ylim(smap.chi[0], smap.chi[-1])
+    ax.set_xlabel(r"$\eta_\perp$")
+    ax.set_ylabel(r"$\chi$")
+    ax.text(0.7, 0.9, "flutter, swims one way (chi>0)", transform=ax.transAxes, fontsize=7, ha="center")
+    ax.text(0.7, 0.07, "flutter, swims the other way (chi<0)", transform=ax.transAxes, fontsize=7, ha="center")
+    ax.text(0.7, 0.5, "stable", transform=ax.transAxes, fontsize=9, ha="center")
+    return _finish(fig, path)
+
+
+def plot_bifurcation(curves, *, path=None):
+    """Re (blue) and Im (orange) of omega_max vs the varied parameter, one panel per Bifurcation."""
+    plt = _plt()
+    fig, axes = plt.subplots(1, len(curves), figsize=(4.5 * len(curves), 3.2), squeeze=False)
+    for ax, b in zip(axes[0], curves):
+        ax.plot(b.values, b.omega.real, color="tab:blue", label=r"Re $\omega_{max}$")
+        ax.plot(b.values, b.omega.imag, color="tab:orange", label=r"Im $\omega_{max}$")
+        ax.axhline(0, color="k", lw=0.5)
+        other = "eta_perp" if b.parameter == "chi" else "chi"
+        ax.set_xlabel(b.parameter)
+        ax.set_title(f"{other} = {b.fixed:.4g}", fontsize=9)
+        ax.legend(fontsize=7)
+    return _finish(fig, path)
+
+
+def plot_modes(modes, *, path=None):
+    """Real (blue) and imaginary (orange) parts of normalised r(s), one panel per Eigenmode."""
+    plt = _plt()
+    fig, axes = plt.subplots(1, len(modes), figsize=(4.5 * len(modes), 3.0), squeeze=False)
+    for ax, m in zip(axes[0], modes):
+        ax.plot(m.s, m.r.real, color="tab:blue", label="Re r")
+        ax.plot(m.s, m.r.imag, color="tab:orange", label="Im r")
+        ax.set_xlabel("s")
+        ax.set_title(f"mode {m.rank}: omega = {m.omega.real:.3f} + {m.omega.imag:.3f}i", fontsize=9)
+        ax.legend(fontsize=7)
+    return _finish(fig, path)
