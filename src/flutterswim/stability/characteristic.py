@@ -9,7 +9,9 @@ Free-end conditions give the 4x4 boundary matrix (:func:`boundary_matrix`) and t
 
     f = (omega+1)^-4 prod(lambda_i) prod(lambda_i (omega+1) + chi) * bracket(lambda),
 
-which equals (eta_perp omega)^2 * bracket and flips sign under a swap of two roots.
+which equals (eta_perp omega)^2 * bracket, flips sign under a swap of two roots, equals
+minus the determinant of the boundary matrix as printed (row order moment, shear), and
+vanishes like omega^3 at omega = 0 (prefactor, and the triple root lambda = 0).
 The reduced function used for root finding is order independent and has no spurious zeros,
 
     g(omega) = -bracket(lambda) / prod_{i<j} (lambda_j - lambda_i)
