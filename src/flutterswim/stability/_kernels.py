@@ -74,7 +74,7 @@ def _cold_roots(c, q, lam):
     for k in range(4):
         ang = 0.4 + 2.0 * math.pi * k / 4.0
         lam[k] = 1.3 * scale * complex(math.cos(ang), math.sin(ang))
-    return _aberth(c, q, lam, 500)
+    return _aberth(c, q, lam, 150)
 
 
 @_jit

@@ -83,7 +83,7 @@ def leading_eigenvalue(chi: float, eta_perp: float, *, n: int = 32, candidates: 
         return LeadingEigenvalue(complex(vals[0]), complex(vals[1]), chi, eta_perp, True)
     sp = spectrum(chi, eta_perp, n=n)
     cand = _distinct_pairs(sp.omega, candidates)
-    res = newton_root(np.array(cand), chi, eta_perp, backend=backend)
+    res = newton_root(np.array(cand), chi, eta_perp, maxit=25, backend=backend)
     ok = res.converged & (np.abs(res.omega - cand) <= 1e-4 * np.maximum(1.0, np.abs(cand)))
     if np.any(ok):
         w = res.omega[ok]

@@ -103,16 +103,27 @@ def spectrum(
     neutral_tol: float = 1e-7,
     max_abs: float | None = None,
     vectors: bool = False,
+    use_symmetry: bool = True,
 ):
     """Whole spectrum of the collocation problem (no initial guess).
 
     Returns a :class:`Spectrum`; with ``vectors=True`` returns ``(Spectrum, V, s)`` where
     V[:, j] = (r, kappa, M) at points s for eigenvalue ``Spectrum.omega[j]``.
     ``max_abs`` drops eigenvalues with |omega| above it (default 1e12, i.e. only infinite ones).
+    ``use_symmetry``: for chi < 0 solve at -chi and reflect s -> 1 - s (same spectrum; the
+    QZ iteration is markedly slower for some chi < 0 matrices).
     """
     chi = finite("chi", chi)
     eta_perp = positive("eta_perp", eta_perp)
     n = positive_int("n", n, minimum=8)
+    if use_symmetry and chi < 0:
+        out = spectrum(-chi, eta_perp, n=n, neutral_tol=neutral_tol, max_abs=max_abs, vectors=vectors)
+        if not vectors:
+            return Spectrum(out.omega, out.neutral, n, chi, eta_perp)
+        sp, V, s = out
+        m = n + 1
+        idx = np.concatenate([np.arange(m)[::-1] + b * m for b in range(3)])
+        return Spectrum(sp.omega, sp.neutral, n, chi, eta_perp), V[idx], s
     A, B = spectral_matrices(chi, eta_perp, n)
     if vectors:
         w, V = scipy.linalg.eig(A, B, overwrite_a=True, overwrite_b=True, check_finite=False)
