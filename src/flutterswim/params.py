@@ -75,8 +75,12 @@ class Parameters:
                 f"a={self.a!r} m exceeds b={self.b!r} m; the ribbon needs a <= b (a: half thickness, "
                 "b: half width)"
             )
-        if not self.b < self.l:
-            raise ParameterError(f"b={self.b!r} m must be smaller than l={self.l!r} m")
+        if not self.b < 0.5 * self.l:
+            raise ParameterError(
+                f"b={self.b!r} m is a half-width of at least half the length l={self.l!r} m: the body "
+                "is not slender and resistive-force theory does not apply; b < l/2 is required "
+                "(b << l for accuracy)"
+            )
         log = math.log(2.0 * self.l / self.b)
         if 2.0 * log - 1.0 <= 0.0:
             raise ParameterError(

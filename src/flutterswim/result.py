@@ -1,0 +1,175 @@
+"""The result of a simulation: labelled arrays, units, metadata, NetCDF round trip."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field, fields, replace
+from pathlib import Path
+
+import numpy as np
+
+from .integrators import SolverStats
+from .params import Groups, Parameters
+
+__all__ = ["SimulationResult", "load"]
+
+
+@dataclass(frozen=True)
+class SimulationResult:
+    """Time series of the filament.
+
+    Arrays are in SI units when ``params`` is physical (``units == "SI"``: s, m, 1/m,
+    N, N m) and in the paper's scaled units otherwise (length l, time tau, force B/l^2).
+    ``dimensionless()`` always gives the scaled version.
+
+    t (T,); s (P,) joint arc-length, P = N + 1; x, y, kappa (T, P); s_mid (N,);
+    theta (T, N) at segment midpoints; r0 (T, 2) the s = 0 end; field_angle and
+    field_strength (T,); A, V, M (T, P) internal forces and moment, or None.
+    """
+
+    t: np.ndarray
+    s: np.ndarray
+    s_mid: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    theta: np.ndarray
+    kappa: np.ndarray
+    r0: np.ndarray
+    field_angle: np.ndarray
+    field_strength: np.ndarray
+    groups: Groups
+    params: Parameters | None
+    stats: SolverStats
+    status: str
+    message: str
+    state_final: np.ndarray
+    t_final: float
+    settings: dict = field(default_factory=dict)
+    A: np.ndarray | None = None
+    V: np.ndarray | None = None
+    M: np.ndarray | None = None
+    units: str = "SI"
+
+    # --- scales -------------------------------------------------------------
+    @property
+    def n_segments(self) -> int:
+        return self.s_mid.size
+
+    @property
+    def length(self) -> float:
+        return self.params.l if (self.params is not None and self.units == "SI") else 1.0
+
+    @property
+    def time_scale(self) -> float:
+        return self.params.tau if (self.params is not None and self.units == "SI") else 1.0
+
+    @property
+    def force_scale(self) -> float:
+        return self.params.force_scale if (self.params is not None and self.units == "SI") else 1.0
+
+    @property
+    def ok(self) -> bool:
+        return self.status != "failed"
+
+    def dimensionless(self) -> "SimulationResult":
+        """The same run in scaled units (length l, time tau, force B/l^2)."""
+        if self.units == "dimensionless":
+            return self
+        L, T, F = self.length, self.time_scale, self.force_scale
+        opt = {k: (None if getattr(self, k) is None else getattr(self, k) / F) for k in ("A", "V")}
+        return replace(
+            self, t=self.t / T, s=self.s / L, s_mid=self.s_mid / L, x=self.x / L, y=self.y / L,
+            kappa=self.kappa * L, r0=self.r0 / L, t_final=self.t_final / T,
+            M=None if self.M is None else self.M / (F * L), units="dimensionless", **opt,
+        )
+
+    def final_state(self):
+        """An :class:`~flutterswim.initial.InitialState` to continue from the last state."""
+        from .initial import InitialState
+
+        return InitialState.from_state(self.state_final, self.n_segments)
+
+    def tip(self, end: int = -1) -> tuple[np.ndarray, np.ndarray]:
+        """Coordinates (x, y) (T,) of the s = l end (``end=-1``) or the s = 0 end (``0``)."""
+        return self.x[:, end], self.y[:, end]
+
+    # --- labelled arrays and files --------------------------------------------
+    def to_xarray(self):
+        """An xarray.Dataset with coordinates t, s, s_mid and the metadata as attributes."""
+        import xarray as xr
+
+        from . import __version__
+
+        lu = "m" if self.units == "SI" else "l"
+        tu = "s" if self.units == "SI" else "tau"
+        data = {
+            "x": (("t", "s"), self.x, {"units": lu, "long_name": "centreline x"}),
+            "y": (("t", "s"), self.y, {"units": lu, "long_name": "centreline y"}),
+            "theta": (("t", "s_mid"), self.theta, {"units": "rad", "long_name": "tangent angle"}),
+            "kappa": (("t", "s"), self.kappa, {"units": f"1/{lu}", "long_name": "spontaneous curvature"}),
+            "r0": (("t", "xy"), self.r0, {"units": lu, "long_name": "position of the s=0 end"}),
+            "field_angle": (("t",), self.field_angle, {"units": "rad"}),
+            "field_strength": (("t",), self.field_strength, {"units": "1", "long_name": "kappa_E multiplier"}),
+        }
+        fu = "N" if self.units == "SI" else "B/l^2"
+        for name, unit in (("A", fu), ("V", fu), ("M", f"{fu} {lu}")):
+            arr = getattr(self, name)
+            if arr is not None:
+                data[name] = (("t", "s"), arr, {"units": unit})
+        ds = xr.Dataset(
+            data,
+            coords={
+                "t": ("t", self.t, {"units": tu}),
+                "s": ("s", self.s, {"units": lu}),
+                "s_mid": ("s_mid", self.s_mid, {"units": lu}),
+                "xy": ("xy", np.array(["x", "y"])),
+            },
+        )
+        ds["state_final"] = (("state",), self.state_final)
+        ds.attrs.update(
+            {
+                "flutterswim_version": __version__,
+                "units": self.units,
+                "status": self.status,
+                "message": self.message,
+                "t_final": float(self.t_final),
+                "groups": json.dumps(self.groups.to_dict()),
+                "params": json.dumps(self.params.to_dict() if self.params is not None else None),
+                "stats": json.dumps(self.stats.to_dict()),
+                "settings": json.dumps(self.settings),
+            }
+        )
+        return ds
+
+    def save(self, path: str | Path) -> Path:
+        """Write the run to NetCDF (h5netcdf engine). Returns the path."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self.to_xarray().to_netcdf(path, engine="h5netcdf")
+        return path
+
+    @classmethod
+    def from_xarray(cls, ds) -> "SimulationResult":
+        a = ds.attrs
+        params = json.loads(a["params"])
+        opt = {k: (ds[k].values if k in ds else None) for k in ("A", "V", "M")}
+        names = {f.name for f in fields(SolverStats)}
+        stats = SolverStats(**{k: v for k, v in json.loads(a["stats"]).items() if k in names})
+        return cls(
+            t=ds["t"].values, s=ds["s"].values, s_mid=ds["s_mid"].values, x=ds["x"].values,
+            y=ds["y"].values, theta=ds["theta"].values, kappa=ds["kappa"].values,
+            r0=ds["r0"].values, field_angle=ds["field_angle"].values,
+            field_strength=ds["field_strength"].values, groups=Groups(**json.loads(a["groups"])),
+            params=None if params is None else Parameters(**params), stats=stats,
+            status=str(a["status"]), message=str(a["message"]), state_final=ds["state_final"].values,
+            t_final=float(a["t_final"]), settings=json.loads(a["settings"]), units=str(a["units"]),
+            **opt,
+        )
+
+
+def load(path: str | Path) -> SimulationResult:
+    """Read a run written by :meth:`SimulationResult.save`."""
+    import xarray as xr
+
+    with xr.open_dataset(path, engine="h5netcdf") as ds:
+        return SimulationResult.from_xarray(ds.load())

@@ -1,0 +1,174 @@
+"""``simulate``: the nonlinear morphoelastic filament from an initial state.
+
+The maths lives in :mod:`flutterswim.filament` (dimensionless); this module converts
+units at the edge, drives the integrator and packages a :class:`SimulationResult`.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+from ._validate import ParameterError, finite, positive, positive_int
+from .field import Field
+from .filament import Filament, centreline
+from .geometry import self_intersects
+from .initial import InitialState
+from .integrators import METHODS, integrate
+from .params import Groups, Parameters
+from .result import SimulationResult
+
+__all__ = ["simulate", "DEFAULT_SEGMENTS"]
+
+DEFAULT_SEGMENTS = 40
+
+
+def simulate(
+    params: Parameters | Groups,
+    t_end: float,
+    *,
+    field: Field | float | None = None,
+    initial: InitialState | None = None,
+    n_segments: int = DEFAULT_SEGMENTS,
+    n_frames: int | None = None,
+    frame_dt: float | None = None,
+    t_start: float = 0.0,
+    rtol: float = 1e-5,
+    atol: float = 1e-7,
+    method: str = "ros34pw2",
+    max_step: float | None = None,
+    stop_on_self_intersection: bool = False,
+    forces: bool = False,
+    progress: bool = False,
+    check: Callable[[float, np.ndarray], str | None] | None = None,
+) -> SimulationResult:
+    """Simulate the filament from ``t_start`` to ``t_end``.
+
+    Times (``t_end``, ``frame_dt``, field schedules) are in seconds for physical
+    :class:`Parameters` and in units of tau for :class:`Groups`. ``field`` is a
+    :class:`Field` or a constant direction in radians (default: along e1, full strength).
+    ``initial`` defaults to the paper's straight filament tilted by 0.01 degree.
+    Output: ``n_frames`` equally spaced frames (default 50 per time unit tau) or one
+    every ``frame_dt``. ``forces=True`` adds the internal force components A, V and the
+    bending moment M. ``check(t, y)`` may stop the run by returning a reason.
+    """
+    groups = params.groups if isinstance(params, Parameters) else params
+    if not isinstance(groups, Groups):
+        raise ParameterError(f"params={params!r} must be flutterswim.Parameters or flutterswim.Groups")
+    tau = params.tau if isinstance(params, Parameters) else 1.0
+    t_start = finite("t_start", t_start)
+    t_end = finite("t_end", t_end)
+    if not t_end > t_start:
+        raise ParameterError(f"t_end={t_end!r} must be greater than t_start={t_start!r}")
+    n_segments = positive_int("n_segments", n_segments, minimum=4)
+    rtol, atol = positive("rtol", rtol), positive("atol", atol)
+    if method not in METHODS:
+        raise ParameterError(f"method={method!r} is unknown; choose one of {sorted(METHODS)}")
+    if field is None:
+        field = Field()
+    elif not isinstance(field, Field):
+        field = Field(direction=field)
+    initial = InitialState.straight() if initial is None else initial
+    if not isinstance(initial, InitialState):
+        raise ParameterError(f"initial={initial!r} must be a flutterswim.InitialState")
+
+    # --- dimensionless problem ------------------------------------------------
+    t0, t1 = t_start / tau, t_end / tau
+    fld = field.scaled(tau)
+    fil = Filament(n_segments, groups.eta_par, groups.eta_perp, groups.chi)
+    y0 = initial.state(n_segments)
+    t_eval = _frames(t0, t1, n_frames, None if frame_dt is None else positive("frame_dt", frame_dt) / tau)
+    direction, strength = fld.direction, fld.strength
+
+    def fun(t: float, y: np.ndarray) -> np.ndarray:
+        return fil.rhs(y, direction(t), strength(t))
+
+    def jac(t: float, y: np.ndarray) -> np.ndarray:
+        return fil.jacobian(y, direction(t), strength(t))
+
+    n = n_segments
+
+    def _check(t: float, y: np.ndarray) -> str | None:
+        if stop_on_self_intersection:
+            x, yy = centreline(y[:2], y[2 : n + 2])
+            if self_intersects(x, yy):
+                return f"self-intersection at t={t * tau:.6g}"
+        return check(t * tau, y) if check is not None else None
+
+    bar, tick = _progress(progress, t0, t1)
+    try:
+        sol = integrate(
+            fun, jac, (t0, t1), y0, t_eval, method=method, rtol=rtol, atol=atol,
+            max_step=np.inf if max_step is None else positive("max_step", max_step) / tau,
+            breakpoints=fld.breakpoints, time_dependent=not fld.is_constant,
+            check=_check if (stop_on_self_intersection or check is not None) else None,
+            progress=tick,
+        )
+    finally:
+        if bar is not None:
+            bar.close()
+    return _package(sol, fil, fld, groups, params, tau, forces, {
+        "n_segments": n_segments, "method": method, "rtol": rtol, "atol": atol,
+        "field": field.describe(), "initial": initial.describe(), "t_start": t_start,
+        "t_end": t_end, "stop_on_self_intersection": stop_on_self_intersection,
+    })
+
+
+def _frames(t0: float, t1: float, n_frames: int | None, dt: float | None) -> np.ndarray:
+    if n_frames is not None and dt is not None:
+        raise ParameterError("give n_frames or frame_dt, not both")
+    if dt is not None:
+        return np.arange(t0, t1 + 0.5 * dt, dt)[: int(np.floor((t1 - t0) / dt + 1e-9)) + 1]
+    if n_frames is None:
+        n_frames = int(np.ceil(50 * (t1 - t0))) + 1
+    n_frames = positive_int("n_frames", n_frames, minimum=2)
+    return np.linspace(t0, t1, n_frames)
+
+
+def _progress(enabled: bool, t0: float, t1: float):
+    if not enabled:
+        return None, None
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=round(t1 - t0, 3), unit="tau", desc="simulate", leave=False)
+    state = {"last": t0}
+
+    def tick(t: float) -> None:
+        if t - state["last"] > 0.01 * (t1 - t0):
+            bar.update(round(t - state["last"], 3))
+            state["last"] = t
+
+    return bar, tick
+
+
+def _package(sol, fil: Filament, fld: Field, groups, params, tau, forces, settings) -> SimulationResult:
+    n = fil.n
+    y = sol.y
+    r0, theta, kappa = y[:, :2], y[:, 2 : n + 2], y[:, n + 2 :]
+    x, yy = centreline(r0, theta)
+    t = sol.t
+    angle = np.array([fld.direction(ti) for ti in t])
+    strength = np.array([fld.strength(ti) for ti in t])
+    a = v = m = None
+    if forces and len(t):
+        avm = np.array([fil.forces(yi) for yi in y])
+        a, v, m = avm[:, 0], avm[:, 1], avm[:, 2]
+    res = SimulationResult(
+        t=t, s=fil.s_nodes, s_mid=fil.s_mid, x=x, y=yy, theta=theta, kappa=kappa, r0=r0,
+        field_angle=angle, field_strength=strength, groups=groups,
+        params=params if isinstance(params, Parameters) else None, stats=sol.stats,
+        status=sol.status, message=sol.message, state_final=sol.y_final, t_final=sol.t_final,
+        settings=settings, A=a, V=v, M=m, units="dimensionless",
+    )
+    if isinstance(params, Parameters):
+        L, F = params.l, params.force_scale
+        from dataclasses import replace
+
+        res = replace(
+            res, t=t * tau, s=res.s * L, s_mid=res.s_mid * L, x=x * L, y=yy * L, kappa=kappa / L,
+            r0=r0 * L, t_final=sol.t_final * tau, units="SI",
+            A=None if a is None else a * F, V=None if v is None else v * F,
+            M=None if m is None else m * F * L,
+        )
+    return res

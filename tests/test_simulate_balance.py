@@ -1,0 +1,74 @@
+"""Force and torque balance, passive relaxation, rest state, and failures."""
+
+import numpy as np
+import pytest
+
+import flutterswim as fs
+from flutterswim.filament import Filament
+from flutterswim.initial import InitialState
+from flutterswim.simulate import simulate
+
+
+def _states(res):
+    return np.concatenate((res.r0, res.theta, res.kappa), axis=1)
+
+
+def test_total_drag_force_and_torque_vanish(paper_groups):
+    res = simulate(paper_groups, 3.0, initial=InitialState.straight(20.0), n_segments=24, n_frames=31)
+    fil = Filament(24, paper_groups.eta_par, paper_groups.eta_perp, paper_groups.chi)
+    for y in _states(res)[1:]:  # t = 0 is a stress-free rest state
+        fx, fy, tq = fil.drag_totals(y)
+        # scale: the drag on a filament translating at the speed of its fastest point
+        g, wfx, wfy = fil.mobility(y[2:26], y[26:])
+        z = np.linalg.solve(g, np.r_[0, 0, -fil.moment(y[2:26], y[26:]), 0])
+        scale = np.abs(wfx @ z).sum() + np.abs(wfy @ z).sum()
+        assert scale > 0
+        assert abs(fx) < 1e-12 * scale and abs(fy) < 1e-12 * scale and abs(tq) < 1e-12 * scale
+
+
+def test_passive_relaxation_is_monotone():
+    g = fs.Groups(eta_par=40.0, eta_perp=70.0, chi=0.0)
+    bent = InitialState(theta=lambda s: 0.8 * np.sin(2.5 * s) + 0.3 * s**2)
+    res = simulate(g, 2.5, initial=bent, n_segments=32, n_frames=101, rtol=1e-7, atol=1e-9)
+    h = 1.0 / 32
+    energy = 0.5 * h * np.sum((np.diff(res.theta, axis=1) / h) ** 2, axis=1)
+    assert np.all(np.diff(energy) < 0)
+    # slowest passive mode decays as exp(-k^4 t / eta_perp), k = 4.73: energy by ~e^-36
+    assert energy[-1] < 1e-12 * energy[0]
+    # it ends straight: the tangent angle is uniform
+    assert np.ptp(res.theta[-1]) < 1e-3 * np.ptp(res.theta[0])
+
+
+def test_straight_state_without_field_stays_at_rest():
+    g = fs.Groups(eta_par=40.0, eta_perp=70.0, chi=0.0)
+    res = simulate(g, 2.0, initial=InitialState.straight(30.0, position=(0.3, -0.2)), n_segments=16)
+    assert np.max(np.abs(res.theta - np.radians(30.0))) < 1e-13
+    assert np.max(np.abs(res.r0 - [0.3, -0.2])) < 1e-13
+
+
+def test_straight_aligned_filament_is_an_equilibrium(paper_groups):
+    res = simulate(paper_groups, 2.0, initial=InitialState.straight(0.0), n_segments=16)
+    assert np.max(np.abs(res.theta)) == 0.0 and np.max(np.abs(res.kappa)) == 0.0
+
+
+@pytest.mark.parametrize(
+    "kwargs, name",
+    [
+        (dict(t_end=np.nan), "t_end"),
+        (dict(t_end=1.0, n_segments=2), "n_segments"),
+        (dict(t_end=1.0, rtol=-1.0), "rtol"),
+        (dict(t_end=1.0, method="euler"), "method"),
+    ],
+)
+def test_bad_arguments_name_the_parameter(paper_groups, kwargs, name):
+    with pytest.raises(fs.ParameterError, match=name):
+        simulate(paper_groups, **kwargs)
+
+
+def test_self_intersection_stops_the_run_with_a_reason():
+    # a strongly curled filament that closes on itself as it relaxes towards kappa
+    g = fs.Groups(eta_par=40.0, eta_perp=70.0, chi=0.0)
+    curl = InitialState(theta=0.0, kappa=9.0)
+    res = simulate(g, 1.0, initial=curl, n_segments=32, stop_on_self_intersection=True)
+    assert res.status == "stopped" and "self-intersection" in res.message
+    assert res.t_final < 1.0
