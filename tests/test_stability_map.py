@@ -52,6 +52,12 @@ def test_map_follows_leading_branch_without_jumps(coarse):
             assert abs(om[i, j] - le) <= 1e-9 * max(1, abs(le)), (eta, chi)
 
 
+def test_map_builtin_spectral_check():
+    m = stability_map(eta_perp=np.linspace(0, 350, 8), chi=np.linspace(-130, 130, 9), check_stride=2)
+    assert m.check_points == 12  # eta = 0 and chi = 0 are skipped
+    assert m.check_max_rel_diff < 1e-9
+
+
 def test_map_symmetric_in_chi(coarse):
     om = coarse.omega[1:]
     assert np.allclose(om, om[:, ::-1], rtol=1e-12)
@@ -158,5 +164,7 @@ def test_input_validation_names_parameter():
         leading_eigenvalue(float("nan"), 1.0)
     with pytest.raises(ParameterError, match="backend"):
         stability_map(eta_perp=[1.0, 2.0], chi=[1.0, 2.0], backend="cuda")
+    with pytest.raises(ParameterError, match="eta_perp"):
+        stability_map(eta_perp=[-1.0, 2.0], chi=[1.0, 2.0])
     with pytest.raises(ParameterError, match="increasing"):
         stability_map(eta_perp=[2.0, 1.0], chi=[1.0, 2.0])

@@ -95,6 +95,8 @@ def neutral_curve(eta_perp=None, *, eta_range: tuple[float, float] = (0.0, 350.0
         eta = np.atleast_1d(np.asarray(eta_perp, dtype=float))
     if eta.ndim != 1 or eta.size == 0 or not np.all(np.isfinite(eta)) or np.any(np.diff(eta) <= 0):
         raise ParameterError("eta_perp must be a non-empty, finite, strictly increasing 1-D array")
+    if eta[0] < 0:
+        raise ParameterError(f"eta_perp={eta[0]!r} must be >= 0 (eta_perp = 0 gives NaN)")
     chi_max = positive("chi_max", chi_max)
     n = eta.size
     chi_cr = np.full(n, np.nan)

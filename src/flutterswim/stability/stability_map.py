@@ -9,6 +9,8 @@ Grid steps larger than ``max_step`` are subdivided internally so that no branch 
 
 from __future__ import annotations
 
+import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,12 +26,16 @@ __all__ = ["StabilityMap", "stability_map", "load_map"]
 @dataclass(frozen=True)
 class StabilityMap:
     """omega (n_eta, n_chi) complex leading eigenvalue, Im >= 0, units 1/tau (NaN: not computed);
-    eta_perp (n_eta,), chi (n_chi,); iterations (n_eta, n_chi) Newton steps (-1: failed)."""
+    eta_perp (n_eta,), chi (n_chi,); iterations (n_eta, n_chi) Newton steps (-1: failed);
+    check_points, check_max_rel_diff: size of the spectral cross-check subgrid and the largest
+    relative difference found there (0 and NaN when not requested)."""
 
     eta_perp: np.ndarray
     chi: np.ndarray
     omega: np.ndarray
     iterations: np.ndarray
+    check_points: int = 0
+    check_max_rel_diff: float = math.nan
 
     @property
     def growth_rate(self) -> np.ndarray:
@@ -50,7 +56,8 @@ class StabilityMap:
                 "iterations": (("eta_perp", "chi"), self.iterations.astype(np.int16)),
             },
             coords={"eta_perp": self.eta_perp, "chi": self.chi},
-            attrs={"description": "leading eigenvalue of the straight filament (flutterswim.stability)"},
+            attrs={"description": "leading eigenvalue of the straight filament (flutterswim.stability)",
+                   "check_points": self.check_points, "check_max_rel_diff": self.check_max_rel_diff},
         )
 
     def save(self, path) -> None:
@@ -64,7 +71,8 @@ def load_map(path) -> StabilityMap:
 
     with xr.open_dataset(path, engine="h5netcdf") as ds:
         om = ds["re_omega"].values + 1j * ds["im_omega"].values
-        return StabilityMap(ds["eta_perp"].values, ds["chi"].values, om, ds["iterations"].values.astype(np.int64))
+        return StabilityMap(ds["eta_perp"].values, ds["chi"].values, om, ds["iterations"].values.astype(np.int64),
+                            int(ds.attrs.get("check_points", 0)), float(ds.attrs.get("check_max_rel_diff", math.nan)))
 
 
 def _refine(values: np.ndarray, hmax: float) -> tuple[np.ndarray, np.ndarray]:
@@ -120,12 +128,18 @@ def _columns_numpy(etas, chis, seeds, tol, maxit):
 def stability_map(*, eta_perp=None, chi=None, eta_range: tuple[float, float] = (0.0, 350.0),
                   chi_range: tuple[float, float] = (-130.0, 130.0), step: float = 0.1,
                   max_step: float = 0.25, tol: float = 1e-10, maxit: int = 30,
-                  backend: str = "auto") -> StabilityMap:
+                  check_stride: int | None = None, backend: str = "auto") -> StabilityMap:
     """Leading eigenvalue over the grid eta_perp x chi (default: the paper's [0,350]x[-130,130]
-    at ``step``; or explicit increasing 1-D arrays). Returns a :class:`StabilityMap`."""
+    at ``step``; or explicit increasing 1-D arrays). Returns a :class:`StabilityMap`.
+
+    ``check_stride=k`` compares every k-th point in both directions with the collocation
+    solver started from scratch (:func:`leading_eigenvalue`), warning if a branch was jumped.
+    """
     backend = resolve_backend(backend)
     eta = _grid(eta_perp, eta_range, step, "eta_perp")
     chis = _grid(chi, chi_range, step, "chi")
+    if np.any(eta < 0):
+        raise ParameterError(f"eta_perp={eta[eta < 0][0]!r} must be >= 0 (eta_perp = 0 gives NaN)")
     max_step = positive("max_step", max_step)
     omega = np.full((eta.size, chis.size), np.nan + 0j)
     iters = np.full((eta.size, chis.size), -1, dtype=np.int64)
@@ -158,4 +172,24 @@ def stability_map(*, eta_perp=None, chi=None, eta_range: tuple[float, float] = (
     nz = np.flatnonzero(~zero)
     omega[np.ix_(ve, nz)] = out[:, col]
     iters[np.ix_(ve, nz)] = its[:, col]
-    return StabilityMap(eta, chis, omega, iters)
+    if check_stride is None:
+        return StabilityMap(eta, chis, omega, iters)
+    return _check(StabilityMap(eta, chis, omega, iters), int(check_stride))
+
+
+def _check(smap: StabilityMap, stride: int) -> StabilityMap:
+    if stride < 1:
+        raise ParameterError(f"check_stride={stride!r} must be an integer >= 1")
+    worst, count = 0.0, 0
+    for i in range(0, smap.eta_perp.size, stride):
+        for j in range(0, smap.chi.size, stride):
+            e, c = float(smap.eta_perp[i]), float(smap.chi[j])
+            if e <= 0 or c == 0:
+                continue
+            ref = leading_eigenvalue(c, e, n=48).omega
+            worst = max(worst, abs(smap.omega[i, j] - ref) / max(1.0, abs(ref)))
+            count += 1
+    if not worst <= 1e-6:
+        warnings.warn(f"stability map differs from the spectral solver by {worst:.3g} (relative) on the "
+                      f"check subgrid: a branch was jumped; reduce max_step", RuntimeWarning, stacklevel=2)
+    return StabilityMap(smap.eta_perp, smap.chi, smap.omega, smap.iterations, count, worst)
