@@ -168,3 +168,20 @@ def test_input_validation_names_parameter():
         stability_map(eta_perp=[-1.0, 2.0], chi=[1.0, 2.0])
     with pytest.raises(ParameterError, match="increasing"):
         stability_map(eta_perp=[2.0, 1.0], chi=[1.0, 2.0])
+
+
+@pytest.mark.parametrize("eta", [10.0, 200.0, 700.0])
+def test_small_chi_limit_is_continuous_with_chi_zero(eta):
+    # as chi -> 0 the leading eigenvalue tends to the exact chi = 0 value max(-1, -k1^4/eta)
+    w0 = max(-1.0, -(FREE_FREE_K1**4) / eta)
+    ws = [leading_eigenvalue(c, eta).omega for c in (1e-2, 1e-4, 1e-6)]
+    d = [abs(w - w0) for w in ws]
+    assert d[0] > d[1] > d[2] and d[2] < 1e-5
+    if w0 == -1.0:
+        # omega + 1 = a chi + b chi^2 + ...: (omega + 1)/chi converges linearly in chi
+        r = [(w + 1) / c for w, c in zip(ws, (1e-2, 1e-4, 1e-6))]
+        assert abs(r[0].imag) > 0.01
+        assert 50 < abs(r[0] - r[2]) / abs(r[1] - r[2]) < 200
+    m = stability_map(eta_perp=[eta], chi=[-1e-2, 0.0, 1e-4, 1e-2])
+    assert abs(m.omega[0, 3] - ws[0]) <= 1e-9 and abs(m.omega[0, 2] - ws[1]) <= 1e-9
+    assert m.omega[0, 1] == w0

@@ -14,10 +14,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._validate import finite, positive, positive_int
-from .newton import newton_root
+from .newton import follow_root, newton_root
 from .spectral import spectrum
 
 __all__ = ["LeadingEigenvalue", "leading_eigenvalue", "FREE_FREE_K1"]
+
+#: Below this |chi| the leading roots are continued from +-SMALL_CHI (accumulation at -1).
+SMALL_CHI = 0.05
 
 #: First positive root of cos k cosh k = 1 (free-free beam).
 FREE_FREE_K1 = 4.730040744862704
@@ -71,7 +74,11 @@ def leading_eigenvalue(chi: float, eta_perp: float, *, n: int = 32, candidates: 
 
     The ``candidates`` conjugate pairs with largest real part from a degree-``n`` collocation
     are polished by Newton; unresolved candidates (Newton moves them by > 1e-4 relative or
-    fails) are dropped, so the answer is a root of the characteristic function.
+    fails) are dropped, so the answer is a root of the characteristic function. For
+    0 < |chi| < 0.05 the eigenvalues crowd the accumulation point -1 (omega + 1 ~ chi), so the
+    two leading roots are followed from chi = +-0.05 along a geometric path instead.
+    Checked for eta_perp >= 0.1 and |chi| <= 1000; at eta_perp <~ 1e-2 with |chi| >~ 100 raise
+    ``n`` and compare.
     """
     chi = finite("chi", chi)
     eta_perp = positive("eta_perp", eta_perp)
@@ -81,6 +88,16 @@ def leading_eigenvalue(chi: float, eta_perp: float, *, n: int = 32, candidates: 
         bend = [-(FREE_FREE_K1**4) / eta_perp, -(7.853204624095838**4) / eta_perp]
         vals = sorted([-1.0] + bend, reverse=True)
         return LeadingEigenvalue(complex(vals[0]), complex(vals[1]), chi, eta_perp, True)
+    if abs(chi) < SMALL_CHI:
+        ref = leading_eigenvalue(math.copysign(SMALL_CHI, chi), eta_perp, n=n, candidates=candidates,
+                                 backend=backend)
+        path = math.copysign(1.0, chi) * np.geomspace(SMALL_CHI, abs(chi), 8 + int(20 * math.log10(SMALL_CHI / abs(chi))))
+        ends = []
+        for w0 in (ref.omega, ref.second):
+            res = follow_root(w0, path, eta_perp, backend=backend) if np.isfinite(w0) else None
+            ends.append(complex(res.omega[-1]) if res is not None and res.converged[-1] else complex(math.nan, math.nan))
+        ends.sort(key=lambda z: -z.real if np.isfinite(z) else math.inf)
+        return LeadingEigenvalue(ends[0], ends[1], chi, eta_perp, bool(np.isfinite(ends[0])))
     sp = spectrum(chi, eta_perp, n=n)
     cand = _distinct_pairs(sp.omega, candidates)
     res = newton_root(np.array(cand), chi, eta_perp, maxit=25, backend=backend)

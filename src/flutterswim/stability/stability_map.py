@@ -75,12 +75,20 @@ def load_map(path) -> StabilityMap:
                             int(ds.attrs.get("check_points", 0)), float(ds.attrs.get("check_max_rel_diff", math.nan)))
 
 
-def _refine(values: np.ndarray, hmax: float) -> tuple[np.ndarray, np.ndarray]:
-    """Insert points so consecutive gaps are <= hmax; return (fine path, indices of values)."""
+def _refine(values: np.ndarray, hmax: float, ratio: float = 1.25) -> tuple[np.ndarray, np.ndarray]:
+    """Insert points so consecutive gaps are <= hmax and, towards 0, |a/b| <= ratio (geometric
+    steps: the leading root moves like omega + 1 ~ chi near chi = 0); return (path, indices)."""
     pieces, idx, pos = [values[:1]], [0], 0
     for a, b in zip(values[:-1], values[1:]):
         k = max(1, int(np.ceil(abs(b - a) / hmax - 1e-9)))
-        pieces.append(a + (b - a) * np.arange(1, k + 1) / k)
+        kg = 0
+        if a * b > 0 and abs(a) > ratio * abs(b):
+            kg = int(np.ceil(np.log(abs(a / b)) / np.log(ratio) - 1e-9))
+        if kg > k:
+            k = kg
+            pieces.append(np.geomspace(a, b, k + 1)[1:])
+        else:
+            pieces.append(a + (b - a) * np.arange(1, k + 1) / k)
         pos += k
         idx.append(pos)
     return np.concatenate(pieces), np.array(idx)
