@@ -28,3 +28,11 @@ def test_figures_and_gif(tmp_path):
     # bifurcation curve continuous: neighbouring points close (no branch jumps)
     for b in (b1, b2):
         assert np.max(np.abs(np.diff(b.omega))) < 1.0
+
+
+def test_stability_figures_entry_point(tmp_path):
+    from flutterswim.stability import stability_figures
+
+    figs = stability_figures(tmp_path, step=5.0)
+    for p in (figs.map_png, figs.bifurcation_png, figs.modes_png, figs.mode_gif):
+        assert p.stat().st_size > 1000

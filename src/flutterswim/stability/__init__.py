@@ -10,9 +10,11 @@ kappa_t + kappa + chi r' = 0, free ends. Entry points:
   critical kappa_E
 - :func:`stability_map`, :func:`neutral_curve`, :func:`bifurcation`: maps and curves
 - :func:`eigenmodes`, :func:`animate_mode`, and :mod:`.plots`
+- :func:`stability_figures`: all panels of the paper's stability figure in one call
 """
 
 from .characteristic import boundary_matrix, char_f, quartic_roots, reduced_char
+from .figures import StabilityFigures, stability_figures
 from .leading import LeadingEigenvalue, leading_eigenvalue
 from .modes import Bifurcation, Eigenmode, animate_mode, bifurcation, eigenmodes, mode_shape
 from .neutral import NeutralCurve, critical_chi, neutral_curve
@@ -26,5 +28,5 @@ __all__ = [
     "RootResult", "Spectrum", "StabilityMap", "animate_mode", "bifurcation", "boundary_matrix", "char_f",
     "critical_chi", "eigenmodes", "follow_root", "leading_eigenvalue", "load_map", "mode_shape",
     "neutral_curve", "newton_root", "physical_stability", "quartic_roots", "reduced_char", "spectrum",
-    "stability_map",
+    "stability_map", "StabilityFigures", "stability_figures",
 ]
