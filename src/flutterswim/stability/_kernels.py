@@ -263,6 +263,16 @@ def _follow_columns(etas, chis, seeds, tol, maxit, out, iters):
         _follow(e, chis, seeds[i], tol, maxit, out[i], iters[i])
 
 
+@_jit
+def _newton_serial(w0, chis, etas, tol, maxit, out, iters):
+    """As _newton_batch without threads (a parallel launch costs milliseconds)."""
+    lam = np.empty(4, dtype=np.complex128)
+    for i in range(w0.shape[0]):
+        w, it = _newton(w0[i], chis[i], etas[i], lam, False, tol, maxit)
+        out[i] = w
+        iters[i] = it
+
+
 @_pjit
 def _newton_batch(w0, chis, etas, tol, maxit, out, iters):
     for i in prange(w0.shape[0]):

@@ -105,8 +105,8 @@ def newton_root(guess, chi, eta_perp, *, tol: float = 1e-12, maxit: int = 50, ba
         w0f = np.ascontiguousarray(w0.ravel())
         out = np.empty_like(w0f)
         it = np.empty(w0f.shape, dtype=np.int64)
-        _kernels._newton_batch(w0f, np.ascontiguousarray(ch.ravel()), np.ascontiguousarray(et.ravel()),
-                               tol, maxit, out, it)
+        kern = _kernels._newton_serial if w0f.size < 512 else _kernels._newton_batch
+        kern(w0f, np.ascontiguousarray(ch.ravel()), np.ascontiguousarray(et.ravel()), tol, maxit, out, it)
     else:
         out, it = _newton_numpy(w0, ch, et, tol, maxit)
     return RootResult(out.reshape(shape), it.reshape(shape))
