@@ -1,0 +1,81 @@
+"""Swimming emerges from flutter; convergence in space and time."""
+
+import numpy as np
+import pytest
+from conftest import crossings, stroke
+
+import flutterswim as fs
+from flutterswim.initial import InitialState
+from flutterswim.simulate import simulate
+
+
+@pytest.fixture(scope="module")
+def paper_run(paper_groups):
+    return simulate(paper_groups, 30.0, n_segments=24, rtol=1e-4, atol=1e-6, n_frames=3001)
+
+
+def _envelope(res, t0, t1):
+    """Peak-to-peak lateral tip offset (from the centroid) over t0 < t < t1."""
+    sel = (res.t > t0) & (res.t < t1)
+    return np.ptp(res.y[sel, -1] - res.y[sel].mean(axis=1))
+
+
+def test_straight_state_loses_stability_and_amplitude_grows(paper_run):
+    early, mid, late = (_envelope(paper_run, a, a + 2.5) for a in (3.0, 10.0, 27.0))
+    assert late > 50 * early and mid > 3 * early
+    assert late > 0.1  # body lengths: a large-amplitude stroke
+
+
+def test_limit_cycle_is_periodic_and_swims_along_the_field(paper_run):
+    r = paper_run
+    tc = crossings(r.t, r.y[:, -1] - r.y.mean(axis=1))
+    periods = np.diff(tc)[-6:]
+    # a periodic orbit: consecutive periods agree
+    assert np.ptp(periods) < 1e-3 * periods.mean()
+    # displacement per cycle of the centroid: along +e1 (the field), not across it
+    xc = np.interp(tc, r.t, r.x.mean(axis=1))
+    yc = np.interp(tc, r.t, r.y.mean(axis=1))
+    dx, dy = np.diff(xc)[-6:], np.diff(yc)[-6:]
+    assert np.all(dx > 0.05)  # body lengths per cycle, towards the cathode (direction of E)
+    assert np.all(np.abs(dy) < 1e-2 * dx)
+
+
+def test_stroke_is_nonreciprocal(paper_run):
+    """Net displacement per cycle needs a nonreciprocal stroke (scallop theorem); check the
+    shape loop itself encloses area: the tip's lateral offset vs mid-body angle."""
+    r = paper_run
+    sel = r.t > 20
+    a = r.y[sel, -1] - r.y[sel].mean(axis=1)
+    b = r.theta[sel, r.theta.shape[1] // 2] - r.theta[sel].mean(axis=1)
+    area = 0.5 * np.abs(np.sum(a[:-1] * np.diff(b) - b[:-1] * np.diff(a))) / sel.sum()
+    assert area > 1e-2 * np.ptp(a) * np.ptp(b) / 100
+
+
+def test_below_threshold_the_filament_stays_straight(paper_groups):
+    sub = paper_groups.replace(chi=0.5 * paper_groups.chi)
+    res = simulate(sub, 30.0, n_segments=16, rtol=1e-6, n_frames=3001)
+    dev = np.abs(res.theta - res.theta.mean(axis=1, keepdims=True)).max(axis=1)
+    assert dev.max() < 0.1
+    assert _envelope(res, 27.0, 29.5) < 0.1 * _envelope(res, 3.0, 5.5)
+
+
+def _period_adv(n, rtol, groups):
+    res = simulate(groups, 30.0, n_segments=n, rtol=rtol, atol=rtol * 1e-2, n_frames=6001)
+    return stroke(res, n_last=3)
+
+
+@pytest.mark.slow
+def test_spatial_convergence_is_second_order(paper_groups):
+    vals = np.array([_period_adv(n, 1e-8, paper_groups) for n in (12, 24, 48)])
+    for k in range(2):  # period, advancement
+        e1, e2 = abs(vals[0, k] - vals[1, k]), abs(vals[1, k] - vals[2, k])
+        slope = np.log2(e1 / e2)
+        assert 1.7 < slope < 2.4, (k, vals[:, k], slope)
+
+
+def test_temporal_error_falls_with_tolerance(paper_groups):
+    ref = _period_adv(12, 1e-7, paper_groups)
+    errs = [np.abs(np.subtract(_period_adv(12, tol, paper_groups), ref)) for tol in (1e-3, 1e-4, 1e-5)]
+    errs = np.array(errs)
+    assert np.all(np.diff(errs, axis=0) < 0), errs
+    assert np.all(errs[-1] < 1e-3 * np.abs(ref))
