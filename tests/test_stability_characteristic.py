@@ -102,6 +102,13 @@ def test_reduced_regular_near_coinciding_roots():
     h = 1e-6
     dref = (reduced_char_expm(w0 + h, chi, eta) - reduced_char_expm(w0 - h, chi, eta)) / (2 * h)
     assert abs(dg[0] - dref) <= 1e-6 * abs(dref)
+    from flutterswim.stability import _kernels
+
+    n = pts.size
+    gk, dgk, dck, mk = (np.empty(n, complex), np.empty(n, complex), np.empty(n, complex), np.empty(n))
+    _kernels._gval_batch(pts, np.full(n, chi), np.full(n, eta), gk, dgk, dck, mk)
+    assert np.allclose(gk * np.exp(2 * mk), ref, rtol=1e-9)
+    assert abs(dgk[0] * np.exp(2 * mk[0]) - dref) <= 1e-6 * abs(dref)
 
 
 @pytest.mark.parametrize("chi,eta", CASES)
