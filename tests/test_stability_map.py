@@ -185,3 +185,23 @@ def test_small_chi_limit_is_continuous_with_chi_zero(eta):
     m = stability_map(eta_perp=[eta], chi=[-1e-2, 0.0, 1e-4, 1e-2])
     assert abs(m.omega[0, 3] - ws[0]) <= 1e-9 and abs(m.omega[0, 2] - ws[1]) <= 1e-9
     assert m.omega[0, 1] == w0
+
+
+def test_works_without_numba():
+    import subprocess
+    import sys
+
+    code = (
+        "import sys; sys.modules['numba'] = None\n"
+        "import numpy as np\n"
+        "from flutterswim.stability import _kernels, leading_eigenvalue, neutral_curve, stability_map\n"
+        "assert not _kernels.HAVE_NUMBA\n"
+        "m = stability_map(eta_perp=[10.0, 71.5], chi=[-60.0, 0.0, 60.0])\n"
+        "nc = neutral_curve([70.0, 71.5])\n"
+        "print(repr(complex(m.omega[1, 2])), repr(float(nc.chi_cr[1])))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    w, chi_cr = (eval(x) for x in out.stdout.split())
+    assert abs(w - leading_eigenvalue(60.0, 71.5).omega) <= 1e-9 * abs(w)
+    assert chi_cr == pytest.approx(neutral_curve([70.0, 71.5]).chi_cr[1], rel=1e-9)
