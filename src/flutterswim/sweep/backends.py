@@ -1,0 +1,182 @@
+"""Execution backends: a registry of named executors behind one argument.
+
+Every backend is a context manager factory ``factory(workers=None, scheduler=None)``
+returning an object with ``imap(fn, items)``: it calls ``fn(item)`` for every
+``(key, item)`` pair and yields ``(key, fn(item))`` in completion order. Workers only
+compute and return; the caller alone writes results.
+
+- ``"serial"``: in this process, in order.
+- ``"processes"`` (default): a local process pool, all cores unless ``workers``.
+- ``"dask"``: a running dask.distributed scheduler at ``scheduler`` (``tcp://host:port``).
+- ``"dask-local"``: a dask.distributed LocalCluster started on demand (``workers`` processes,
+  one thread each), closed at the end.
+
+``register_backend(name, factory)`` adds one (e.g. a batch system).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from typing import Any, Callable, Iterable, Iterator
+
+from .._validate import ParameterError
+
+__all__ = ["BACKENDS", "register_backend", "get_backend", "available_backends", "default_workers"]
+
+BACKENDS: dict[str, Callable[..., Any]] = {}
+
+
+def register_backend(name: str, factory: Callable[..., Any]) -> None:
+    """Register ``factory(workers=..., scheduler=...)`` -> context manager yielding an executor."""
+    BACKENDS[name] = factory
+
+
+def available_backends() -> list[str]:
+    return sorted(BACKENDS)
+
+
+def default_workers() -> int:
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def get_backend(name: str, *, workers: int | None = None, scheduler: str | None = None):
+    """A context manager yielding the executor of backend ``name``."""
+    if scheduler is not None and name in ("processes", "serial"):
+        name = "dask"
+    try:
+        factory = BACKENDS[name]
+    except KeyError:
+        raise ParameterError(f"backend={name!r} is unknown; choose one of {available_backends()}") from None
+    if workers is not None and (isinstance(workers, bool) or int(workers) != workers or workers < 1):
+        raise ParameterError(f"workers={workers!r} must be an integer >= 1")
+    return factory(workers=workers, scheduler=scheduler)
+
+
+class SerialExecutor:
+    name = "serial"
+    workers = 1
+
+    def imap(self, fn: Callable, items: Iterable[tuple[Any, Any]]) -> Iterator[tuple[Any, Any]]:
+        for key, item in items:
+            yield key, fn(item)
+
+
+@contextlib.contextmanager
+def _serial(workers=None, scheduler=None):
+    yield SerialExecutor()
+
+
+def _limit_threads() -> None:
+    # one BLAS thread per worker: the points are the parallelism (and results stay bitwise
+    # reproducible across backends)
+    for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
+        os.environ.setdefault(k, "1")
+
+
+class PoolExecutor:
+    name = "processes"
+
+    def __init__(self, pool, workers: int):
+        self.pool, self.workers = pool, workers
+
+    def imap(self, fn, items):
+        from concurrent.futures import FIRST_COMPLETED, wait
+
+        it = iter(items)
+        pending: dict[Any, Any] = {}
+
+        def fill():
+            while len(pending) < 2 * self.workers:
+                try:
+                    key, item = next(it)
+                except StopIteration:
+                    return
+                pending[self.pool.submit(fn, item)] = key
+
+        fill()
+        while pending:
+            done, _ = wait(list(pending), return_when=FIRST_COMPLETED)
+            for f in done:
+                key = pending.pop(f)
+                yield key, f.result()
+            fill()
+
+
+@contextlib.contextmanager
+def _processes(workers=None, scheduler=None):
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
+
+    n = workers or default_workers()
+    ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else mp.get_context()
+    with ProcessPoolExecutor(max_workers=n, mp_context=ctx, initializer=_limit_threads) as pool:
+        yield PoolExecutor(pool, n)
+
+
+class DaskExecutor:
+    name = "dask"
+
+    def __init__(self, client):
+        self.client = client
+        try:
+            self.workers = max(1, sum(w.get("nthreads", 1) for w in client.scheduler_info()["workers"].values()))
+        except Exception:  # pragma: no cover
+            self.workers = 1
+
+    def imap(self, fn, items):
+        from distributed import as_completed
+
+        it = iter(items)
+        futs: dict[Any, Any] = {}
+        ac = as_completed()
+        window = 2 * self.workers
+
+        def fill():
+            while len(futs) < window:
+                try:
+                    key, item = next(it)
+                except StopIteration:
+                    return
+                f = self.client.submit(fn, item, pure=False)
+                futs[f] = key
+                ac.add(f)
+
+        fill()
+        while futs:
+            f = next(ac)
+            key = futs.pop(f)
+            yield key, f.result()
+            f.release()
+            fill()
+
+
+@contextlib.contextmanager
+def _dask(workers=None, scheduler=None):
+    if scheduler is None:
+        raise ParameterError("backend='dask' needs scheduler='tcp://host:port' (or use backend='dask-local')")
+    from distributed import Client
+
+    with Client(scheduler, set_as_default=False) as client:
+        yield DaskExecutor(client)
+
+
+@contextlib.contextmanager
+def _dask_local(workers=None, scheduler=None):
+    from distributed import Client, LocalCluster
+
+    n = workers or default_workers()
+    _limit_threads()
+    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster, Client(cluster, set_as_default=False) as client:
+        client.wait_for_workers(n)
+        yield DaskExecutor(client)
+
+
+register_backend("serial", _serial)
+register_backend("processes", _processes)
+register_backend("dask", _dask)
+register_backend("dask-local", _dask_local)
