@@ -3,7 +3,19 @@
 from importlib.metadata import PackageNotFoundError, version
 
 from ._validate import ParameterError
+from .field import Constant, Field, Piecewise
+from .initial import InitialState
 from .params import PAPER, Groups, Parameters, SlendernessWarning, preset
+from .result import SimulationResult, load
+from .simulate import simulate
+from .stability import (
+    leading_eigenvalue,
+    neutral_curve,
+    physical_stability,
+    spectrum,
+    stability_figures,
+    stability_map,
+)
 
 try:
     __version__ = version("flutterswim")
@@ -12,10 +24,23 @@ except PackageNotFoundError:  # pragma: no cover - running from a source tree
 
 __all__ = [
     "PAPER",
+    "Constant",
+    "Field",
     "Groups",
+    "InitialState",
     "ParameterError",
     "Parameters",
+    "Piecewise",
+    "SimulationResult",
     "SlendernessWarning",
     "__version__",
+    "leading_eigenvalue",
+    "load",
+    "neutral_curve",
+    "physical_stability",
     "preset",
+    "simulate",
+    "spectrum",
+    "stability_figures",
+    "stability_map",
 ]

@@ -79,12 +79,13 @@ class Filament:
 
     # --- kernels ------------------------------------------------------------
     def node_theta(self, theta: np.ndarray, kappa: np.ndarray) -> np.ndarray:
-        """Tangent angle at the joints (N+1,): mean of the neighbouring segments inside; at
-        the free ends theta_0 -/+ (h/2) kappa, second order since theta_s = kappa there."""
-        tn = self._avg @ theta
-        tn[0] -= 0.5 * self.h * kappa[0]
-        tn[-1] += 0.5 * self.h * kappa[-1]
-        return tn
+        """Tangent angle at the joints (N+1,): mean of the neighbouring segments; the end
+        segments' angles at the free ends.
+
+        (Extrapolating the ends with theta_s = kappa, theta_0 - h kappa_0 / 2, feeds kappa_0
+        back into its own activity law with gain chi h / 2 and, for chi h > 2, creates a
+        spurious unstable mode, so it is not done.)"""
+        return self._avg @ theta
 
     def mobility(self, theta: np.ndarray, kappa: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Mobility matrix G (N+2, N+2) and the weighted drag maps Fx, Fy (N+1, N+2).
@@ -155,8 +156,6 @@ class Filament:
         jac[n + 2 :, 2 : n + 2] = cosv[:, None] * self._avg
         k = np.arange(n + 2, 2 * n + 3)
         jac[k, k] = -1.0
-        jac[n + 2, n + 2] -= 0.5 * self.h * cosv[0]
-        jac[-1, -1] += 0.5 * self.h * cosv[-1]
         return jac
 
     def forces(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
