@@ -132,8 +132,8 @@ class DaskExecutor:
 
         it = iter(items)
         futs: dict[Any, Any] = {}
-        ac = as_completed()
         window = 2 * self.workers
+        ac = None
 
         def fill():
             while len(futs) < window:
@@ -143,9 +143,13 @@ class DaskExecutor:
                     return
                 f = self.client.submit(fn, item, pure=False)
                 futs[f] = key
-                ac.add(f)
+                if ac is not None:
+                    ac.add(f)
 
         fill()
+        if not futs:
+            return
+        ac = as_completed(list(futs), loop=self.client.loop)
         while futs:
             f = next(ac)
             key = futs.pop(f)

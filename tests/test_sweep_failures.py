@@ -1,0 +1,58 @@
+"""A point that raises or returns non-finite values is recorded as failed; the others complete."""
+
+import math
+import time
+
+import numpy as np
+import pytest
+
+from flutterswim.sweep import open_sweep, sweep
+
+
+def flaky(task):
+    x = task["values"]["chi"]
+    if x == 2.0:
+        raise RuntimeError("boom at chi=2")
+    if x == 3.0:
+        return {"a": math.nan, "b": 1.0}
+    if x == 4.0:
+        return {"a": 1.0, "b": math.inf}
+    return {"a": 10 * x, "b": x + 0.5}
+
+
+flaky.variables = ["a", "b"]
+
+
+@pytest.mark.parametrize("backend", ["serial", "processes"])
+def test_failures_are_recorded_and_do_not_stop(tmp_path, backend, capsys):
+    out = tmp_path / "f.zarr"
+    ds = sweep({"chi": [1.0, 2.0, 3.0, 4.0, 5.0]}, out=str(out), backend=backend, workers=2,
+               point_fn=flaky, progress=True)
+    assert ds["done"].all()
+    np.testing.assert_array_equal(ds["failed"].values, [False, True, True, True, False])
+    reason = ds["reason"].values
+    assert reason[0] == "" and reason[4] == ""
+    assert "RuntimeError" in reason[1] and "boom at chi=2" in reason[1]
+    assert "non-finite" in reason[2] and "a=nan" in reason[2]
+    assert "non-finite" in reason[3] and "b=inf" in reason[3]
+    np.testing.assert_array_equal(ds["a"].values[[0, 4]], [10.0, 50.0])
+    assert np.all(np.isnan(ds["a"].values[1:4]))
+    assert ds.attrs["n_failed"] == 3
+    err = capsys.readouterr().err
+    assert "3 of 5 points failed" in err and "boom at chi=2" in err
+    # the store holds the same (reopened without running)
+    again = open_sweep(str(out))
+    np.testing.assert_array_equal(again["failed"].values, ds["failed"].values)
+    assert list(again["reason"].values) == list(reason)
+
+
+def test_real_point_failure_is_recorded():
+    """A real simulation point with an invalid parameter fails with the parameter's message;
+    the valid point still runs (and is the straight state at zero field)."""
+    ds = sweep({"tau": [0.375, -1.0]}, base=__import__("flutterswim").PAPER.replace(kappa_E=0.0),
+               backend="serial", progress=False,
+               settings={"n_segments": 8, "t_cap": 2.0, "chunk": 1.0, "rtol": 1e-3, "atol": 1e-5, "n_cycles": 1})
+    assert ds["done"].all()
+    np.testing.assert_array_equal(ds["failed"].values, [False, True])
+    assert "tau=-1.0" in str(ds["reason"].values[1]) and "> 0" in str(ds["reason"].values[1])
+    assert bool(ds["straight"].values[0])

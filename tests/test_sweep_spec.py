@@ -1,0 +1,72 @@
+"""Sweep definition: grid parsing, point parameters, refusal of a changed definition."""
+
+import numpy as np
+import pytest
+
+from flutterswim._validate import ParameterError
+from flutterswim.params import PAPER, Groups
+from flutterswim.sweep import SweepDefinitionError, SweepSpec, parse_axis, sweep
+from flutterswim.sweep.spec import point_params
+
+
+def test_parse_axis_forms():
+    a = parse_axis("kappa_E_ratio=0:2:101")
+    assert a.name == "kappa_E_ratio" and len(a.values) == 101
+    assert a.values[0] == 0.0 and a.values[-1] == 2.0 and a.values[50] == 1.0
+    assert parse_axis("chi=60,70.5,80").values == (60.0, 70.5, 80.0)
+    assert parse_axis("tau=0.3").values == (0.3,)
+    for bad in ("kappa_E_ratio", "kappa_E_ratio=0:2", "kappa_E_ratio=a:b:3", "nope=1,2", "chi=1,nan"):
+        with pytest.raises(ParameterError):
+            parse_axis(bad)
+
+
+def test_point_params():
+    p = point_params(PAPER, {"kappa_E_ratio": 0.5})
+    assert p.kappa_E == pytest.approx(0.5 * PAPER.kappa_E)
+    p = point_params(PAPER, {"chi": 30.0, "tau": 0.5})
+    assert p.kappa_E == pytest.approx(30.0 / PAPER.l) and p.tau == 0.5
+    g = point_params(PAPER, {"eta_perp": 100.0})
+    assert isinstance(g, Groups) and g.eta_perp == 100.0 and g.eta_par == pytest.approx(PAPER.eta_par)
+    g = point_params(Groups(40.0, 70.0, 50.0), {"kappa_E_ratio": 2.0})
+    assert g.chi == 100.0
+    with pytest.raises(ParameterError, match="physical"):
+        point_params(Groups(40.0, 70.0, 50.0), {"tau": 1.0})
+
+
+def test_grid_and_list_and_continuation_order():
+    s = SweepSpec.build(["kappa_E_ratio=0:1:3", "tau=0.3,0.4"])
+    assert s.shape == (3, 2) and s.n_points == 6
+    assert s.values(1) == {"kappa_E_ratio": 0.0, "tau": 0.4}
+    s = SweepSpec.build({"chi": [1, 2, 3], "tau": [0.1, 0.2, 0.3]}, mode="list")
+    assert s.shape == (3,) and s.values(2) == {"chi": 3.0, "tau": 0.3}
+    with pytest.raises(ParameterError, match="equal lengths"):
+        SweepSpec.build({"chi": [1, 2, 3], "tau": [0.1]}, mode="list")
+    s = SweepSpec.build(["kappa_E_ratio=0:1:3"], continuation=True)
+    seq = [s.point(k)[:2] for k in range(s.n_points)]
+    assert seq == [("up", 0), ("up", 1), ("up", 2), ("down", 2), ("down", 1), ("down", 0)]
+    with pytest.raises(ParameterError, match="repeat"):
+        SweepSpec.build(["chi=1,2", "chi=3"])
+
+
+def _const(task):
+    return {"a": task["values"]["x_dummy"] if "x_dummy" in task["values"] else task["values"]["chi"]}
+
+
+_const.variables = ["a"]
+
+
+def test_changed_definition_is_refused(tmp_path):
+    out = tmp_path / "s.zarr"
+    ds = sweep({"chi": [1.0, 2.0]}, out=str(out), backend="serial", point_fn=_const, progress=False)
+    np.testing.assert_array_equal(ds["a"].values, [1.0, 2.0])
+    # the same definition resumes (nothing to do) and gives the same data
+    ds2 = sweep({"chi": [1.0, 2.0]}, out=str(out), backend="serial", point_fn=_const, progress=False)
+    np.testing.assert_array_equal(ds2["a"].values, ds["a"].values)
+    with pytest.raises(SweepDefinitionError, match=r"axes\.0\.values"):
+        sweep({"chi": [1.0, 3.0]}, out=str(out), backend="serial", point_fn=_const, progress=False)
+    with pytest.raises(SweepDefinitionError, match="settings.t_cap"):
+        sweep({"chi": [1.0, 2.0]}, out=str(out), backend="serial", point_fn=_const, progress=False,
+              settings={"t_cap": 10.0})
+    ds3 = sweep({"chi": [1.0, 3.0]}, out=str(out), backend="serial", point_fn=_const, progress=False,
+                overwrite=True)
+    np.testing.assert_array_equal(ds3["a"].values, [1.0, 3.0])
