@@ -173,3 +173,27 @@ def load(path: str | Path) -> SimulationResult:
 
     with xr.open_dataset(path, engine="h5netcdf") as ds:
         return SimulationResult.from_xarray(ds.load())
+
+
+def concatenate(parts: "list[SimulationResult]") -> SimulationResult:
+    """Join consecutive runs (each continuing from the previous final state) into one.
+
+    The first frame of each later part repeats the last frame of the one before and is
+    dropped. Solver statistics are summed."""
+    if not parts:
+        raise ValueError("concatenate needs at least one result")
+    first, last = parts[0], parts[-1]
+    arrays = {}
+    for name in ("t", "x", "y", "theta", "kappa", "r0", "field_angle", "field_strength", "A", "V", "M"):
+        if getattr(first, name) is None:
+            continue
+        chunks = [getattr(first, name)] + [getattr(p, name)[1:] for p in parts[1:]]
+        arrays[name] = np.concatenate(chunks, axis=0)
+    st = [p.stats for p in parts]
+    stats = SolverStats(
+        first.stats.method, first.stats.order, *(sum(getattr(s, k) for s in st)
+        for k in ("n_steps", "n_rejected", "n_rhs", "n_jac", "n_lu")), sum(s.wall_time for s in st),
+    )
+    return replace(first, **arrays, stats=stats, status=last.status, message=last.message,
+                   state_final=last.state_final, t_final=last.t_final,
+                   settings={**first.settings, "t_end": last.settings.get("t_end"), "parts": len(parts)})
