@@ -1,0 +1,76 @@
+"""CLI: ``flutterswim sweep AXIS... --out store.zarr`` and ``flutterswim plot-sweep store.zarr``.
+
+``register(subparsers)`` adds both subcommands to an argparse parser."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+__all__ = ["register", "main"]
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("sweep", help="parameter sweep (durable, resumable Zarr store)",
+                              description="Run a parameter sweep; rerunning the same command resumes it.")
+    p.add_argument("axes", nargs="+", help="axes like kappa_E_ratio=0:2:101, chi=60,70,80, tau=0.3")
+    p.add_argument("--preset", default="paper", help="base parameter preset (default: paper)")
+    p.add_argument("--out", required=True, help="Zarr store (created, or resumed if it exists)")
+    p.add_argument("--backend", default=None, help="processes (default), serial, dask, dask-local")
+    p.add_argument("--scheduler", default=None, help="dask scheduler address tcp://host:port (implies --backend dask)")
+    p.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
+    p.add_argument("--mode", choices=("grid", "list"), default="grid")
+    p.add_argument("--continuation", action="store_true", help="start each point from the previous one, up then down")
+    p.add_argument("--overwrite", action="store_true", help="discard a store with a different definition")
+    p.add_argument("--no-progress", action="store_true")
+    for name, typ, help_ in (("n-cycles", int, "cycles averaged (15)"), ("t-cap", float, "time cap [tau] (60)"),
+                             ("n-segments", int, "segments (24)"), ("rtol", float, "(1e-4)"), ("atol", float, "(1e-6)")):
+        p.add_argument(f"--{name}", type=typ, default=None, help=help_)
+    p.add_argument("--plot", default=None, help="also save the sweep figure here (1-d sweeps)")
+    p.set_defaults(func=_cmd_sweep)
+
+    q = subparsers.add_parser("plot-sweep", help="figure of a sweep store (advancement and period)")
+    q.add_argument("store")
+    q.add_argument("--out", default="sweep.png")
+    q.add_argument("--branch", default=None, help="up or down (continuation sweeps)")
+    q.set_defaults(func=_cmd_plot)
+
+
+def _cmd_sweep(args) -> int:
+    from .run import sweep
+
+    settings = {k: v for k, v in (("n_cycles", args.n_cycles), ("t_cap", args.t_cap), ("n_segments", args.n_segments),
+                                  ("rtol", args.rtol), ("atol", args.atol)) if v is not None}
+    backend = args.backend or ("dask" if args.scheduler else "processes")
+    ds = sweep(args.axes, args.preset, out=args.out, backend=backend, workers=args.workers, scheduler=args.scheduler,
+               mode=args.mode, continuation=args.continuation, settings=settings or None,
+               progress=not args.no_progress, overwrite=args.overwrite)
+    print(f"{args.out}: {ds.attrs['n_done']}/{ds.attrs['n_points']} points, {ds.attrs['n_failed']} failed")
+    if args.plot:
+        from .plot import plot_sweep
+
+        plot_sweep(ds, args.plot)
+        print(f"figure: {args.plot}")
+    return 1 if ds.attrs["n_failed"] else 0
+
+
+def _cmd_plot(args) -> int:
+    from .plot import plot_sweep
+    from .run import open_sweep
+
+    plot_sweep(open_sweep(args.store), args.out, branch=args.branch)
+    print(f"figure: {args.out}")
+    return 0
+
+
+def main(argv=None) -> int:
+    """Standalone entry (``python -m flutterswim.sweep.cli sweep ...``)."""
+    ap = argparse.ArgumentParser(prog="flutterswim")
+    sub = ap.add_subparsers(dest="command", required=True)
+    register(sub)
+    args = ap.parse_args(argv)
+    return args.func(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,90 @@
+"""The paper's kappa_E sweep figure: advancement per cycle and period against kappa_E/kappa_E_fit,
+self-intersecting parts in red, the linear-stability critical ratio marked."""
+
+from __future__ import annotations
+
+import json
+import math
+from typing import Any
+
+import numpy as np
+
+from .._validate import ParameterError
+
+__all__ = ["plot_sweep", "critical_ratio"]
+
+
+def critical_ratio(ds) -> float:
+    """kappa_E,cr / kappa_E of the sweep's base (linear stability; NaN if unavailable)."""
+    from ..params import Parameters
+    from .spec import SweepSpec
+
+    spec = SweepSpec.from_dict(json.loads(ds.attrs["sweep_spec"]))
+    b = spec.base
+    try:
+        from ..stability import critical_chi
+
+        chi_cr, _ = critical_chi(b.groups.eta_perp if isinstance(b, Parameters) else b.eta_perp)
+        return float(chi_cr / b.chi) if b.chi else math.nan
+    except Exception:  # pragma: no cover - stability unavailable
+        return math.nan
+
+
+def _coloured(ax, x, y, red, **kw):
+    """Line through (x, y) in black, segments touching a red point in red."""
+    x, y, red = np.asarray(x, float), np.asarray(y, float), np.asarray(red, bool)
+    for i in range(x.size - 1):
+        if not (np.isfinite(y[i]) and np.isfinite(y[i + 1])):
+            continue
+        c = "tab:red" if (red[i] or red[i + 1]) else "k"
+        ax.plot(x[i : i + 2], y[i : i + 2], color=c, lw=1.8, solid_capstyle="round")
+    ok = np.isfinite(y)
+    ax.scatter(x[ok & ~red], y[ok & ~red], s=8, color="k", zorder=3)
+    ax.scatter(x[ok & red], y[ok & red], s=8, color="tab:red", zorder=3)
+
+
+def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str | None = None,
+               advance: str = "advance_per_cycle_bl", period: str = "period_s") -> Any:
+    """Two panels (advancement per cycle, period) against the swept axis (default
+    ``kappa_E_ratio``); returns the Figure, saved to ``path`` if given (Agg backend)."""
+    import matplotlib
+
+    if path is not None:
+        matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    if "branch" in ds.dims:
+        ds = ds.sel(branch=branch or "up")
+    dims = [d for d in ds[advance].dims]
+    if len(dims) != 1:
+        raise ParameterError(f"plot_sweep needs a 1-d sweep; {advance} has dims {dims}")
+    x = x or dims[0]
+    xv = ds[x].values
+    swim = ds["swimming"].values & ~ds["failed"].values
+    straight = ds["straight"].values
+    adv = np.where(swim, ds[advance].values, np.where(straight, 0.0, np.nan))
+    per = np.where(swim, ds[period].values, np.nan)
+    red = ds["self_intersecting"].values
+    fig, axs = plt.subplots(2, 1, figsize=(5.0, 5.2), sharex=True, constrained_layout=True)
+    _coloured(axs[0], xv, adv, red)
+    _coloured(axs[1], xv, per, red)
+    unit = ds.attrs.get("time_unit", "s")
+    axs[0].set_ylabel("advancement per cycle [body lengths]" if advance.endswith("_bl") else advance)
+    axs[1].set_ylabel(f"period [{unit}]" if period == "period_s" else period)
+    axs[1].set_xlabel(r"$\kappa_E/\kappa_E^{fit}$" if x == "kappa_E_ratio" else x)
+    rc = critical_ratio(ds) if x == "kappa_E_ratio" else math.nan
+    if math.isfinite(rc):
+        for ax in axs:
+            ax.axvline(rc, color="tab:blue", ls="--", lw=1)
+        axs[0].text(rc, axs[0].get_ylim()[1], f" linear onset {rc:.3f}", color="tab:blue", va="top", fontsize=8)
+    failed = ds["failed"].values
+    if failed.any():
+        axs[0].plot(xv[failed], np.zeros(failed.sum()), "x", color="0.5", label="failed")
+        axs[0].legend(fontsize=8)
+    capped = (~ds["limit_cycle_reached"].values) & swim
+    if capped.any():
+        axs[1].plot(xv[capped], per[capped], "o", mfc="none", color="0.4", ms=6, label="no limit cycle by t_cap")
+        axs[1].legend(fontsize=8)
+    if path is not None:
+        fig.savefig(path, dpi=150)
+    return fig
