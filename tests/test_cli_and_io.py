@@ -1,0 +1,54 @@
+"""NetCDF round trip of a run, and the CLI against the Python API."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import flutterswim as fs
+from flutterswim.analysis.descriptors import describe
+from flutterswim.field import Field, Piecewise
+
+
+@pytest.fixture(scope="module")
+def short_run(tmp_path_factory):
+    field = Field(direction=Piecewise([0.0, 11.0], [0.0, 0.1]))
+    run = fs.simulate(fs.PAPER, 12.0, n_segments=16, rtol=1e-4, field=field, forces=True, n_frames=1201)
+    path = run.save(tmp_path_factory.mktemp("io") / "run.nc")
+    return run, path
+
+
+def test_netcdf_round_trip_is_exact(short_run):
+    run, path = short_run
+    back = fs.load(path)
+    for name in ("t", "s", "s_mid", "x", "y", "theta", "kappa", "r0", "field_angle",
+                 "field_strength", "A", "V", "M", "state_final"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(run, name), err_msg=name)
+    assert back.params == run.params and back.groups == run.groups
+    assert back.stats == run.stats and back.settings == run.settings
+    assert (back.status, back.message, back.t_final, back.units) == (run.status, run.message, run.t_final, run.units)
+    import xarray as xr
+
+    with xr.open_dataset(path, engine="h5netcdf") as ds:
+        assert ds.attrs["flutterswim_version"] == fs.__version__
+        assert json.loads(ds.attrs["params"])["kappa_E"] == fs.PAPER.kappa_E
+
+
+def test_field_schedule_is_followed(short_run):
+    run, _ = short_run
+    assert np.all(run.field_angle[run.t < 11.0] == 0.0) and np.all(run.field_angle[run.t >= 11.0] == 0.1)
+
+
+def test_cli_json_matches_python_api(short_run):
+    run, path = short_run
+    out = subprocess.run([sys.executable, "-m", "flutterswim.cli", "describe", str(path), "--json", "--last", "3"],
+                         capture_output=True, text=True, check=True)
+    assert json.loads(out.stdout) == json.loads(json.dumps(describe(fs.load(path), n_last=3).to_dict()))
+
+
+def test_cli_reports_bad_input_by_name(tmp_path):
+    out = subprocess.run([sys.executable, "-m", "flutterswim.cli", "simulate", "--segments", "2", "--t-end", "1",
+                          "--out", str(tmp_path / "x.nc"), "--quiet"], capture_output=True, text=True)
+    assert out.returncode == 2 and "n_segments=2" in out.stderr
