@@ -13,7 +13,7 @@ import numpy as np
 from ._validate import ParameterError, finite, positive, positive_int
 from .field import Field
 from .filament import Filament, centreline
-from .geometry import self_intersects
+from .analysis.intersection import polyline_self_intersects as self_intersects
 from .initial import InitialState
 from .integrators import METHODS, integrate
 from .params import Groups, Parameters
