@@ -28,7 +28,7 @@ DESCRIPTOR_VARIABLES = tuple(
     f for f in Descriptors.__dataclass_fields__ if f not in _SKIP
 )
 #: Classification of the point (0/1), independent of the descriptors.
-FLAG_VARIABLES = ("straight", "unstable", "swimming", "limit_cycle_reached", "capped")
+FLAG_VARIABLES = ("straight", "unstable", "swimming", "limit_cycle_reached", "saturated", "capped")
 #: Always finite for a successful point (else the point is recorded as failed).
 CORE_VARIABLES = ("t_simulated", "oscillation_amplitude", "amplitude_growth_rate", "n_chunks")
 VARIABLES = FLAG_VARIABLES + CORE_VARIABLES + ("cycle_amplitude", "cycle_amplitude_std") + DESCRIPTOR_VARIABLES
@@ -63,7 +63,7 @@ def run_point(task: Mapping[str, Any]) -> dict[str, Any]:
     t = 0.0
     chunk = st.chunk * tunit
     t_cap = st.t_cap * tunit
-    limit = capped = False
+    limit = capped = saturated = False
     straight = False
     cyc = None
     res = None
@@ -101,6 +101,18 @@ def run_point(task: Mapping[str, Any]) -> dict[str, Any]:
                 if n_on >= st.n_cycles:
                     limit = True
                     break
+            # a stationary but not strictly periodic oscillation (e.g. self-intersecting strokes):
+            # amplitude steady over the last chunks covering at least n_cycles cycles
+            k_sat = st.saturated_chunks
+            if (cyc is not None and len(amps) > k_sat and cyc.n_cycles >= st.n_cycles
+                    and all(a_ > st.swim_tol for a_ in amps[-k_sat - 1:])
+                    and all(abs(math.log(amps[-j] / amps[-j - 1])) / st.chunk < st.rate_tol
+                            for j in range(1, k_sat + 1))
+                    ):
+                per_ = float(np.median(cyc.periods[-5:]))
+                if k_sat * chunk >= st.n_cycles * per_:
+                    saturated = True
+                    break
         elif len(amps) >= 2 and a <= amps[-2] and a < st.damped_tol:
             straight = True
             break
@@ -118,12 +130,13 @@ def run_point(task: Mapping[str, Any]) -> dict[str, Any]:
         rate = 0.0
     rate = max(rate, -1e3)
     a_last = amps[-1]
+    growing, decaying = rate > st.rate_tol, rate < -st.rate_tol
+    unstable = (not straight) and (limit or growing or (not decaying and a_last > st.swim_tol))
     if not straight:
-        straight = a_last < st.straight_tol and rate < 0
-    unstable = (not straight) and (limit or rate > 0 or a_last > st.swim_tol)
+        straight = (not unstable) and a_last < st.straight_tol
     out: dict[str, float] = {k: math.nan for k in VARIABLES}
     out.update(straight=float(straight), unstable=float(unstable), limit_cycle_reached=float(limit),
-               capped=float(capped), t_simulated=t / tunit, oscillation_amplitude=a_last,
+               capped=float(capped), saturated=float(saturated), t_simulated=t / tunit, oscillation_amplitude=a_last,
                amplitude_growth_rate=rate, n_chunks=float(len(amps)))
     swimming = False
     if a_last > st.swim_tol:
@@ -143,7 +156,7 @@ def run_point(task: Mapping[str, Any]) -> dict[str, Any]:
             amp = c.amplitudes[idx] / length
             out["cycle_amplitude"] = float(np.mean(amp))
             out["cycle_amplitude_std"] = float(np.std(amp, ddof=1)) if amp.size > 1 else 0.0
-            swimming = d.n_cycles_used >= 1
+            swimming = d.n_cycles_used >= 1 and not decaying
         except Exception:
             swimming = False
     out["swimming"] = float(swimming)

@@ -80,7 +80,11 @@ class PointSettings:
     limit cycle once ``n_cycles`` cycles on it are available (they are averaged), or when the
     straight state has damped out. ``straight_tol``: oscillation half-range of the shape angle
     [rad] under which a decaying state is called straight; ``swim_tol``: above which cycles
-    are analysed."""
+    are analysed; ``rate_tol``: growth rate of the oscillation amplitude [1/tau] beyond which
+    it counts as growing or decaying (``unstable``: limit cycle, growing, or a large
+    non-decaying oscillation). A swimming point whose amplitude stays within ``rate_tol``
+    over ``saturated_chunks`` chunks (at least ``n_cycles`` cycles) but never meets the
+    limit-cycle test stops early and is flagged ``saturated`` (stationary, not periodic)."""
 
     n_cycles: int = 15
     t_cap: float = 60.0
@@ -92,14 +96,16 @@ class PointSettings:
     straight_tol: float = 1e-2
     swim_tol: float = 0.05
     damped_tol: float = 1e-6
+    rate_tol: float = 2e-3
+    saturated_chunks: int = 3
     initial_angle_deg: float = 0.01
 
     def __post_init__(self) -> None:
-        for k in ("t_cap", "chunk", "rtol", "atol", "straight_tol", "swim_tol", "damped_tol"):
+        for k in ("t_cap", "chunk", "rtol", "atol", "straight_tol", "swim_tol", "damped_tol", "rate_tol"):
             v = float(getattr(self, k))
             if not (math.isfinite(v) and v > 0):
                 raise ParameterError(f"{k}={getattr(self, k)!r} must be a finite number > 0")
-        for k in ("n_cycles", "n_segments", "frames_per_tau"):
+        for k in ("n_cycles", "n_segments", "frames_per_tau", "saturated_chunks"):
             v = getattr(self, k)
             if isinstance(v, bool) or int(v) != v or v < 1:
                 raise ParameterError(f"{k}={v!r} must be an integer >= 1")

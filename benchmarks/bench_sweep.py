@@ -1,0 +1,110 @@
+"""Sweep benchmarks (not a test): the paper's 101-point kappa_E sweep, worker scaling,
+Dask per-point overhead, resume cost.
+
+    .venv/bin/python benchmarks/bench_sweep.py [--quick] [--only full|scaling|dask|resume]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import shutil
+import tempfile
+import time
+
+import numpy as np
+
+
+def machine() -> str:
+    try:
+        cpu = next(l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name"))
+    except Exception:
+        cpu = platform.processor()
+    return f"{cpu}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}, load {os.getloadavg()}"
+
+
+def _sleep_point(task):
+    time.sleep(0.0)
+    return {"a": task["values"]["chi"]}
+
+
+_sleep_point.variables = ["a"]
+
+
+def main() -> None:
+    from flutterswim.sweep import sweep
+    from flutterswim.sweep.plot import critical_ratio, plot_sweep
+
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--only", default=None)
+    ap.add_argument("--figure", default="benchmarks/sweep_kappa_E.png")
+    ap.add_argument("--n", type=int, default=101)
+    a = ap.parse_args()
+    tmp = tempfile.mkdtemp(prefix="bench-sweep-")
+    res: dict = {"machine": machine()}
+    axes = [f"kappa_E_ratio=0:2:{a.n}"]
+    try:
+        if a.only in (None, "full"):
+            t0 = time.perf_counter()
+            ds = sweep(axes, out=f"{tmp}/full.zarr", backend="processes", workers=2, progress=False)
+            res["full_101_2workers_s"] = time.perf_counter() - t0
+            res["full_core_seconds"] = float(np.nansum(ds["wall_time_s"].values))
+            res["full_failed"] = int(ds["failed"].sum())
+            sw = ds["swimming"].values
+            x = ds["kappa_E_ratio"].values
+            res["first_swimming_ratio"] = float(x[np.argmax(sw)]) if sw.any() else None
+            res["critical_ratio_linear"] = critical_ratio(ds)
+            adv = np.where(sw, ds["advance_per_cycle_bl"].values, np.nan)
+            res["best_advance_ratio"] = float(x[np.nanargmax(adv)])
+            res["best_advance_bl"] = float(np.nanmax(adv))
+            res["self_intersecting_ratios"] = [float(v) for v in x[ds["self_intersecting"].values]]
+            res["limit_cycle_not_reached"] = [float(v) for v in x[sw & ~ds["limit_cycle_reached"].values]]
+            plot_sweep(ds, a.figure)
+            # resume cost: rerun the finished sweep
+            t0 = time.perf_counter()
+            sweep(axes, out=f"{tmp}/full.zarr", backend="processes", workers=2, progress=False)
+            res["resume_finished_101_s"] = time.perf_counter() - t0
+            print(json.dumps(res, indent=1), flush=True)
+        if a.only in (None, "scaling"):
+            sub = ["kappa_E_ratio=0.7:2:27"]
+            for w in (1, 2):
+                t0 = time.perf_counter()
+                sweep(sub, out=f"{tmp}/w{w}.zarr", backend="processes", workers=w, progress=False)
+                res[f"scaling_27pts_{w}worker_s"] = time.perf_counter() - t0
+            res["speedup_1_to_2"] = res["scaling_27pts_1worker_s"] / res["scaling_27pts_2worker_s"]
+            print(json.dumps(res, indent=1), flush=True)
+        if a.only in (None, "dask"):
+            # per-point overhead with a trivial point function (no simulation)
+            n = 200
+            pts = {"chi": list(np.arange(n, dtype=float))}
+            for be in ("serial", "processes", "dask-local"):
+                t0 = time.perf_counter()
+                with_store = f"{tmp}/ovh_{be}.zarr"
+                sweep(pts, out=with_store, backend=be, workers=2, point_fn=_sleep_point, progress=False)
+                res[f"overhead_{be}_ms_per_point"] = 1e3 * (time.perf_counter() - t0) / n
+            # real points on dask-local vs processes
+            sub = ["kappa_E_ratio=0.7:2:14"]
+            for be in ("processes", "dask-local"):
+                t0 = time.perf_counter()
+                sweep(sub, out=f"{tmp}/real_{be}.zarr", backend=be, workers=2, progress=False)
+                res[f"real14_{be}_s"] = time.perf_counter() - t0
+            print(json.dumps(res, indent=1), flush=True)
+        if a.only in (None, "resume"):
+            # kill-free resume cost model: half the points done, rerun computes the rest only
+            sub = ["kappa_E_ratio=0.7:2:14"]
+            t0 = time.perf_counter()
+            sweep(sub, out=f"{tmp}/res.zarr", backend="processes", workers=2, progress=False, max_points=7)
+            t_half = time.perf_counter() - t0
+            t0 = time.perf_counter()
+            sweep(sub, out=f"{tmp}/res.zarr", backend="processes", workers=2, progress=False)
+            res["resume_half_then_rest_s"] = [t_half, time.perf_counter() - t0]
+            print(json.dumps(res, indent=1), flush=True)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    print(json.dumps(res, indent=1))
+
+
+if __name__ == "__main__":
+    main()
