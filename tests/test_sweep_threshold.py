@@ -42,22 +42,19 @@ def test_transition_within_2_percent_of_linear_threshold(rc):
 
 @pytest.mark.slow
 def test_continuation_hysteresis_and_onset_law(rc):
-    """Up/down continuation near onset: brackets of the onset on both branches, and the
-    limit-cycle amplitude against (chi - chi_cr) on the up branch (exponent reported)."""
-    ratios = list(np.round(rc * np.array([0.9, 0.96, 1.04, 1.1, 1.2, 1.35, 1.5]), 6))
-    ds = sweep({"kappa_E_ratio": ratios}, continuation=True, settings={"t_cap": 80.0}, progress=False)
+    """Up/down continuation near onset: the onset brackets of both branches agree (no
+    hysteresis at 1% resolution: the Hopf bifurcation is not subcritical), and the limit-cycle
+    amplitude on the down branch grows like a power of (chi - chi_cr) close to the square root."""
+    ratios = list(np.round(rc * np.array([0.99, 1.01, 1.02, 1.04, 1.07, 1.1, 1.2]), 6))
+    ds = sweep({"kappa_E_ratio": ratios}, continuation=True, settings={"t_cap": 200.0}, progress=False)
     assert not ds["failed"].any()
     h = hysteresis(ds)
-    up_lo, up_hi = h["up"]
-    assert up_lo < rc < up_hi
-    # the down branch loses the oscillation no lower than 10% below the linear threshold:
-    # a hysteresis, if any, is narrower than the grid; without one both brackets agree
-    dn_lo, dn_hi = h["down"]
-    assert dn_hi >= 0.9 * rc
-    if not h["hysteresis"]:
-        assert (dn_lo, dn_hi) == (up_lo, up_hi)
-    up = ds.sel(branch="up")
-    ok = up["limit_cycle_reached"].values
-    chi = up["kappa_E_ratio"].values * PAPER.chi
-    fit = onset_fit(chi[ok], up["oscillation_amplitude"].values[ok], rc * PAPER.chi)
-    assert 0.2 < fit.exponent < 0.8
+    assert h["up"][0] < rc < h["up"][1]
+    assert not h["hysteresis"] and h["down"] == h["up"]
+    dn = ds.sel(branch="down")
+    ok = dn["limit_cycle_reached"].values
+    assert ok[dn["kappa_E_ratio"].values > rc].all()
+    chi = dn["kappa_E_ratio"].values * PAPER.chi
+    fit = onset_fit(chi[ok], dn["oscillation_amplitude"].values[ok], rc * PAPER.chi, window=0.1 * rc * PAPER.chi)
+    assert fit.n_points >= 3
+    assert 0.3 < fit.exponent < 0.7, fit

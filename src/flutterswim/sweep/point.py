@@ -98,7 +98,8 @@ def run_point(task: Mapping[str, Any]) -> dict[str, Any]:
                 cyc = None
             if cyc is not None and cyc.limit_cycle:
                 n_on = int(np.count_nonzero(cyc.starts[:-1] >= cyc.limit_cycle_time - 1e-12))
-                if n_on >= st.n_cycles:
+                steady = len(amps) >= 2 and abs(math.log(amps[-1] / amps[-2])) / st.chunk < st.rate_tol
+                if n_on >= st.n_cycles and steady:
                     limit = True
                     break
             # a stationary but not strictly periodic oscillation (e.g. self-intersecting strokes):
@@ -113,7 +114,7 @@ def run_point(task: Mapping[str, Any]) -> dict[str, Any]:
                 if k_sat * chunk >= st.n_cycles * per_:
                     saturated = True
                     break
-        elif len(amps) >= 2 and a <= amps[-2] and a < st.damped_tol:
+        elif len(amps) >= 3 and a <= amps[-2] <= amps[-3] and a < st.damped_tol:
             straight = True
             break
         if done:

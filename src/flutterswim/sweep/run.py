@@ -160,7 +160,7 @@ def _run(store: SweepStore, spec: SweepSpec, fn, variables, *, backend, workers,
             else:
                 # a chain: each point starts from its predecessor's final state
                 for k in todo:
-                    init = store.state(k - 1) if (k > 0 and not store.failed(k - 1)) else None
+                    init = _continue_from(store, k)
                     for kk, out in ex.imap(call, [(k, _task(spec, k, init))]):
                         record(kk, out)
     finally:
@@ -168,6 +168,18 @@ def _run(store: SweepStore, spec: SweepSpec, fn, variables, *, backend, workers,
             bar.close()
     if progress:
         _summary(store, file=sys.stderr)
+
+
+def _continue_from(store: SweepStore, k: int) -> np.ndarray | None:
+    """Initial state of continuation point k: the final state of point k-1, unless that point
+    failed or damped out to the straight state (then the default perturbed straight state, as
+    an exactly straight filament would need unbounded time to show an instability)."""
+    if k == 0 or store.failed(k - 1):
+        return None
+    j = store.variables.index("straight") if "straight" in store.variables else None
+    if j is not None and store.value(k - 1, j) > 0.5:
+        return None
+    return store.state(k - 1)
 
 
 def _summary(store: SweepStore, file=None) -> None:

@@ -124,6 +124,9 @@ class SweepStore:
         s = np.asarray(self._arr["state"][k])
         return None if not np.all(np.isfinite(s)) else s
 
+    def value(self, k: int, j: int) -> float:
+        return float(self._arr["values"][k, j])
+
     def failed(self, k: int) -> bool:
         return bool(self._arr["failed"][k])
 
