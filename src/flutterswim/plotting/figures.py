@@ -1,0 +1,219 @@
+"""Publication figures: ghosts of one stroke, the swimmer, descriptors over time, kymographs.
+
+Every function takes a Track or a result-like object and ``path``: with a path the figure is
+saved (PNG/PDF/SVG from the suffix) and the path is returned; without, the matplotlib Figure
+is returned. Lengths are shown in mm, times in s.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._validate import ParameterError
+from ..analysis.cycles import Cycles, detect_cycles
+from ..analysis.descriptors import per_cycle
+from ..analysis.kymograph import body_kymograph, kymograph_windows, line_kymograph
+from ..analysis.track import as_track
+from ._common import (
+    FIELD_COLOR, GREEN_CMAP, SWIM_COLOR, TIP_COLOR, field_arrow, finish, mm_factor, new_figure, window_indices,
+)
+
+__all__ = ["plot_ghosts", "plot_swimmer", "plot_descriptors", "plot_kymographs", "plot_summary", "draw_ghosts",
+           "draw_kymographs"]
+
+
+def _cycle_window(tr, cycles: Cycles | None, cycle: int | None, window):
+    if window is not None:
+        return tuple(window)
+    cyc = detect_cycles(tr) if cycles is None else cycles
+    if cyc.n_cycles == 0:
+        return (float(tr.t[0]), float(tr.t[-1]))
+    k = cyc.n_cycles - 1 if cycle is None else int(cycle)
+    if not -cyc.n_cycles <= k < cyc.n_cycles:
+        raise ParameterError(f"cycle={cycle!r} is out of range; {cyc.n_cycles} cycles were detected")
+    k %= cyc.n_cycles
+    return (float(cyc.starts[k]), float(cyc.starts[k + 1]))
+
+
+def draw_ghosts(ax, obj: Any, window: tuple[float, float], *, n_ghosts: int = 8, tip_trail=None,
+                field: bool = True, title: str | None = None) -> None:
+    """Draw ``n_ghosts`` configurations over ``window`` in shades of green, the tip trajectory
+    over ``tip_trail`` (default: the window) in magenta and the field arrow on ``ax``."""
+    import matplotlib
+
+    tr = as_track(obj)
+    f = mm_factor(tr)
+    idx = window_indices(tr.t, window)
+    pick = idx[np.unique(np.linspace(0, idx.size - 1, max(2, n_ghosts)).round().astype(int))]
+    cmap = matplotlib.colormaps[GREEN_CMAP]
+    for n, i in enumerate(pick):
+        c = cmap(0.35 + 0.6 * n / max(1, pick.size - 1))
+        ax.plot(tr.x[i] * f, tr.y[i] * f, color=c, lw=1.6, solid_capstyle="round")
+    tidx = window_indices(tr.t, window if tip_trail is None else tip_trail)
+    ax.plot(tr.x[tidx, -1] * f, tr.y[tidx, -1] * f, color=TIP_COLOR, lw=1.0, label="tip trajectory")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    if field:
+        field_arrow(ax, float(np.mean(tr.field_angle[idx])))
+    ax.set_title(title or f"t = {window[0]:.2f}–{window[1]:.2f} s", fontsize=9)
+
+
+def plot_ghosts(obj: Any, path: str | Path | None = None, *, cycle: int | None = None,
+                window: tuple[float, float] | None = None, cycles: Cycles | None = None, n_ghosts: int = 8,
+                figsize=(6.0, 3.0), dpi: float = 150) -> Any:
+    """Ghosts of one stroke cycle (default: the last detected) in greens with the tip
+    trajectory in magenta and the field arrow in red."""
+    tr = as_track(obj)
+    win = _cycle_window(tr, cycles, cycle, window)
+    fig = new_figure(figsize, dpi)
+    ax = fig.add_subplot()
+    draw_ghosts(ax, tr, win, n_ghosts=n_ghosts)
+    return finish(fig, path)
+
+
+def plot_swimmer(obj: Any, path: str | Path | None = None, *, time: float | None = None, trail: bool = True,
+                 figsize=(6.0, 3.0), dpi: float = 150) -> Any:
+    """The filament at ``time`` (default: the last frame), with the tip trajectory up to that
+    time, the centroid path and the field arrow."""
+    tr = as_track(obj)
+    f = mm_factor(tr)
+    i = tr.n_frames - 1 if time is None else int(np.argmin(np.abs(tr.t - float(time))))
+    fig = new_figure(figsize, dpi)
+    ax = fig.add_subplot()
+    if trail:
+        ax.plot(tr.x[: i + 1, -1] * f, tr.y[: i + 1, -1] * f, color=TIP_COLOR, lw=0.8, label="tip")
+        xc, yc = tr.centroid()
+        ax.plot(xc[: i + 1] * f, yc[: i + 1] * f, color=SWIM_COLOR, lw=1.2, label="centroid")
+    ax.plot(tr.x[i] * f, tr.y[i] * f, color="#1a7f37", lw=2.5, solid_capstyle="round")
+    ax.plot(tr.x[i, -1] * f, tr.y[i, -1] * f, "o", color=TIP_COLOR, ms=3)
+    field_arrow(ax, float(tr.field_angle[i]))
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    ax.set_title(f"t = {tr.t[i]:.3f} s", fontsize=9)
+    if trail:
+        ax.legend(fontsize=7, loc="lower right", frameon=False)
+    return finish(fig, path)
+
+
+def plot_descriptors(obj: Any, path: str | Path | None = None, *, cycles: Cycles | None = None,
+                     figsize=(6.5, 6.0), dpi: float = 150) -> Any:
+    """Per-cycle descriptors against time: amplitude envelope (log) with the exponential fit,
+    period, advancement per cycle along the field, tip lateral peak-to-peak and
+    nonreciprocity; the transient is shaded and the limit-cycle time marked."""
+    tr = as_track(obj)
+    cyc = detect_cycles(tr) if cycles is None else cycles
+    f = mm_factor(tr)
+    fig = new_figure(figsize, dpi)
+    axs = fig.subplots(4, 1, sharex=True)
+    if cyc.n_cycles == 0:
+        for ax in axs:
+            ax.text(0.5, 0.5, "no complete cycle", transform=ax.transAxes, ha="center")
+        axs[-1].set_xlabel("t (s)")
+        return finish(fig, path)
+    pc = per_cycle(tr, cyc)
+    tm = cyc.mids
+    ax = axs[0]
+    ax.semilogy(tm, cyc.amplitudes * f, "o-", ms=3, color="#1a7f37", label="section amplitude")
+    if math.isfinite(cyc.growth_rate):
+        a, b = cyc.growth_fit_window
+        sel = (tm >= a) & (tm <= b)
+        la = np.log(cyc.amplitudes[sel] * f)
+        c0 = float(np.mean(la - cyc.growth_rate * tm[sel]))
+        tt = np.linspace(a, b, 20)
+        ax.semilogy(tt, np.exp(c0 + cyc.growth_rate * tt), "--", color="k", lw=1,
+                    label=f"fit: {cyc.growth_rate:.3g} ± {cyc.growth_rate_stderr:.1g} 1/s")
+    ax.set_ylabel("amplitude (mm)")
+    ax.legend(fontsize=7, frameon=False)
+    axs[1].plot(tm, pc["period"], "o-", ms=3, color="#1f77b4")
+    axs[1].set_ylabel("period (s)")
+    axs[2].plot(tm, pc["advance"] * f, "o-", ms=3, color=SWIM_COLOR, label="advance / cycle")
+    axs[2].plot(tm, pc["tip_p2p"] * f, "s-", ms=3, color=TIP_COLOR, label="tip lateral p-p")
+    axs[2].set_ylabel("length (mm)")
+    axs[2].legend(fontsize=7, frameon=False)
+    axs[3].plot(tm, pc["nonreciprocity"], "o-", ms=3, color="0.3")
+    axs[3].axhline(0, color="0.7", lw=0.8)
+    axs[3].set_ylabel("nonreciprocity (–)")
+    axs[3].set_xlabel("t (s)")
+    for ax in axs:
+        if cyc.limit_cycle:
+            ax.axvspan(tr.t[0], cyc.limit_cycle_time, color="0.9", zorder=0)
+            ax.axvline(cyc.limit_cycle_time, color="0.4", lw=0.8, ls=":")
+        if math.isfinite(cyc.onset_time):
+            ax.axvline(cyc.onset_time, color=FIELD_COLOR, lw=0.8, ls=":")
+    axs[0].set_title("shaded: transient; red dotted: onset; grey dotted: limit cycle reached", fontsize=8)
+    return finish(fig, path)
+
+
+def draw_kymographs(axs, obj: Any, window: tuple[float, float] | None = None, *, h_level=None, v_level=None) -> None:
+    """Fill four axes with: crossings of a horizontal line (x against t), of a vertical line
+    (y against t), body-frame curvature kappa(s, t) and tangent angle theta(s, t)."""
+    tr = as_track(obj)
+    if window is not None:
+        tr = tr.window(*window)
+    f = mm_factor(tr)
+    hk = line_kymograph(tr, "horizontal", h_level)
+    vk = line_kymograph(tr, "vertical", v_level)
+    for ax, k, lab in ((axs[0], hk, "x"), (axs[1], vk, "y")):
+        tt = np.broadcast_to(k.t[:, None], k.positions.shape)
+        ok = np.isfinite(k.positions)
+        sc = ax.scatter(tt[ok], k.positions[ok] * f, c=k.s[ok] / tr.length, s=2, cmap="viridis", vmin=0, vmax=1,
+                        linewidths=0)
+        line = "y" if k.orientation == "horizontal" else "x"
+        ax.set_title(f"crossings of {line} = {k.level * f:.3g} mm", fontsize=8)
+        ax.set_xlabel("t (s)")
+        ax.set_ylabel(f"{lab} (mm)")
+        ax.set_xlim(tr.t[0], tr.t[-1])
+    axs[1].figure.colorbar(sc, ax=axs[1], label="s / l")
+    bk = body_kymograph(tr)
+    kap = bk.kappa / f  # 1/mm
+    lim = float(np.max(np.abs(kap))) or 1.0
+    im = axs[2].pcolormesh(bk.t, bk.s / tr.length, kap.T, cmap="RdBu_r", vmin=-lim, vmax=lim, shading="nearest",
+                           rasterized=True)
+    axs[2].figure.colorbar(im, ax=axs[2], label="κ (1/mm)")
+    axs[2].set_ylabel("s / l")
+    axs[2].set_xlabel("t (s)")
+    axs[2].set_title("curvature", fontsize=8)
+    lim = float(np.max(np.abs(bk.theta))) or 1.0
+    im = axs[3].pcolormesh(bk.t, bk.s_mid / tr.length, bk.theta.T, cmap="PuOr_r", vmin=-lim, vmax=lim,
+                           shading="nearest", rasterized=True)
+    axs[3].figure.colorbar(im, ax=axs[3], label="θ − ⟨θ⟩ (rad)")
+    axs[3].set_ylabel("s / l")
+    axs[3].set_xlabel("t (s)")
+    axs[3].set_title("tangent angle (body frame)", fontsize=8)
+
+
+def plot_kymographs(obj: Any, path: str | Path | None = None, *, window: tuple[float, float] | None = None,
+                    h_level: float | None = None, v_level: float | None = None, figsize=(7.5, 5.5),
+                    dpi: float = 150) -> Any:
+    """Kymographs over ``window`` (default: the whole track): lab-frame line crossings (dots
+    coloured by arc length) and body-frame curvature / tangent-angle maps."""
+    tr = as_track(obj)
+    fig = new_figure(figsize, dpi)
+    axs = fig.subplots(2, 2).ravel()
+    draw_kymographs(axs, tr, window, h_level=h_level, v_level=v_level)
+    return finish(fig, path)
+
+
+def plot_summary(obj: Any, path: str | Path | None = None, *, cycles: Cycles | None = None, n_cycles: int = 3,
+                 figsize=(10.0, 8.0), dpi: float = 150) -> Any:
+    """Paper-style overview: ghosts of a cycle near onset and at the limit cycle (with the tip
+    trajectory over the whole run), and kymographs of both windows."""
+    tr = as_track(obj)
+    cyc = detect_cycles(tr) if cycles is None else cycles
+    wins = kymograph_windows(tr, n_cycles=n_cycles, cycles=cyc)
+    fig = new_figure(figsize, dpi)
+    gs = fig.add_gridspec(3, 4, height_ratios=[1.0, 1.0, 1.0])
+    full = (float(tr.t[0]), float(tr.t[-1]))
+    for col, (name, (a, b)) in enumerate(wins.items()):
+        ax = fig.add_subplot(gs[0, 2 * col : 2 * col + 2])
+        per = (b - a) / max(1, n_cycles)
+        draw_ghosts(ax, tr, (a, min(b, a + per)), tip_trail=full, title=f"{name}: t = {a:.2f}–{a + per:.2f} s")
+        axs = [fig.add_subplot(gs[1 + r, 2 * col + c]) for r in range(2) for c in range(2)]
+        draw_kymographs(axs, tr, (a, b))
+    return finish(fig, path)
