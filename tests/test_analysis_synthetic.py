@@ -1,0 +1,150 @@
+"""Cycle detection and descriptors on analytically prescribed strokes.
+
+Travelling wave y = A(s) sin(k s - 2 pi t / T + phase), x = s + U t: exact period T,
+advancement per cycle U T along x, tip lateral peak-to-peak 2 A(l), swimming along +x.
+"""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from flutterswim._validate import ParameterError
+from flutterswim.analysis.cycles import detect_cycles
+from flutterswim.analysis.descriptors import describe, stroke_area
+from flutterswim.analysis.synthetic import landau_envelope, wave_track
+from flutterswim.analysis.track import Track
+
+L, T, U, A = 1.0, 0.4, 0.05, 0.1
+REL = 1e-3
+
+
+def _check(d, length=L):
+    assert d.period_s == pytest.approx(T, rel=REL)
+    assert d.frequency_hz == pytest.approx(1 / T, rel=REL)
+    adv_mm = U * T * 1e3
+    assert d.advance_per_cycle_mm == pytest.approx(adv_mm, rel=REL)
+    assert d.advance_per_cycle_bl == pytest.approx(U * T / length, rel=REL)
+    assert d.speed_mm_s == pytest.approx(U * 1e3, rel=REL)
+    assert d.tip_lateral_p2p_mm == pytest.approx(2 * A * 1e3, rel=REL)
+
+
+def test_clean_travelling_wave_exact():
+    d = describe(wave_track(period=T, speed=U, amplitude=A, length=L))
+    _check(d)
+    assert d.towards_field and abs(d.direction_to_field_deg) < 1e-6
+    assert d.limit_cycle and not d.self_intersecting
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_noisy_jittered_random_phase(seed):
+    rng = np.random.default_rng(100 + seed)
+    phase = float(rng.uniform(0, 2 * math.pi))
+    field = float(rng.uniform(-math.pi, math.pi))  # whole picture rotated: field along swimming
+    tr = wave_track(period=T, speed=U, amplitude=A, length=L, phase=phase, noise=2e-4, jitter=0.3,
+                    field_angle=field, seed=seed, duration=5.0, n_frames=1201)
+    d = describe(tr, n_last=8)
+    _check(d)
+    assert d.towards_field
+    assert math.cos(math.radians(d.swim_direction_deg) - field) > 0.9999
+    assert d.advance_total_mm == pytest.approx(U * 5.0 * 1e3, rel=1e-2)
+    # the cycle-to-cycle spread is small compared with the mean
+    assert d.period_std_s < 1e-3 * T
+
+
+def test_against_field_and_leading_end():
+    # field points to -x while the body swims to +x: "against" and 180 degrees
+    tr = wave_track(period=T, speed=U, amplitude=A)
+    tr2 = Track(t=tr.t, x=tr.x, y=tr.y, s=tr.s, field_angle=math.pi, length=tr.length)
+    d = describe(tr2)
+    assert not d.towards_field
+    assert abs(abs(d.direction_to_field_deg) - 180.0) < 1e-6
+    assert d.advance_per_cycle_mm == pytest.approx(-U * T * 1e3, rel=REL)
+    # the s = l end is ahead (x = s + U t)
+    assert d.leading_end == "s=l"
+
+
+def test_reciprocal_vs_nonreciprocal():
+    trav = describe(wave_track(kind="travelling"))
+    stand = describe(wave_track(kind="standing", wavelength=4 / 3, phase=0.7))
+    assert not trav.reciprocal and abs(trav.nonreciprocity) > 0.5
+    assert stand.reciprocal and abs(stand.nonreciprocity) < 1e-3
+    # with noise the verdicts hold
+    assert describe(wave_track(kind="standing", wavelength=4 / 3, noise=2e-4)).reciprocal
+    assert not describe(wave_track(kind="travelling", noise=2e-4)).reciprocal
+    # travelling the other way reverses the loop
+    back = describe(wave_track(kind="travelling", period=-T))
+    assert np.sign(back.nonreciprocity) == -np.sign(trav.nonreciprocity)
+
+
+def test_stroke_area_normalisation():
+    n = 200
+    ph = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    poly = n * np.sin(2 * np.pi / n) / (2 * np.pi)  # regular n-gon area / circle area
+    assert stroke_area(np.cos(ph), np.sin(ph)) == pytest.approx(poly, rel=1e-9)
+    assert stroke_area(np.cos(ph), -np.sin(ph)) == pytest.approx(-poly, rel=1e-9)
+    # ellipse a, b: pi a b / (pi (a^2 + b^2) / 2)
+    assert stroke_area(3 * np.cos(ph), np.sin(ph)) == pytest.approx(poly * 2 * 3 / (9 + 1), rel=1e-9)
+    assert stroke_area(np.cos(ph), np.cos(ph) ** 2) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_onset_growth_rate_and_limit_cycle():
+    rate, a0 = 2.0, 1e-4
+    tr = wave_track(envelope=(a0, rate), duration=16.0, n_frames=4001)
+    c = detect_cycles(tr, fit_after=0.5)
+    # early envelope ~ a0 exp(rate t): the fit recovers the rate
+    assert c.growth_rate == pytest.approx(rate, rel=2e-2)
+    # onset: the Landau envelope reaches 10% of its final value at t_on
+    f = 0.1
+    t_on = math.log((1 / a0**2 - 1) / (1 / f**2 - 1)) / (2 * rate)
+    assert abs(c.onset_time - t_on) < 0.5 * T
+    # limit cycle flagged, and only after the envelope has settled to within tol
+    assert c.limit_cycle
+    env = landau_envelope(np.array([c.limit_cycle_time]), a0, 1.0, rate)[0]
+    assert env > 0.95
+    assert c.limit_cycle_time > t_on
+    assert c.transient_duration == pytest.approx(c.limit_cycle_time - tr.t[0])
+    # a run stopped during growth has no limit cycle
+    short = tr.window(0.0, t_on + 1.0)
+    assert not detect_cycles(short).limit_cycle
+
+
+def test_to_dict_json_ready():
+    d = describe(wave_track())
+    js = json.loads(json.dumps(d.to_dict()))
+    assert js["period_s"] == pytest.approx(T, rel=REL)
+    assert isinstance(js["reciprocal"], bool) and isinstance(js["leading_end"], str)
+
+
+def test_result_like_duck_typing():
+    tr = wave_track()
+
+    class Params:
+        l = 1.0
+        tau = 0.2
+
+    class Res:
+        t, x, y, s = tr.t, tr.x, tr.y, tr.s
+        field_angle = np.zeros_like(tr.t)
+        params = Params()
+
+    d = describe(Res())
+    assert d.period_s == pytest.approx(T, rel=REL)
+    assert d.body_length_mm == pytest.approx(1e3)
+
+
+def test_bad_input_names_parameter():
+    with pytest.raises(ParameterError, match="units"):
+        Track(t=[0, 1, 2], x=np.zeros((3, 4)), y=np.zeros((3, 4)), units="furlong")
+    with pytest.raises(ParameterError, match="t is not strictly increasing"):
+        Track(t=[0, 0, 2], x=np.zeros((3, 4)), y=np.zeros((3, 4)))
+    with pytest.raises(ParameterError, match="x has shape"):
+        Track(t=[0, 1, 2], x=np.zeros((2, 4)), y=np.zeros((3, 4)))
+    with pytest.raises(ParameterError, match="n_last"):
+        describe(wave_track(), n_last=0)
+    with pytest.raises(ParameterError, match="tip"):
+        detect_cycles(wave_track(), tip="middle")
+    flat = Track(t=np.linspace(0, 1, 50), x=np.tile(np.linspace(0, 1, 5), (50, 1)), y=np.zeros((50, 5)))
+    with pytest.raises(ParameterError):
+        describe(flat)
