@@ -1,0 +1,68 @@
+"""The analysis on the paper preset run of the nonlinear simulator."""
+
+import math
+
+import numpy as np
+import pytest
+
+import flutterswim as fs
+
+sim = pytest.importorskip("flutterswim.simulate")
+
+from flutterswim.analysis.cycles import detect_cycles  # noqa: E402
+from flutterswim.analysis.descriptors import describe  # noqa: E402
+from flutterswim.analysis.track import as_track  # noqa: E402
+
+KEYS = ("period_s", "advance_per_cycle_mm", "tip_lateral_p2p_mm", "speed_mm_s", "nonreciprocity")
+
+
+@pytest.fixture(scope="module")
+def paper_track():
+    res = sim.simulate(fs.PAPER, 12.0, n_segments=24, rtol=1e-4, atol=1e-6, frame_dt=0.005)
+    return as_track(res)
+
+
+def test_descriptors_converge_with_run_length(paper_track):
+    ends = (6.0, 8.0, 10.0, 12.0)
+    ds = [describe(paper_track.window(0.0, T), n_last=4) for T in ends]
+    for key in KEYS:
+        v = np.array([getattr(d, key) for d in ds])
+        change = np.abs(np.diff(v)) / np.abs(v[1:])
+        # successive changes shrink, and the last one is tiny: the descriptors converge
+        assert change[-1] < change[0], (key, change)
+        assert change[-1] < 2e-3, (key, change)
+    last = ds[-1]
+    assert last.towards_field and abs(last.direction_to_field_deg) < 1.0
+    assert not last.reciprocal and not last.self_intersecting
+    assert last.period_std_s < 1e-3 * last.period_s
+
+
+def test_limit_cycle_flag_only_after_transient(paper_track):
+    short = [detect_cycles(paper_track.window(0.0, T)) for T in (4.0, 6.0)]
+    assert not any(c.limit_cycle for c in short)
+    full = detect_cycles(paper_track)
+    assert full.limit_cycle
+    assert full.limit_cycle_time > full.onset_time > paper_track.t[0]
+    # at the limit-cycle time the stroke amplitude has settled within 1% of its final value
+    k = int(np.searchsorted(full.starts, full.limit_cycle_time))
+    final = np.median(full.amplitudes[-4:])
+    assert np.all(np.abs(full.amplitudes[k:] / final - 1) < 1e-2)
+    # while before the onset it was far smaller
+    early = full.amplitudes[full.mids < full.onset_time]
+    assert early.size and early.max() < 0.1 * final
+    # the verdict does not move when the run gets longer
+    mid = detect_cycles(paper_track.window(0.0, 10.0))
+    assert mid.limit_cycle and mid.limit_cycle_time == pytest.approx(full.limit_cycle_time, abs=0.5 * full.periods[-1])
+
+
+def test_growth_rate_matches_linear_stability(paper_track):
+    st = pytest.importorskip("flutterswim.stability")
+    g = fs.PAPER.groups
+    lam = st.leading_eigenvalue(g.chi, g.eta_perp).omega
+    c = detect_cycles(paper_track)
+    # envelope grows like exp(Re(lambda) t / tau) while small
+    assert c.growth_rate == pytest.approx(lam.real / fs.PAPER.tau, rel=3e-2)
+    # early cycles oscillate at the linear frequency
+    early = c.periods[(c.mids > 2 * fs.PAPER.tau) & (c.mids < c.onset_time)]
+    assert early.size >= 3
+    assert np.median(early) == pytest.approx(2 * math.pi * fs.PAPER.tau / abs(lam.imag), rel=3e-2)
