@@ -10,6 +10,7 @@ import argparse
 import json
 import os
 import platform
+import resource
 import shutil
 import tempfile
 import time
@@ -41,15 +42,24 @@ def main() -> None:
     ap.add_argument("--only", default=None)
     ap.add_argument("--figure", default="benchmarks/sweep_kappa_E.png")
     ap.add_argument("--n", type=int, default=101)
+    ap.add_argument("--rtol", type=float, default=None, help="override PointSettings.rtol (atol = rtol/100)")
     a = ap.parse_args()
     tmp = tempfile.mkdtemp(prefix="bench-sweep-")
     res: dict = {"machine": machine()}
     axes = [f"kappa_E_ratio=0:2:{a.n}"]
+    st = None if a.rtol is None else {"rtol": a.rtol, "atol": a.rtol / 100}
+    res["settings"] = st or "default (PointSettings: n_segments=24, rtol=1e-4, atol=1e-6, t_cap=60 tau, 15 cycles)"
+
+    def cpu_children() -> float:
+        ru = resource.getrusage(resource.RUSAGE_CHILDREN)
+        return ru.ru_utime + ru.ru_stime
     try:
         if a.only in (None, "full"):
-            t0 = time.perf_counter()
-            ds = sweep(axes, out=f"{tmp}/full.zarr", backend="processes", workers=2, progress=False)
+            t0, c0 = time.perf_counter(), cpu_children()
+            ds = sweep(axes, out=f"{tmp}/full.zarr", backend="processes", workers=2, progress=False, settings=st)
             res["full_101_2workers_s"] = time.perf_counter() - t0
+            res["full_worker_cpu_s"] = cpu_children() - c0
+            res["load_after"] = os.getloadavg()
             res["full_core_seconds"] = float(np.nansum(ds["wall_time_s"].values))
             res["full_failed"] = int(ds["failed"].sum())
             sw = ds["swimming"].values
@@ -64,15 +74,17 @@ def main() -> None:
             plot_sweep(ds, a.figure)
             # resume cost: rerun the finished sweep
             t0 = time.perf_counter()
-            sweep(axes, out=f"{tmp}/full.zarr", backend="processes", workers=2, progress=False)
+            sweep(axes, out=f"{tmp}/full.zarr", backend="processes", workers=2, progress=False, settings=st)
             res["resume_finished_101_s"] = time.perf_counter() - t0
             print(json.dumps(res, indent=1), flush=True)
         if a.only in (None, "scaling"):
             sub = ["kappa_E_ratio=0.7:2:27"]
             for w in (1, 2):
-                t0 = time.perf_counter()
-                sweep(sub, out=f"{tmp}/w{w}.zarr", backend="processes", workers=w, progress=False)
+                t0, c0 = time.perf_counter(), cpu_children()
+                sweep(sub, out=f"{tmp}/w{w}.zarr", backend="processes", workers=w, progress=False, settings=st)
                 res[f"scaling_27pts_{w}worker_s"] = time.perf_counter() - t0
+                res[f"scaling_27pts_{w}worker_cpu_s"] = cpu_children() - c0
+                res[f"scaling_27pts_{w}worker_load"] = os.getloadavg()
             res["speedup_1_to_2"] = res["scaling_27pts_1worker_s"] / res["scaling_27pts_2worker_s"]
             print(json.dumps(res, indent=1), flush=True)
         if a.only in (None, "dask"):

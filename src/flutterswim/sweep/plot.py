@@ -65,11 +65,11 @@ def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str
     adv = np.where(swim, ds[advance].values, np.where(straight, 0.0, np.nan))
     per = np.where(swim, ds[period].values, np.nan)
     red = ds["self_intersecting"].values
-    fig, axs = plt.subplots(2, 1, figsize=(5.0, 5.2), sharex=True, constrained_layout=True)
+    fig, axs = plt.subplots(2, 1, figsize=(5.5, 5.2), sharex=True, constrained_layout=True)
     _coloured(axs[0], xv, adv, red)
     _coloured(axs[1], xv, per, red)
     unit = ds.attrs.get("time_unit", "s")
-    axs[0].set_ylabel("advancement per cycle [body lengths]" if advance.endswith("_bl") else advance)
+    axs[0].set_ylabel("advance / cycle [body lengths]" if advance.endswith("_bl") else advance)
     axs[1].set_ylabel(f"period [{unit}]" if period == "period_s" else period)
     axs[1].set_xlabel(r"$\kappa_E/\kappa_E^{fit}$" if x == "kappa_E_ratio" else x)
     rc = critical_ratio(ds) if x == "kappa_E_ratio" else math.nan
@@ -81,6 +81,11 @@ def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str
     if failed.any():
         axs[0].plot(xv[failed], np.zeros(failed.sum()), "x", color="0.5", label="failed")
         axs[0].legend(fontsize=8)
+    growing = ds["unstable"].values & ~swim & ~failed if "unstable" in ds else np.zeros_like(failed)
+    if growing.any():
+        axs[0].plot(xv[growing], np.zeros(growing.sum()), "^", mfc="none", color="tab:orange", ms=5,
+                    label="unstable, still growing at t_cap")
+        axs[0].legend(fontsize=8, loc="upper right")
     capped = (~ds["limit_cycle_reached"].values) & swim
     if capped.any():
         axs[1].plot(xv[capped], per[capped], "o", mfc="none", color="0.4", ms=6, label="no limit cycle by t_cap")

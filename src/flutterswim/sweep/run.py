@@ -38,8 +38,11 @@ def _task(spec: SweepSpec, k: int, initial: np.ndarray | None) -> dict[str, Any]
             "initial": initial, "index": k, "branch": branch}
 
 
-def _check(result: Any, variables: Sequence[str]) -> tuple[dict | None, np.ndarray | None, str]:
-    """-> (values, final state, failure message or "")."""
+def _check(result: Any, variables: Sequence[str], required: Sequence[str] | None = None
+           ) -> tuple[dict | None, np.ndarray | None, str]:
+    """-> (values, final state, failure message or ""). A value is bad if infinite, or NaN
+    where it is required (``required``; default: the core variables of :func:`run_point` if
+    present, else every returned value)."""
     if isinstance(result, Mapping) and "values" in result:
         values, state = dict(result["values"]), result.get("final_state")
     elif isinstance(result, Mapping):
@@ -47,7 +50,8 @@ def _check(result: Any, variables: Sequence[str]) -> tuple[dict | None, np.ndarr
     else:
         return None, None, f"the point function returned {type(result).__name__}; a dict is required"
     bad = []
-    required = [k for k in CORE_VARIABLES if k in values] or list(values)
+    if required is None:
+        required = [k for k in CORE_VARIABLES if k in values] or list(values)
     for k, v in values.items():
         try:
             fv = float(v)
@@ -94,7 +98,8 @@ def sweep(
     (finished points are not recomputed), a different definition is refused. ``continuation``:
     each point starts from the previous one's final state, up the axis and back down (adds a
     ``branch`` dimension). ``point_fn(task) -> dict`` replaces the simulation (tests, custom
-    measurements; it must be picklable for parallel backends; give its ``variables``).
+    measurements; it must be picklable for parallel backends; give its ``variables`` and
+    optionally ``required``, the variables that must be finite, as attributes).
     ``max_points``: stop after computing that many points (the rest stay undone).
     A failing point (exception, non-finite values) is recorded with its message and never
     stops the sweep.
@@ -140,7 +145,7 @@ def _run(store: SweepStore, spec: SweepSpec, fn, variables, *, backend, workers,
         result, err, wall = out
         values = state = None
         if not err:
-            values, state, err = _check(result, variables)
+            values, state, err = _check(result, variables, getattr(fn, "required", None))
         store.write_point(k, None if err else values, failed=bool(err), message=err, wall_time=wall,
                           state=None if err else state)
         n_failed += bool(err)

@@ -1,0 +1,69 @@
+"""Sweep figure (self-intersecting parts red, linear onset marked) and the CLI subcommands."""
+
+import argparse
+import math
+
+import numpy as np
+import pytest
+
+from flutterswim.params import PAPER
+from flutterswim.stability import physical_stability
+from flutterswim.sweep import sweep
+from flutterswim.sweep.cli import register
+from flutterswim.sweep.plot import critical_ratio, plot_sweep
+
+VARS = ["swimming", "straight", "self_intersecting", "limit_cycle_reached", "advance_per_cycle_bl", "period_s"]
+
+
+def fake(task):
+    r = task["values"]["kappa_E_ratio"]
+    swim = r > 0.7
+    return {"swimming": float(swim), "straight": float(not swim), "self_intersecting": float(r > 1.5),
+            "limit_cycle_reached": float(swim), "advance_per_cycle_bl": 0.1 * r if swim else math.nan,
+            "period_s": 0.4 / r if swim else math.nan}
+
+
+fake.variables = VARS
+fake.required = ["swimming", "straight"]
+
+
+def test_plot_marks_self_intersection_red_and_onset(tmp_path):
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    ds = sweep(["kappa_E_ratio=0:2:21"], backend="serial", point_fn=fake, progress=False)
+    rc = critical_ratio(ds)
+    assert rc == pytest.approx(physical_stability(PAPER).critical_kappa_E / PAPER.kappa_E, rel=1e-9)
+    fig = plot_sweep(ds, str(tmp_path / "f.png"))
+    assert (tmp_path / "f.png").stat().st_size > 1000
+    ax = fig.axes[0]
+    red = [l for l in ax.lines if l.get_color() == "tab:red"]
+    black = [l for l in ax.lines if l.get_color() == "k"]
+    # segments touching a self-intersecting point (r > 1.5: 1.6 ... 2.0, and 1.5-1.6) are red
+    xs_red = sorted({float(v) for l in red for v in l.get_xdata()})
+    assert xs_red and min(xs_red) == pytest.approx(1.5) and max(xs_red) == pytest.approx(2.0)
+    assert all(max(l.get_xdata()) <= 1.6 + 1e-9 for l in black)
+    vlines = [l for l in ax.lines if l.get_color() == "tab:blue"]
+    assert vlines and np.allclose(vlines[0].get_xdata(), rc)
+    # below the onset the advancement is drawn as zero (straight), above it positive
+    y = {round(float(v[0]), 6): float(v[1]) for l in ax.lines if l.get_color() in ("k", "tab:red")
+         for v in zip(l.get_xdata(), l.get_ydata())}
+    assert y[0.2] == 0.0 and y[1.0] == pytest.approx(0.1)
+
+
+def test_cli_sweep_and_plot(tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    ap = argparse.ArgumentParser()
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    register(sub)
+    out = tmp_path / "s.zarr"
+    args = ap.parse_args(["sweep", "kappa_E_ratio=0,0.3", "--out", str(out), "--backend", "serial",
+                          "--n-segments", "8", "--t-cap", "4", "--no-progress"])
+    assert args.func(args) == 0
+    assert "2/2 points, 0 failed" in capsys.readouterr().out
+    args = ap.parse_args(["plot-sweep", str(out), "--out", str(tmp_path / "p.png")])
+    assert args.func(args) == 0 and (tmp_path / "p.png").exists()
+    # a changed definition on the same store is refused with a clear message
+    args = ap.parse_args(["sweep", "kappa_E_ratio=0,0.4", "--out", str(out), "--backend", "serial",
+                          "--n-segments", "8", "--t-cap", "4", "--no-progress"])
+    with pytest.raises(Exception, match="different sweep"):
+        args.func(args)
