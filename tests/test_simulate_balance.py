@@ -72,3 +72,15 @@ def test_self_intersection_stops_the_run_with_a_reason():
     res = simulate(g, 1.0, initial=curl, n_segments=32, stop_on_self_intersection=True)
     assert res.status == "stopped" and "self-intersection" in res.message
     assert res.t_final < 1.0
+
+
+def test_compiled_and_numpy_mobility_agree():
+    pytest.importorskip("numba")
+    rng = np.random.default_rng(1)
+    for n in (5, 17, 40):
+        theta = np.cumsum(rng.normal(scale=0.4, size=n))
+        kappa = rng.normal(size=n + 1)
+        fil = Filament(n, 30.0, 55.0, 12.0)
+        g_numpy = fil.mobility(theta, kappa)[0]
+        g_compiled = fil.matrix(theta, kappa)
+        assert np.max(np.abs(g_compiled - g_numpy)) < 1e-12 * np.max(np.abs(g_numpy))

@@ -66,11 +66,13 @@ def _period_adv(n, rtol, groups):
 
 @pytest.mark.slow
 def test_spatial_convergence_is_second_order(paper_groups):
-    vals = np.array([_period_adv(n, 1e-8, paper_groups) for n in (12, 24, 48)])
+    """Interior stencils are 4th order, those next to the free ends 2nd order, so the
+    scheme is 2nd order: the fitted slope tends to 2 from above as N grows."""
+    vals = np.array([_period_adv(n, 1e-8, paper_groups) for n in (16, 32, 64)])
     for k in range(2):  # period, advancement
         e1, e2 = abs(vals[0, k] - vals[1, k]), abs(vals[1, k] - vals[2, k])
         slope = np.log2(e1 / e2)
-        assert 1.7 < slope < 2.4, (k, vals[:, k], slope)
+        assert 1.8 < slope < 2.6, (k, vals[:, k], slope)
 
 
 def test_temporal_error_falls_with_tolerance(paper_groups):

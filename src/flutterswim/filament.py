@@ -17,8 +17,9 @@ Equations, G z = b:
   sum_j w_j F_j = 0                                         (2 rows)
   M_j + sum_{k<j} w_k (X_k - X_j) x F_k = 0,  j = 1..N-1    (moment balance at each cut)
   sum_k w_k (X_k - X_N) x F_k = 0                           (total torque)
-with the bending moment M_j = (theta_j - theta_{j-1})/h - kappa_j
-(eq. MOD:eq:bending_moment_constitutive) and M_0 = M_N = 0 (free ends).
+with the bending moment M_j = theta_s(s_j) - kappa_j (eq. MOD:eq:bending_moment_constitutive)
+and M_0 = M_N = 0 (free ends). theta_s and the joint angles use 4th-order staggered stencils
+inside and 2-point stencils next to the ends (:func:`_joint_difference`, :func:`_joint_average`).
 Activity (eq. MOD:eq:nondim_EVO with the field direction phi and strength sigma):
   kappa_t = -kappa - chi sigma sin(theta_node - phi).
 The scheme is second order in h.
@@ -31,6 +32,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 
+from . import _mobility_kernel as _kernel
+
 __all__ = ["Filament", "split_state", "node_angles", "centreline"]
 
 
@@ -42,6 +45,7 @@ class Filament:
     eta_par: float
     eta_perp: float
     chi: float
+    compiled: bool = True
     _strict: np.ndarray = field(init=False, repr=False, compare=False)
     _weights: np.ndarray = field(init=False, repr=False, compare=False)
     _avg: np.ndarray = field(init=False, repr=False, compare=False)
@@ -53,13 +57,8 @@ class Filament:
         weights = np.full(n + 1, 1.0 / n)
         weights[[0, -1]] *= 0.5
         object.__setattr__(self, "_weights", weights)
-        avg = np.zeros((n + 1, n))
-        avg[0, 0] = avg[n, n - 1] = 1.0
-        idx = np.arange(1, n)
-        avg[idx, idx - 1] = avg[idx, idx] = 0.5
-        object.__setattr__(self, "_avg", avg)
-        diff = (np.eye(n, k=1) - np.eye(n))[: n - 1] * n  # (N-1, N): (theta_j - theta_{j-1})/h
-        object.__setattr__(self, "_diff", diff)
+        object.__setattr__(self, "_avg", _joint_average(n))
+        object.__setattr__(self, "_diff", _joint_difference(n))
 
     @property
     def h(self) -> float:
@@ -121,18 +120,31 @@ class Filament:
         g[2:] = p - xj[1:, None] * sy + yj[1:, None] * sx
         return g, fx, fy
 
+    def matrix(self, theta: np.ndarray, kappa: np.ndarray) -> np.ndarray:
+        """The mobility matrix G alone: compiled assembly when numba is available."""
+        if self._use_kernel:
+            return _kernel.assemble(theta, self.node_theta(theta, kappa), self._weights,
+                                    self.eta_par, self.eta_perp, self.h)
+        return self.mobility(theta, kappa)[0]
+
+    @property
+    def _use_kernel(self) -> bool:
+        return self.compiled and _kernel.assemble is not None
+
     def moment(self, theta: np.ndarray, kappa: np.ndarray) -> np.ndarray:
-        """Bending moment at interior joints, M_j = (theta_j - theta_{j-1})/h - kappa_j, (N-1,)."""
-        return np.diff(theta) * self.n - kappa[1:-1]
+        """Bending moment at interior joints, M_j = theta_s(s_j) - kappa_j, (N-1,)."""
+        return self._diff @ theta - kappa[1:-1]
 
     def velocities(self, y: np.ndarray) -> np.ndarray:
         """Solve the mobility problem: z = [U0x, U0y, omega] (N+2,)."""
         n = self.n
         theta, kappa = y[2 : n + 2], y[n + 2 :]
-        g, _, _ = self.mobility(theta, kappa)
         b = np.zeros(n + 2)
         b[2 : n + 1] = -self.moment(theta, kappa)
-        return np.linalg.solve(g, b)
+        if self._use_kernel:
+            return _kernel.solve(theta, self._avg @ theta, self._weights, self.eta_par, self.eta_perp,
+                                 self.h, b)
+        return np.linalg.solve(self.matrix(theta, kappa), b)
 
     def rhs(self, y: np.ndarray, phi: float, sigma: float) -> np.ndarray:
         """Time derivative of the state y (2N+3,) for field direction phi and strength sigma."""
@@ -147,8 +159,12 @@ class Filament:
         """Jacobian of rhs, exact except for the (non-stiff) change of G with theta."""
         n = self.n
         theta, kappa = y[2 : n + 2], y[n + 2 :]
-        g, _, _ = self.mobility(theta, kappa)
-        ginv_m = sla.inv(g, check_finite=False)[:, 2 : n + 1]  # dz/d(-M)
+        if self._use_kernel:
+            ginv = _kernel.inverse(theta, self._avg @ theta, self._weights, self.eta_par,
+                                   self.eta_perp, self.h)
+        else:
+            ginv = sla.inv(self.matrix(theta, kappa), check_finite=False)
+        ginv_m = ginv[:, 2 : n + 1]  # dz/d(-M)
         jac = np.zeros((self.size, self.size))
         jac[: n + 2, 2 : n + 2] = -ginv_m @ self._diff
         jac[: n + 2, n + 3 : 2 * n + 2] = ginv_m
@@ -186,6 +202,34 @@ class Filament:
         fxs, fys = fx @ z, fy @ z
         xj, yj = centreline(np.zeros(2), theta)
         return float(fxs.sum()), float(fys.sum()), float(np.sum(xj * fys - yj * fxs))
+
+
+def _joint_average(n: int) -> np.ndarray:
+    """(N+1, N) map from segment angles to joint angles: 4th-order interpolation
+    (-1, 9, 9, -1)/16 inside, the mean of the two neighbours next to the ends, and the end
+    segment's angle at a free end."""
+    avg = np.zeros((n + 1, n))
+    avg[0, 0] = avg[n, n - 1] = 1.0
+    for j in range(1, n):
+        if 2 <= j <= n - 2:
+            avg[j, j - 2 : j + 2] = np.array([-1.0, 9.0, 9.0, -1.0]) / 16.0
+        else:
+            avg[j, j - 1 : j + 1] = 0.5
+    return avg
+
+
+def _joint_difference(n: int) -> np.ndarray:
+    """(N-1, N) map from segment angles to theta_s at the interior joints: the staggered
+    4th-order stencil (1, -27, 27, -1)/(24 h) inside, (theta_j - theta_{j-1})/h next to the
+    ends. Both operators leave the scheme second order overall (boundary stencils), with
+    an error constant about ten times smaller than the plain two-point stencils."""
+    diff = np.zeros((n - 1, n))
+    for j in range(1, n):
+        if 2 <= j <= n - 2:
+            diff[j - 1, j - 2 : j + 2] = np.array([1.0, -27.0, 27.0, -1.0]) * (n / 24.0)
+        else:
+            diff[j - 1, j - 1 : j + 1] = (-n, n)
+    return diff
 
 
 def split_state(y: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -60,6 +60,9 @@ def run_to_limit_cycle(
             verdict = {"limit_cycle": True, "limit_cycle_time": float(cyc.limit_cycle_time)}
             if after >= n_cycles:
                 break
+            # run just long enough for the missing cycles (and a little of the next)
+            period = float(cyc.periods[-1])
+            chunk = max((n_cycles - after + 0.25) * period, 0.05 * tau)
     if bar is not None:
         bar.close()
     run = concatenate(parts)
