@@ -88,20 +88,33 @@ def main() -> None:
             res["speedup_1_to_2"] = res["scaling_27pts_1worker_s"] / res["scaling_27pts_2worker_s"]
             print(json.dumps(res, indent=1), flush=True)
         if a.only in (None, "dask"):
-            # per-point overhead with a trivial point function (no simulation)
-            n = 200
-            pts = {"chi": list(np.arange(n, dtype=float))}
+            from flutterswim.sweep import get_backend
+            from flutterswim.sweep.run import _Call
+
+            # executor-level per-point overhead with a trivial point function (no store)
+            n = 400
+            items = [(k, {"values": {"chi": float(k)}}) for k in range(n)]
             for be in ("serial", "processes", "dask-local"):
                 t0 = time.perf_counter()
-                with_store = f"{tmp}/ovh_{be}.zarr"
-                sweep(pts, out=with_store, backend=be, workers=2, point_fn=_sleep_point, progress=False)
-                res[f"overhead_{be}_ms_per_point"] = 1e3 * (time.perf_counter() - t0) / n
-            # real points on dask-local vs processes
-            sub = ["kappa_E_ratio=0.7:2:14"]
-            for be in ("processes", "dask-local"):
-                t0 = time.perf_counter()
-                sweep(sub, out=f"{tmp}/real_{be}.zarr", backend=be, workers=2, progress=False)
-                res[f"real14_{be}_s"] = time.perf_counter() - t0
+                with get_backend(be, workers=2) as ex:
+                    t1 = time.perf_counter()
+                    got = sorted(k for k, _ in ex.imap(_Call(_sleep_point), items))
+                    t2 = time.perf_counter()
+                assert got == list(range(n))
+                res[f"startup_{be}_s"] = t1 - t0
+                res[f"overhead_{be}_ms_per_point"] = 1e3 * (t2 - t1) / n
+            # store write cost per point (parent side)
+            t0 = time.perf_counter()
+            sweep({"chi": list(np.arange(200, dtype=float))}, out=f"{tmp}/ovh.zarr", backend="serial",
+                  point_fn=_sleep_point, progress=False)
+            res["store_serial_sweep_ms_per_point"] = 1e3 * (time.perf_counter() - t0) / 200
+            # real points: processes vs dask-local, alternated twice to expose load noise
+            sub = ["kappa_E_ratio=0.9:2:12"]
+            for rep in range(2):
+                for be in ("processes", "dask-local"):
+                    t0 = time.perf_counter()
+                    sweep(sub, out=f"{tmp}/real_{be}_{rep}.zarr", backend=be, workers=2, progress=False, settings=st)
+                    res[f"real12_{be}_run{rep}_s"] = time.perf_counter() - t0
             print(json.dumps(res, indent=1), flush=True)
         if a.only in (None, "resume"):
             # kill-free resume cost model: half the points done, rerun computes the rest only

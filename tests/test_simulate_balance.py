@@ -84,3 +84,18 @@ def test_compiled_and_numpy_mobility_agree():
         g_numpy = fil.mobility(theta, kappa)[0]
         g_compiled = fil.matrix(theta, kappa)
         assert np.max(np.abs(g_compiled - g_numpy)) < 1e-12 * np.max(np.abs(g_numpy))
+
+
+def test_internal_forces_vanish_at_free_ends_and_balance_the_moment(paper_groups):
+    init = InitialState(theta=lambda s: 0.6 * np.sin(3.0 * s), kappa=lambda s: 4.0 * np.cos(2.0 * s))
+    errs = []
+    for n in (32, 64):
+        res = simulate(paper_groups, 0.2, initial=init, n_segments=n, n_frames=3, forces=True)
+        a, v, m = res.A[-1], res.V[-1], res.M[-1]
+        scale = np.abs(v).max()
+        assert scale > 0
+        assert max(abs(a[0]), abs(a[-1]), abs(v[0]), abs(v[-1]), abs(m[0]), abs(m[-1])) < 1e-10 * scale
+        # angular momentum balance, M_s + V = 0 (eq. MOD:eq:MBLs:BAM_components), inside
+        ms = np.gradient(m, res.s)
+        errs.append(np.max(np.abs(ms + v)[3:-3]) / scale)
+    assert errs[1] < 0.5 * errs[0] and errs[1] < 0.05

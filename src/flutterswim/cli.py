@@ -83,7 +83,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--kappa-E-ratio", type=float, default=None, help="scale the preset's kappa_E")
     p.add_argument("--cycles", type=int, default=15, help="settled cycles to simulate")
     p.add_argument("--t-end", type=float, default=None, help="simulate to this time [s] instead")
-    p.add_argument("--segments", type=int, default=40)
+    p.add_argument("--segments", type=int, default=48)
     p.add_argument("--rtol", type=float, default=1e-4)
     p.add_argument("--atol", type=float, default=1e-6)
     p.add_argument("--out", default="run.nc")

@@ -22,7 +22,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m flutterswim.demo", description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="out", help="output folder (default: out)")
     ap.add_argument("--cycles", type=int, default=15, help="settled cycles to simulate and average")
-    ap.add_argument("--segments", type=int, default=40, help="spatial resolution N")
+    ap.add_argument("--segments", type=int, default=48, help="spatial resolution N")
     args = ap.parse_args(argv)
     from .analysis.descriptors import describe
     from .plotting.figures import plot_ghosts

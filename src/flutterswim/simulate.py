@@ -21,7 +21,7 @@ from .result import SimulationResult
 
 __all__ = ["simulate", "DEFAULT_SEGMENTS"]
 
-DEFAULT_SEGMENTS = 40
+DEFAULT_SEGMENTS = 48
 
 
 def simulate(
