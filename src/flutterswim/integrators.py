@@ -178,6 +178,9 @@ def _integrate_rosw(fun, jac, t_span, y0, t_eval, tab, rtol, atol, max_step, fir
     jmat = None
     last_h_lu = None
     ft = np.zeros(n)
+    # LAPACK directly: scipy.linalg.lu_factor/lu_solve wrappers cost more than the
+    # factorisation itself at these sizes.
+    getrf, getrs = sla.get_lapack_funcs(("getrf", "getrs"), (eye,))
     while t < t1:
         if n_steps + n_rej >= max_steps:
             status, message = "failed", f"maximum number of steps ({max_steps}) reached at t={t:.6g}"
@@ -192,9 +195,12 @@ def _integrate_rosw(fun, jac, t_span, y0, t_eval, tab, rtol, atol, max_step, fir
             if jac is None:
                 n_rhs += n
         if last_h_lu != h:
-            lu = sla.lu_factor(eye - (g * h) * jmat, check_finite=False)
+            lu, piv, info = getrf(eye - (g * h) * jmat, overwrite_a=True)
             n_lu += 1
-            last_h_lu = h
+            last_h_lu = h if info == 0 else None
+            if info != 0:
+                status, message = "failed", f"singular iteration matrix at t={t:.6g}, h={h:.3g}"
+                break
         if time_dependent:
             dt = 1e-7 * max(1.0, abs(t))
             ft = (fun(t + dt, y) - f) / dt
@@ -210,7 +216,7 @@ def _integrate_rosw(fun, jac, t_span, y0, t_eval, tab, rtol, atol, max_step, fir
                 rhs = h * fi + h * (jmat @ (gam[i, :i] @ k[:i]))
             if time_dependent:
                 rhs = rhs + (h * h * d[i]) * ft
-            k[i] = sla.lu_solve(lu, rhs, check_finite=False)
+            k[i] = getrs(lu, piv, rhs)[0]
         y_new = y + b @ k
         finite = np.all(np.isfinite(y_new))
         if finite:

@@ -51,7 +51,14 @@ def shape_modes(obj: Any, t0: float | None = None, t1: float | None = None, n_mo
     mean = sh.mean(axis=0)
     X = sh - mean
     _, sv, vt = np.linalg.svd(X, full_matrices=False)
-    modes = vt[:n_modes]
+    modes = vt[:n_modes].copy()
+    # deterministic orientation: largest component of mode 1 positive, and mode 2 oriented so
+    # that sum(m1 dm2/ds) > 0; then a shape wave travelling towards s = l runs the (a1, a2)
+    # loop counter-clockwise (positive area), whatever signs the SVD returned
+    if modes.shape[0] >= 1 and modes[0, np.argmax(np.abs(modes[0]))] < 0:
+        modes[0] *= -1
+    if modes.shape[0] >= 2 and float(np.sum(modes[0] * np.gradient(modes[1]))) < 0:
+        modes[1] *= -1
     return X @ modes.T, modes, mean, tr.t
 
 
@@ -129,7 +136,8 @@ class Descriptors:
 def per_cycle(obj: Any, cycles: Cycles | None = None, *, tip: int | str = "end", harmonics: int = 6,
               swim_angle: float | None = None) -> dict[str, np.ndarray]:
     """Per-cycle measurements, each (K,): period, advance along the field, displacement,
-    speed, tip lateral peak-to-peak, nonreciprocity (lengths in track units)."""
+    speed, tip lateral peak-to-peak, nonreciprocity, self_intersecting (any frame of the
+    cycle crosses itself); lengths in track units."""
     tr = as_track(obj)
     cyc = detect_cycles(tr, tip=tip) if cycles is None else cycles
     st = cyc.starts
@@ -157,7 +165,10 @@ def per_cycle(obj: Any, cycles: Cycles | None = None, *, tip: int | str = "end",
         for k in range(K):
             a = sample_cycle(tw, coef, st[k], st[k + 1] - st[k], 64)
             nrec[k] = stroke_area(a[:, 0], a[:, 1]) if a.shape[1] >= 2 else 0.0
+    crossing = self_intersections(tr) > 0
+    inter = np.array([bool(np.any(crossing[(tr.t >= st[k]) & (tr.t <= st[k + 1])])) for k in range(K)], bool)
     return {
+        "self_intersecting": inter,
         "start": st[:-1], "period": np.diff(st), "advance": adv, "dx": dx, "dy": dy,
         "displacement": disp, "speed": disp / np.diff(st), "tip_p2p": p2p, "nonreciprocity": nrec,
     }

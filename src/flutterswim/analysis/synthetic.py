@@ -8,7 +8,7 @@ import numpy as np
 
 from .track import Track
 
-__all__ = ["wave_track", "landau_envelope", "figure_eight", "c_shape"]
+__all__ = ["wave_track", "angle_wave_track", "landau_envelope", "figure_eight", "c_shape"]
 
 
 def landau_envelope(t: np.ndarray, a0: float, a_final: float, rate: float) -> np.ndarray:
@@ -73,6 +73,32 @@ def wave_track(
     c, sn = math.cos(field_angle), math.sin(field_angle)
     X, Y = c * x - sn * y, sn * x + c * y
     return Track(t=t, x=X, y=Y, s=s, field_angle=field_angle, length=length, units="m")
+
+
+def angle_wave_track(
+    *,
+    length: float = 1.0,
+    n_points: int = 81,
+    period: float = 0.4,
+    wavelength: float = 0.5,
+    angle: float = 0.5,
+    speed: float = 0.05,
+    duration: float = 2.0,
+    n_frames: int = 401,
+) -> Track:
+    """Inextensible centreline with tangent angle theta(s, t) = angle sin(k s - w t), integrated
+    from the s = 0 end placed at (speed t, 0). Large ``angle`` (> ~2 rad) with a short
+    wavelength makes the centreline loop over itself."""
+    t = np.linspace(0.0, duration, n_frames)
+    s = np.linspace(0.0, length, n_points)
+    k, w = 2 * math.pi / wavelength, 2 * math.pi / period
+    th = angle * np.sin(k * s[None, :] - w * t[:, None])
+    ds = np.diff(s)
+    cx = 0.5 * (np.cos(th[:, 1:]) + np.cos(th[:, :-1])) * ds
+    cy = 0.5 * (np.sin(th[:, 1:]) + np.sin(th[:, :-1])) * ds
+    x = np.concatenate([np.zeros((n_frames, 1)), np.cumsum(cx, axis=1)], axis=1) + speed * t[:, None]
+    y = np.concatenate([np.zeros((n_frames, 1)), np.cumsum(cy, axis=1)], axis=1)
+    return Track(t=t, x=x, y=y, s=s, length=length, units="m")
 
 
 def figure_eight(n_points: int = 81, size: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
