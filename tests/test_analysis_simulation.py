@@ -34,6 +34,8 @@ def test_descriptors_converge_with_run_length(paper_track):
     last = ds[-1]
     assert last.towards_field and abs(last.direction_to_field_deg) < 1.0
     assert not last.reciprocal and not last.self_intersecting
+    # as in the paper's kymographs the wave runs backwards (s = l -> 0) while the s = l end leads
+    assert last.nonreciprocity < -0.5 and last.leading_end == "s=l"
     assert last.period_std_s < 1e-3 * last.period_s
 
 

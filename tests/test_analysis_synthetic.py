@@ -13,7 +13,7 @@ import pytest
 from flutterswim._validate import ParameterError
 from flutterswim.analysis.cycles import detect_cycles
 from flutterswim.analysis.descriptors import describe, stroke_area
-from flutterswim.analysis.synthetic import landau_envelope, wave_track
+from flutterswim.analysis.synthetic import angle_wave_track, landau_envelope, wave_track
 from flutterswim.analysis.track import Track
 
 L, T, U, A = 1.0, 0.4, 0.05, 0.1
@@ -73,9 +73,23 @@ def test_reciprocal_vs_nonreciprocal():
     # with noise the verdicts hold
     assert describe(wave_track(kind="standing", wavelength=4 / 3, noise=2e-4)).reciprocal
     assert not describe(wave_track(kind="travelling", noise=2e-4)).reciprocal
-    # travelling the other way reverses the loop
+    # sign convention: a wave travelling towards s = l runs the loop counter-clockwise
+    assert trav.nonreciprocity > 0.5
     back = describe(wave_track(kind="travelling", period=-T))
-    assert np.sign(back.nonreciprocity) == -np.sign(trav.nonreciprocity)
+    assert back.nonreciprocity < -0.5 and not back.reciprocal
+
+
+@pytest.mark.parametrize("angle", [0.5, 3.0])
+def test_inextensible_angle_wave(angle):
+    """theta = angle sin(k s - w t) integrated along s: exact period and wave direction; at
+    3 rad the centreline loops over itself and the stroke is flagged."""
+    d = describe(angle_wave_track(angle=angle, period=T))
+    assert d.period_s == pytest.approx(T, rel=REL)
+    assert d.nonreciprocity > 0.5
+    assert d.self_intersecting == (angle > 2.0)
+    assert d.self_intersection_fraction == (1.0 if angle > 2.0 else 0.0)
+    back = describe(angle_wave_track(angle=angle, period=-T))
+    assert back.nonreciprocity < -0.5
 
 
 def test_stroke_area_normalisation():

@@ -190,8 +190,10 @@ def describe(
     projection on the field direction; tip lateral peak-to-peak: of the tip coordinate
     perpendicular to the swimming direction, from a Fourier fit (``harmonics``) per cycle
     (robust to noise), averaged pooled over cycles. Nonreciprocity: signed area of the
-    stroke loop in the plane of the first two principal shape modes (:func:`stroke_area`),
-    |value| < ``reciprocal_threshold`` is reported reciprocal.
+    stroke loop in the plane of the first two principal shape modes (:func:`stroke_area`,
+    modes oriented by :func:`shape_modes`): about +1 for a shape wave travelling towards
+    s = l, -1 towards s = 0, 0 for a reciprocal stroke; |value| < ``reciprocal_threshold``
+    is reported reciprocal. self_intersecting: some frame in the window crosses itself.
     """
     tr: Track = as_track(obj)
     if isinstance(n_last, bool) or not isinstance(n_last, (int, np.integer)) or n_last < 1:
