@@ -22,7 +22,7 @@ from typing import Any, Callable, Iterable, Iterator
 
 from .._validate import ParameterError
 
-__all__ = ["BACKENDS", "register_backend", "get_backend", "available_backends", "default_workers"]
+__all__ = ["BACKENDS", "register_backend", "get_backend", "available_backends", "default_workers", "blas_threads"]
 
 BACKENDS: dict[str, Callable[..., Any]] = {}
 
@@ -70,11 +70,78 @@ def _serial(workers=None, scheduler=None):
     yield SerialExecutor()
 
 
+_SET = ("scipy_openblas_set_num_threads64_", "scipy_openblas_set_num_threads", "openblas_set_num_threads64_",
+        "openblas_set_num_threads")
+_GET = tuple(n.replace("_set_", "_get_") for n in _SET)
+
+
+_LIBS: list | None = None
+
+
+def _openblas_libs() -> list:
+    global _LIBS
+    if _LIBS is None:
+        _LIBS = _find_openblas()
+    return _LIBS
+
+
+def _find_openblas() -> list:
+    import ctypes
+
+    try:
+        with open("/proc/self/maps") as f:
+            paths = sorted({ln.split()[-1] for ln in f if "openblas" in ln.lower() and ln.split()[-1].startswith("/")})
+    except OSError:  # pragma: no cover - not Linux
+        return []
+    libs = []
+    for p in paths:
+        try:
+            libs.append(ctypes.CDLL(p))
+        except OSError:  # pragma: no cover
+            pass
+    return libs
+
+
+def blas_threads(n: int | None) -> list[int]:
+    """Set the thread count of every loaded OpenBLAS (numpy's and scipy's) to ``n`` (None: leave);
+    return the previous counts. The filament's matrices are small: BLAS threads only add
+    overhead (~1.7x slower with 2 threads here), and the points are the parallelism."""
+    old = []
+    for lib in _openblas_libs():
+        get = next((getattr(lib, g) for g in _GET if hasattr(lib, g)), None)
+        st = next((getattr(lib, s_) for s_ in _SET if hasattr(lib, s_)), None)
+        if get is None or st is None:
+            continue
+        old.append(int(get()))
+        if n is not None:
+            st(int(n))
+    return old
+
+
 def _limit_threads() -> None:
-    # one BLAS thread per worker: the points are the parallelism (and results stay bitwise
-    # reproducible across backends)
+    # one BLAS thread per worker (the environment for processes started later, the loaded
+    # libraries for this one)
     for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
         os.environ.setdefault(k, "1")
+    import numpy  # noqa: F401 - load BLAS before limiting it
+    import scipy.linalg  # noqa: F401
+
+    blas_threads(1)
+
+
+@contextlib.contextmanager
+def single_blas_thread():
+    """In this process, for the duration: BLAS single-threaded (restored afterwards)."""
+    import scipy.linalg  # noqa: F401
+
+    libs_old = blas_threads(1)
+    try:
+        yield
+    finally:
+        for lib, n in zip(_openblas_libs(), libs_old):
+            st = next((getattr(lib, s_) for s_ in _SET if hasattr(lib, s_)), None)
+            if st is not None:
+                st(n)
 
 
 class PoolExecutor:
@@ -173,9 +240,19 @@ def _dask_local(workers=None, scheduler=None):
     from distributed import Client, LocalCluster
 
     n = workers or default_workers()
-    _limit_threads()
-    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=None) as cluster, Client(cluster, set_as_default=False) as client:
+    keys = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+    saved = {k: os.environ.get(k) for k in keys}
+    os.environ.update({k: "1" for k in keys})  # inherited by the worker processes only
+    try:
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                               dashboard_address=None)
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+    with cluster, Client(cluster, set_as_default=False) as client:
         client.wait_for_workers(n)
         yield DaskExecutor(client)
 

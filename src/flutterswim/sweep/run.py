@@ -29,7 +29,10 @@ class _Call:
         self.fn = fn
 
     def __call__(self, task):
-        return timed(self.fn, task)
+        from .backends import single_blas_thread
+
+        with single_blas_thread():
+            return timed(self.fn, task)
 
 
 def _task(spec: SweepSpec, k: int, initial: np.ndarray | None) -> dict[str, Any]:
