@@ -10,10 +10,10 @@ from typing import Any
 import numpy as np
 
 from .._validate import ParameterError
-from .section import section_crossings
+from .section import estimate_period, running_mean, section_crossings
 from .track import Track, as_track
 
-__all__ = ["Cycles", "body_axis_angle", "lateral_signal", "detect_cycles", "sample_cycle", "tip_index"]
+__all__ = ["Cycles", "body_axis_angle", "local_axis_angle", "lateral_signal", "detect_cycles", "sample_cycle", "tip_index"]
 
 
 def tip_index(track: Track, tip: int | str) -> int:
@@ -34,14 +34,35 @@ def body_axis_angle(track: Track) -> float:
     return math.atan2(ey, ex)
 
 
-def lateral_signal(track: Track, *, tip: int | str = "end", axis_angle: float | None = None) -> tuple[np.ndarray, float]:
+def local_axis_angle(track: Track, window: float) -> np.ndarray:
+    """Body-axis angle at each frame: the end-to-end direction (unwrapped) averaged over a
+    running window of ``window`` s (one stroke period removes the stroke's own wobble and
+    follows a slowly turning swimmer)."""
+    t = track.t
+    ang = np.unwrap(np.arctan2(track.y[:, -1] - track.y[:, 0], track.x[:, -1] - track.x[:, 0]))
+    sm = running_mean(t, ang, window)
+    # within half a window of the ends the centred mean is not available: extrapolate the
+    # interior linearly (exact for a steady turn, constant for a straight swimmer)
+    a, b = t[0] + 0.5 * window, t[-1] - 0.5 * window
+    inner = (t >= a) & (t <= b)
+    if np.count_nonzero(inner) >= 4:
+        for edge, near in ((t < a, inner & (t <= a + 0.5 * window)), (t > b, inner & (t >= b - 0.5 * window))):
+            if np.any(edge) and np.count_nonzero(near) >= 2:
+                c = np.polyfit(t[near] - t[near].mean(), sm[near], 1)
+                sm[edge] = np.polyval(c, t[edge] - t[near].mean())
+    return sm
+
+
+def lateral_signal(track: Track, *, tip: int | str = "end", axis_angle: float | np.ndarray | None = None,
+                   ) -> tuple[np.ndarray, float | np.ndarray]:
     """Lateral displacement of the tip relative to the centroid, perpendicular to the body axis
-    (drift-free). Returns (u (T,), axis angle used)."""
-    a = body_axis_angle(track) if axis_angle is None else float(axis_angle)
+    (drift-free). ``axis_angle``: scalar, per-frame array, or None for the mean body axis.
+    Returns (u (T,), axis angle used)."""
+    a = body_axis_angle(track) if axis_angle is None else np.asarray(axis_angle, float)
     i = tip_index(track, tip)
     xc, yc = track.centroid()
-    u = -(track.x[:, i] - xc) * math.sin(a) + (track.y[:, i] - yc) * math.cos(a)
-    return u, a
+    u = -(track.x[:, i] - xc) * np.sin(a) + (track.y[:, i] - yc) * np.cos(a)
+    return u, (float(a) if np.ndim(a) == 0 else a)
 
 
 def sample_cycle(t: np.ndarray, f: np.ndarray, t0: float, period: float, n: int, endpoint: bool = False) -> np.ndarray:
@@ -77,7 +98,7 @@ class Cycles:
     growth_rate: float
     growth_rate_stderr: float
     growth_fit_window: tuple[float, float]
-    axis_angle: float
+    axis_angle: float | np.ndarray
     section_t: np.ndarray
     section_signal: np.ndarray
     tol: float
@@ -129,11 +150,14 @@ def detect_cycles(
     onset_fraction: float = 0.1,
     fit_after: float | None = None,
     fit_max_fraction: float = 0.1,
+    axis: str = "local",
 ) -> Cycles:
     """Find stroke cycles and decide whether a limit cycle has been reached.
 
     Section: upward crossings of the tip's lateral displacement (relative to the centroid,
-    perpendicular to the mean body axis) through its running mean over one period.
+    perpendicular to the body axis) through its running mean over one period. The body axis
+    is the end-to-end direction averaged over one period around each frame (``axis="local"``,
+    follows a turning swimmer) or over the whole track (``axis="global"``).
     A cycle is *converged* when its period, amplitude and shape (tangent angle minus its mean
     along s, sampled at ``n_shape`` phases) each change by less than ``tol`` (relative) from
     the previous cycle (shapes are projected on their ``n_shape_modes`` leading principal
@@ -153,10 +177,20 @@ def detect_cycles(
         raise ParameterError(f"n_consecutive={n_consecutive!r} must be an integer >= 1")
     if not 0 < onset_fraction < 1:
         raise ParameterError(f"onset_fraction={onset_fraction!r} must be in (0, 1)")
+    if axis not in ("local", "global"):
+        raise ParameterError(f"axis={axis!r} is not allowed; use 'local' or 'global'")
     itip = tip_index(tr, tip)
-    u, axis = lateral_signal(tr, tip=itip)
+    u, ax_angle = lateral_signal(tr, tip=itip)
     t = tr.t
-    starts, d, _ = section_crossings(t, u, period=period, hysteresis=hysteresis)
+    if axis == "local":
+        W0 = float(period) if period is not None else estimate_period(t, u)
+        u, ax_angle = lateral_signal(tr, tip=itip, axis_angle=local_axis_angle(tr, W0))
+        period = W0
+    starts, d, W = section_crossings(t, u, period=period, hysteresis=hysteresis)
+    if axis == "local" and starts.size >= 3 and abs(W - period) > 1e-9 * W:
+        # redo with the axis averaged over the refined period
+        u, ax_angle = lateral_signal(tr, tip=itip, axis_angle=local_axis_angle(tr, W))
+        starts, d, W = section_crossings(t, u, period=W, hysteresis=hysteresis)
     K = max(starts.size - 1, 0)
     periods = np.diff(starts)
     amps = np.empty(K)
@@ -247,7 +281,7 @@ def detect_cycles(
         growth_rate=rate,
         growth_rate_stderr=rate_err,
         growth_fit_window=win,
-        axis_angle=axis,
+        axis_angle=ax_angle,
         section_t=t,
         section_signal=u,
         tol=float(tol),
