@@ -135,7 +135,8 @@ class Descriptors:
 
 def per_cycle(obj: Any, cycles: Cycles | None = None, *, tip: int | str = "end", harmonics: int = 6,
               swim_angle: float | None = None) -> dict[str, np.ndarray]:
-    """Per-cycle measurements, each (K,): period, advance along the field, displacement,
+    """Per-cycle measurements, each (K,) (``swim_angle``: direction(s) across which the tip's
+    lateral peak-to-peak is measured, scalar or (K,); default the mean displacement): period, advance along the field, displacement,
     speed, tip lateral peak-to-peak, nonreciprocity, self_intersecting (any frame of the
     cycle crosses itself); lengths in track units."""
     tr = as_track(obj)
@@ -151,13 +152,13 @@ def per_cycle(obj: Any, cycles: Cycles | None = None, *, tip: int | str = "end",
     disp = np.hypot(dx, dy)
     if swim_angle is None:
         swim_angle = math.atan2(float(dy.sum()), float(dx.sum())) if K else 0.0
-    nx, ny = -math.sin(swim_angle), math.cos(swim_angle)
-    q = tr.x[:, cyc.tip] * nx + tr.y[:, cyc.tip] * ny
+    ang = np.broadcast_to(np.asarray(swim_angle, float), (K,))
     p2p = np.full(K, np.nan)
     for k in range(K):
         m = (tr.t >= st[k]) & (tr.t < st[k + 1])
         if np.count_nonzero(m) >= 4:
-            p2p[k] = _fourier_p2p((tr.t[m] - st[k]) / (st[k + 1] - st[k]), q[m], harmonics)
+            q = -tr.x[m, cyc.tip] * math.sin(ang[k]) + tr.y[m, cyc.tip] * math.cos(ang[k])
+            p2p[k] = _fourier_p2p((tr.t[m] - st[k]) / (st[k + 1] - st[k]), q, harmonics)
     nrec = np.full(K, np.nan)
     if K:
         coef, _, _, _ = shape_modes(tr, st[0], st[-1])
@@ -187,8 +188,9 @@ def describe(
     """Descriptors averaged over the last ``n_last`` detected cycles.
 
     Swimming direction: net centroid displacement over those cycles; advancement: its
-    projection on the field direction; tip lateral peak-to-peak: of the tip coordinate
-    perpendicular to the swimming direction, from a Fourier fit (``harmonics``) per cycle
+    projection on the field direction (per cycle, field at mid-cycle; the total uses the mean
+    field direction); tip lateral peak-to-peak: of the tip coordinate perpendicular to the
+    swimming direction (each cycle's own direction for a turning swimmer), from a Fourier fit (``harmonics``) per cycle
     (robust to noise), averaged pooled over cycles. Nonreciprocity: signed area of the
     stroke loop in the plane of the first two principal shape modes (:func:`stroke_area`,
     modes oriented by :func:`shape_modes`): about +1 for a shape wave travelling towards
@@ -214,6 +216,11 @@ def describe(
     sx, sy = CubicSpline(tr.t, xc)([t0, t1]), CubicSpline(tr.t, yc)([t0, t1])
     swim = math.atan2(float(sy[1] - sy[0]), float(sx[1] - sx[0]))
     pc = per_cycle(tr, sub, tip=tip, harmonics=harmonics, swim_angle=swim)
+    # a turning swimmer (cycle directions spread by more than a degree): measure the tip's
+    # lateral excursion across each cycle's own displacement
+    chord = np.arctan2(pc["dy"], pc["dx"])
+    if chord.size > 1 and np.max(np.abs(np.angle(np.exp(1j * (chord - swim))))) > math.radians(1.0):
+        pc = per_cycle(tr, sub, tip=tip, harmonics=harmonics, swim_angle=chord)
     mm = tr.scale_m * 1e3
     L = tr.length
     per = pc["period"]
