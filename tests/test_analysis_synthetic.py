@@ -178,3 +178,14 @@ def test_turning_swimmer_local_axis():
     assert describe(turned).period_s == pytest.approx(T, rel=REL)
     glob = detect_cycles(turned, axis="global")
     assert np.max(np.abs(glob.periods / T - 1)) > 10 * np.max(np.abs(loc.periods / T - 1))
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_hysteresis_rejects_heavy_noise(seed):
+    """Noise of 5% of the amplitude (20% of a segment) creates no spurious section crossings."""
+    kw = dict(phase=1.3 * seed, duration=4.0)
+    clean = detect_cycles(wave_track(**kw))
+    noisy = detect_cycles(wave_track(noise=5e-3, seed=seed, **kw))
+    assert noisy.n_cycles == clean.n_cycles
+    assert np.all(np.abs(noisy.periods / T - 1) < 2e-2)
+    assert describe(wave_track(noise=5e-3, seed=seed, **kw)).period_s == pytest.approx(T, rel=3e-3)
