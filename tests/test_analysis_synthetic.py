@@ -189,3 +189,14 @@ def test_hysteresis_rejects_heavy_noise(seed):
     assert noisy.n_cycles == clean.n_cycles
     assert np.all(np.abs(noisy.periods / T - 1) < 2e-2)
     assert describe(wave_track(noise=5e-3, seed=seed, **kw)).period_s == pytest.approx(T, rel=3e-3)
+
+
+def test_units_mm_give_same_physical_descriptors():
+    """Experimental tracks in mm: the same stroke expressed in mm gives the same mm values."""
+    tr = wave_track(length=3.7e-3, amplitude=0.3e-3, wavelength=3e-3, speed=0.5e-3)
+    mm = Track(t=tr.t, x=tr.x * 1e3, y=tr.y * 1e3, s=tr.s * 1e3, length=tr.length * 1e3, units="mm")
+    a, b = describe(tr), describe(mm)
+    for key in ("advance_per_cycle_mm", "tip_lateral_p2p_mm", "speed_mm_s", "body_length_mm"):
+        assert getattr(b, key) == pytest.approx(getattr(a, key), rel=1e-9)
+    assert b.advance_per_cycle_mm == pytest.approx(0.5 * T, rel=REL)
+    assert b.body_length_mm == pytest.approx(3.7, rel=1e-12)

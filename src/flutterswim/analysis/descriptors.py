@@ -30,7 +30,7 @@ def _fourier_p2p(phase: np.ndarray, q: np.ndarray, harmonics: int) -> float:
         cols += [np.cos(2 * np.pi * h * phase), np.sin(2 * np.pi * h * phase)]
     A = np.vstack(cols).T
     coef, *_ = np.linalg.lstsq(A, q, rcond=None)
-    ph = np.linspace(0.0, 1.0, 512, endpoint=False)
+    ph = np.linspace(0.0, 1.0, 4096, endpoint=False)
     B = [np.ones_like(ph)]
     for h in range(1, H + 1):
         B += [np.cos(2 * np.pi * h * ph), np.sin(2 * np.pi * h * ph)]
