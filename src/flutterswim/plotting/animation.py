@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from .._validate import ParameterError
+from ..analysis.cycles import tip_index
 from ..analysis.track import as_track
 from ._common import SWIM_COLOR, TIP_COLOR, field_arrow, mm_factor, new_figure, set_field_arrow
 
@@ -44,12 +45,14 @@ def animate(
     dpi: float = 100.0,
     trail: bool = True,
     quality: int = 7,
+    tip: int | str = "end",
 ) -> Path:
     """Write an animation of the swimmer to ``path`` (.mp4 or .gif) and return the path.
 
     One video frame per 1/fps s of video; ``speed`` is simulated seconds per video second
     (frames are the nearest saved times). ``size``: (width, height) pixels, made even for
-    MP4. Shows the filament, the tip trajectory so far (magenta), the centroid path
+    MP4. Shows the filament, the trajectory so far of the tip (``tip``: "end" = s=l or
+    "start" = s=0; magenta), the centroid path
     (yellow), the field arrow (red, follows a rotating field) and a time stamp; the view
     holds the whole trajectory.
     """
@@ -70,6 +73,7 @@ def animate(
     p.parent.mkdir(parents=True, exist_ok=True)
 
     f = mm_factor(tr)
+    it = tip_index(tr, tip)
     X, Y = tr.x * f, tr.y * f
     xc, yc = tr.centroid()
     xc, yc = xc * f, yc * f
@@ -108,7 +112,7 @@ def animate(
     def render(i: int) -> np.ndarray:
         canvas.restore_region(bg)
         if trail:
-            tip_line.set_data(X[: i + 1, -1], Y[: i + 1, -1])
+            tip_line.set_data(X[: i + 1, it], Y[: i + 1, it])
             cen_line.set_data(xc[: i + 1], yc[: i + 1])
             ax.draw_artist(tip_line)
             ax.draw_artist(cen_line)

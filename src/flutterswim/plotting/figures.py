@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from .._validate import ParameterError
-from ..analysis.cycles import Cycles, detect_cycles
+from ..analysis.cycles import Cycles, detect_cycles, tip_index
 from ..analysis.descriptors import per_cycle
 from ..analysis.kymograph import body_kymograph, kymograph_windows, line_kymograph
 from ..analysis.track import as_track
@@ -40,7 +40,7 @@ def _cycle_window(tr, cycles: Cycles | None, cycle: int | None, window):
 
 
 def draw_ghosts(ax, obj: Any, window: tuple[float, float], *, n_ghosts: int = 8, tip_trail=None,
-                field: bool = True, title: str | None = None) -> None:
+                field: bool = True, title: str | None = None, tip: int | str = "end") -> None:
     """Draw ``n_ghosts`` configurations over ``window`` in shades of green, the tip trajectory
     over ``tip_trail`` (default: the window) in magenta and the field arrow on ``ax``."""
     import matplotlib
@@ -54,7 +54,8 @@ def draw_ghosts(ax, obj: Any, window: tuple[float, float], *, n_ghosts: int = 8,
         c = cmap(0.35 + 0.6 * n / max(1, pick.size - 1))
         ax.plot(tr.x[i] * f, tr.y[i] * f, color=c, lw=1.6, solid_capstyle="round")
     tidx = window_indices(tr.t, window if tip_trail is None else tip_trail)
-    ax.plot(tr.x[tidx, -1] * f, tr.y[tidx, -1] * f, color=TIP_COLOR, lw=1.0, label="tip trajectory")
+    it = tip_index(tr, tip)
+    ax.plot(tr.x[tidx, it] * f, tr.y[tidx, it] * f, color=TIP_COLOR, lw=1.0, label="tip trajectory")
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
@@ -65,32 +66,33 @@ def draw_ghosts(ax, obj: Any, window: tuple[float, float], *, n_ghosts: int = 8,
 
 def plot_ghosts(obj: Any, path: str | Path | None = None, *, cycle: int | None = None,
                 window: tuple[float, float] | None = None, cycles: Cycles | None = None, n_ghosts: int = 8,
-                figsize=(6.0, 3.0), dpi: float = 150) -> Any:
-    """Ghosts of one stroke cycle (default: the last detected) in greens with the tip
-    trajectory in magenta and the field arrow in red."""
+                tip: int | str = "end", figsize=(6.0, 3.0), dpi: float = 150) -> Any:
+    """Ghosts of one stroke cycle (default: the last detected) in greens with the trajectory
+    of the tip (``tip``: "end" = s=l, "start" = s=0) in magenta and the field arrow in red."""
     tr = as_track(obj)
     win = _cycle_window(tr, cycles, cycle, window)
     fig = new_figure(figsize, dpi)
     ax = fig.add_subplot()
-    draw_ghosts(ax, tr, win, n_ghosts=n_ghosts)
+    draw_ghosts(ax, tr, win, n_ghosts=n_ghosts, tip=tip)
     return finish(fig, path)
 
 
 def plot_swimmer(obj: Any, path: str | Path | None = None, *, time: float | None = None, trail: bool = True,
-                 figsize=(6.0, 3.0), dpi: float = 150) -> Any:
+                 tip: int | str = "end", figsize=(6.0, 3.0), dpi: float = 150) -> Any:
     """The filament at ``time`` (default: the last frame), with the tip trajectory up to that
     time, the centroid path and the field arrow."""
     tr = as_track(obj)
     f = mm_factor(tr)
     i = tr.n_frames - 1 if time is None else int(np.argmin(np.abs(tr.t - float(time))))
+    it = tip_index(tr, tip)
     fig = new_figure(figsize, dpi)
     ax = fig.add_subplot()
     if trail:
-        ax.plot(tr.x[: i + 1, -1] * f, tr.y[: i + 1, -1] * f, color=TIP_COLOR, lw=0.8, label="tip")
+        ax.plot(tr.x[: i + 1, it] * f, tr.y[: i + 1, it] * f, color=TIP_COLOR, lw=0.8, label="tip")
         xc, yc = tr.centroid()
         ax.plot(xc[: i + 1] * f, yc[: i + 1] * f, color=SWIM_COLOR, lw=1.2, label="centroid")
     ax.plot(tr.x[i] * f, tr.y[i] * f, color="#1a7f37", lw=2.5, solid_capstyle="round")
-    ax.plot(tr.x[i, -1] * f, tr.y[i, -1] * f, "o", color=TIP_COLOR, ms=3)
+    ax.plot(tr.x[i, it] * f, tr.y[i, it] * f, "o", color=TIP_COLOR, ms=3)
     field_arrow(ax, float(tr.field_angle[i]))
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x (mm)")
