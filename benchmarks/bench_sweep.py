@@ -86,6 +86,19 @@ def main() -> None:
                 res[f"scaling_27pts_{w}worker_cpu_s"] = cpu_children() - c0
                 res[f"scaling_27pts_{w}worker_load"] = os.getloadavg()
             res["speedup_1_to_2"] = res["scaling_27pts_1worker_s"] / res["scaling_27pts_2worker_s"]
+            # load-independent estimate: greedy 2-worker schedule (submission order, as the pool
+            # does) of the per-point times measured with 1 worker, plus the measured parent-side cost
+            from flutterswim.sweep import open_sweep
+
+            wt = open_sweep(f"{tmp}/w1.zarr")["wall_time_s"].values
+            busy = [0.0, 0.0]
+            for w_ in wt:
+                i = int(np.argmin(busy))
+                busy[i] += w_
+            parent = res["scaling_27pts_1worker_s"] - float(np.sum(wt))
+            res["scaling_sum_point_s"] = float(np.sum(wt))
+            res["scaling_parent_overhead_s"] = parent
+            res["speedup_schedule_estimate"] = res["scaling_27pts_1worker_s"] / (max(busy) + parent)
             print(json.dumps(res, indent=1), flush=True)
         if a.only in (None, "dask"):
             from flutterswim.sweep import get_backend

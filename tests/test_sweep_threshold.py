@@ -17,7 +17,6 @@ def rc():
     return physical_stability(PAPER).critical_kappa_E / PAPER.kappa_E
 
 
-@pytest.mark.slow
 def test_transition_within_2_percent_of_linear_threshold(rc):
     ratios = sorted([0.1, 0.4, 0.98 * rc, 1.02 * rc, 1.0, 1.5])
     ds = sweep({"kappa_E_ratio": ratios}, settings={"t_cap": 40.0}, progress=False)
@@ -40,7 +39,6 @@ def test_transition_within_2_percent_of_linear_threshold(rc):
         assert np.sign(got) == np.sign(om) and abs(got - om) < 0.5 * abs(om)
 
 
-@pytest.mark.slow
 def test_continuation_hysteresis_and_onset_law(rc):
     """Up/down continuation near onset: the onset brackets of both branches agree (no
     hysteresis at 1% resolution: the Hopf bifurcation is not subcritical), and the limit-cycle

@@ -8,14 +8,20 @@ from .initial import InitialState
 from .params import PAPER, Groups, Parameters, SlendernessWarning, preset
 from .result import SimulationResult, load
 from .simulate import simulate
-from .stability import (
-    leading_eigenvalue,
-    neutral_curve,
-    physical_stability,
-    spectrum,
-    stability_figures,
-    stability_map,
-)
+
+_LAZY = {  # imported on first use: the stability package loads numba
+    name: "flutterswim.stability"
+    for name in ("leading_eigenvalue", "neutral_curve", "physical_stability", "spectrum",
+                 "stability_figures", "stability_map")
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'flutterswim' has no attribute {name!r}")
 
 try:
     __version__ = version("flutterswim")

@@ -1,5 +1,5 @@
-"""Compiled assembly of the mobility matrix (numba), the same maths as
-:meth:`flutterswim.filament.Filament.mobility` in O(N^2) loops without temporaries.
+"""Compiled assembly and solution of the mobility problem (numba): the same maths as
+:meth:`flutterswim.filament.Filament.mobility`, in O(N^2) loops without temporaries.
 
 Used by the filament when numba is installed (extra ``fast``); the tests check that it
 agrees with the numpy assembly. ``benchmarks/bench_simulate.py`` measures what it saves.
@@ -9,10 +9,34 @@ from __future__ import annotations
 
 import numpy as np
 
-try:
-    from numba import njit
-except ImportError:  # pragma: no cover - the numpy path is used instead
-    njit = None
+_KERNELS: dict[str, object] = {}
+_assemble_nb = None  # the compiled _assemble, a global the compiled solvers call
+
+
+def kernels() -> dict[str, object]:
+    """The compiled kernels {"assemble", "solve", "inverse"}, compiled (or loaded from
+    numba's cache) on first use; empty if numba is not installed. Importing numba costs
+    tens of MB, so it is not done before a simulation needs it."""
+    if not _KERNELS:
+        try:
+            from numba import njit
+        except ImportError:  # pragma: no cover - the numpy path is used instead
+            _KERNELS["missing"] = True
+            return {}
+        global _assemble_nb
+        _assemble_nb = njit(cache=True)(_assemble)
+        _KERNELS["assemble"] = _assemble_nb
+        _KERNELS["solve"] = njit(cache=True)(_solve)
+        _KERNELS["inverse"] = njit(cache=True)(_inverse)
+    return {} if "missing" in _KERNELS else _KERNELS
+
+
+def _solve(theta, tn, weights, eta_par, eta_perp, h, b):  # pragma: no cover - compiled
+    return np.linalg.solve(_assemble_nb(theta, tn, weights, eta_par, eta_perp, h), b)
+
+
+def _inverse(theta, tn, weights, eta_par, eta_perp, h):  # pragma: no cover - compiled
+    return np.linalg.inv(_assemble_nb(theta, tn, weights, eta_par, eta_perp, h))
 
 
 def _assemble(theta, tn, weights, eta_par, eta_perp, h):  # pragma: no cover - compiled
@@ -59,19 +83,3 @@ def _assemble(theta, tn, weights, eta_par, eta_perp, h):  # pragma: no cover - c
         g[0, q] = sx[q]
         g[1, q] = sy[q]
     return g
-
-
-def _solve(theta, tn, weights, eta_par, eta_perp, h, b):  # pragma: no cover - compiled
-    return np.linalg.solve(assemble(theta, tn, weights, eta_par, eta_perp, h), b)
-
-
-def _inverse(theta, tn, weights, eta_par, eta_perp, h):  # pragma: no cover - compiled
-    return np.linalg.inv(assemble(theta, tn, weights, eta_par, eta_perp, h))
-
-
-if njit is not None:
-    assemble = njit(cache=True)(_assemble)
-    solve = njit(cache=True)(_solve)
-    inverse = njit(cache=True)(_inverse)
-else:  # pragma: no cover
-    assemble = solve = inverse = None

@@ -122,14 +122,15 @@ class Filament:
 
     def matrix(self, theta: np.ndarray, kappa: np.ndarray) -> np.ndarray:
         """The mobility matrix G alone: compiled assembly when numba is available."""
-        if self._use_kernel:
-            return _kernel.assemble(theta, self.node_theta(theta, kappa), self._weights,
-                                    self.eta_par, self.eta_perp, self.h)
+        k = self._kernels
+        if k:
+            return k["assemble"](theta, self.node_theta(theta, kappa), self._weights,
+                                 self.eta_par, self.eta_perp, self.h)
         return self.mobility(theta, kappa)[0]
 
     @property
-    def _use_kernel(self) -> bool:
-        return self.compiled and _kernel.assemble is not None
+    def _kernels(self) -> dict:
+        return _kernel.kernels() if self.compiled else {}
 
     def moment(self, theta: np.ndarray, kappa: np.ndarray) -> np.ndarray:
         """Bending moment at interior joints, M_j = theta_s(s_j) - kappa_j, (N-1,)."""
@@ -141,9 +142,10 @@ class Filament:
         theta, kappa = y[2 : n + 2], y[n + 2 :]
         b = np.zeros(n + 2)
         b[2 : n + 1] = -self.moment(theta, kappa)
-        if self._use_kernel:
-            return _kernel.solve(theta, self._avg @ theta, self._weights, self.eta_par, self.eta_perp,
-                                 self.h, b)
+        k = self._kernels
+        if k:
+            return k["solve"](theta, self._avg @ theta, self._weights, self.eta_par, self.eta_perp,
+                              self.h, b)
         return np.linalg.solve(self.matrix(theta, kappa), b)
 
     def rhs(self, y: np.ndarray, phi: float, sigma: float) -> np.ndarray:
@@ -159,9 +161,10 @@ class Filament:
         """Jacobian of rhs, exact except for the (non-stiff) change of G with theta."""
         n = self.n
         theta, kappa = y[2 : n + 2], y[n + 2 :]
-        if self._use_kernel:
-            ginv = _kernel.inverse(theta, self._avg @ theta, self._weights, self.eta_par,
-                                   self.eta_perp, self.h)
+        k = self._kernels
+        if k:
+            ginv = k["inverse"](theta, self._avg @ theta, self._weights, self.eta_par,
+                                self.eta_perp, self.h)
         else:
             ginv = sla.inv(self.matrix(theta, kappa), check_finite=False)
         ginv_m = ginv[:, 2 : n + 1]  # dz/d(-M)

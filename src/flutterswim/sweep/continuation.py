@@ -69,11 +69,30 @@ class OnsetFit:
         return asdict(self)
 
 
-def onset_fit(x, amplitude, x_cr: float, *, window: float | None = None, tol: float = 0.15) -> OnsetFit:
+def onset_fit(x, amplitude, x_cr: float | tuple[float, float], *, window: float | None = None,
+              tol: float = 0.15) -> OnsetFit:
     """Fit log amplitude = log c + exponent log(x - x_cr) over points with x > x_cr (and within
-    ``window`` of it) and finite positive amplitude."""
+    ``window`` of it) and finite positive amplitude. ``x_cr`` fixed (e.g. the linear threshold)
+    or a bracket (lo, hi): then x_cr is fitted too (least squares in log amplitude)."""
     x = np.asarray(x, float)
     a = np.asarray(amplitude, float)
+    if isinstance(x_cr, tuple):
+        from scipy.optimize import minimize_scalar
+
+        lo, hi = float(x_cr[0]), float(min(x_cr[1], np.min(x[np.isfinite(a) & (a > 0) & (x > x_cr[0])])))
+
+        def sse(xc):
+            try:
+                f = onset_fit(x, a, float(xc), window=window, tol=tol)
+            except ParameterError:
+                return math.inf
+            m = np.isfinite(a) & (a > 0) & (x > xc) & ((x - xc <= window) if window is not None else True)
+            r = np.log(a[m]) - math.log(f.prefactor) - f.exponent * np.log(x[m] - xc)
+            return float(r @ r)
+
+        xc = minimize_scalar(sse, bounds=(lo, hi - 1e-9 * max(1.0, abs(hi))), method="bounded",
+                             options={"xatol": 1e-10 * max(1.0, abs(hi))}).x
+        return onset_fit(x, a, float(xc), window=window, tol=tol)
     m = np.isfinite(a) & (a > 0) & (x > x_cr)
     if window is not None:
         m &= x - x_cr <= window

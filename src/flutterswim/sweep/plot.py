@@ -85,7 +85,7 @@ def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str
     if growing.any():
         axs[0].plot(xv[growing], np.zeros(growing.sum()), "^", mfc="none", color="tab:orange", ms=5,
                     label="unstable, still growing at t_cap")
-        axs[0].legend(fontsize=8, loc="upper right")
+        axs[0].legend(fontsize=8, loc="lower right")
     capped = (~ds["limit_cycle_reached"].values) & swim
     if capped.any():
         axs[1].plot(xv[capped], per[capped], "o", mfc="none", color="0.4", ms=6, label="no limit cycle by t_cap")
