@@ -9,10 +9,17 @@ from .params import PAPER, Groups, Parameters, SlendernessWarning, preset
 from .result import SimulationResult, load
 from .simulate import simulate
 
-_LAZY = {  # imported on first use: the stability package loads numba
-    name: "flutterswim.stability"
-    for name in ("leading_eigenvalue", "neutral_curve", "physical_stability", "spectrum",
-                 "stability_figures", "stability_map")
+_LAZY = {  # imported on first use: the stability package loads numba, plotting matplotlib
+    **{name: "flutterswim.stability"
+       for name in ("leading_eigenvalue", "neutral_curve", "physical_stability", "spectrum",
+                    "stability_figures", "stability_map")},
+    **{name: "flutterswim.analysis"
+       for name in ("Track", "Cycles", "Descriptors", "describe", "detect_cycles", "self_intersections")},
+    **{name: "flutterswim.plotting"
+       for name in ("plot_ghosts", "plot_swimmer", "plot_descriptors", "plot_kymographs", "plot_summary",
+                    "animate")},
+    "run_to_limit_cycle": "flutterswim.limit_cycle",
+    "sweep": "flutterswim.sweep",
 }
 
 
@@ -41,6 +48,20 @@ __all__ = [
     "SlendernessWarning",
     "__version__",
     "leading_eigenvalue",
+    "run_to_limit_cycle",
+    "sweep",
+    "Track",
+    "Cycles",
+    "Descriptors",
+    "describe",
+    "detect_cycles",
+    "self_intersections",
+    "plot_ghosts",
+    "plot_swimmer",
+    "plot_descriptors",
+    "plot_kymographs",
+    "plot_summary",
+    "animate",
     "load",
     "neutral_curve",
     "physical_stability",

@@ -1,0 +1,96 @@
+"""Benchmark: the paper preset from a 0.01 degree tilt to 15 settled cycles.
+
+Reports, measured in this run:
+- wall time of ``run_to_limit_cycle`` (ROS34PW2) at several resolutions, with the errors
+  of the period and of the advancement per cycle against a much finer run of this code;
+- the ratio against scipy's ``solve_ivp`` (Radau and BDF, finite-difference Jacobian)
+  on the same semi-discretisation, same window and tolerance;
+- peak memory of a run saving 2000 frames of 100 points (in a fresh subprocess).
+
+Usage: OPENBLAS_NUM_THREADS=1 python benchmarks/bench_simulate.py [--quick]
+(one BLAS thread: the target is one core, and small matrices gain nothing from threads).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+import flutterswim as fs
+from flutterswim.analysis.descriptors import describe
+from flutterswim.limit_cycle import run_to_limit_cycle
+from flutterswim.simulate import simulate
+
+
+def job(n: int, rtol: float) -> dict:
+    t0 = time.perf_counter()
+    run = run_to_limit_cycle(fs.PAPER, n_cycles=15, n_segments=n, rtol=rtol, atol=rtol * 1e-2)
+    wall = time.perf_counter() - t0
+    d = describe(run, n_last=15)
+    return {"n": n, "rtol": rtol, "wall_s": wall, "sim_s": float(run.t[-1]), "steps": run.stats.n_steps,
+            "period_s": d.period_s, "advance_mm": d.advance_per_cycle_mm}
+
+
+def baseline(method: str, n: int, rtol: float, start, window_tau: float) -> tuple[float, float, float]:
+    """Wall time of ours and of scipy over the same window of the settled stroke (the hard
+    part: large amplitude), from the same state, with the same tolerances."""
+    g = fs.PAPER.groups
+    out = {}
+    for m in ("ros34pw2", method):
+        t0 = time.perf_counter()
+        r = simulate(g, window_tau, n_segments=n, rtol=rtol, atol=rtol * 1e-2, method=m, n_frames=101,
+                     initial=start)
+        out[m] = (time.perf_counter() - t0, r)
+    a, b = out["ros34pw2"][1], out[method][1]
+    diff = float(np.max(np.abs(a.theta[-1] - b.theta[-1])))
+    return out["ros34pw2"][0], out[method][0], diff
+
+
+MEMORY = """
+import resource, flutterswim as fs
+r = fs.simulate(fs.PAPER, 40 * fs.PAPER.tau, n_segments=99, n_frames=2000, rtol=1e-4, atol=1e-6)
+assert r.x.shape == (2000, 100)
+print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
+"""
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--quick", action="store_true", help="skip the reference and the slow baseline")
+    args = ap.parse_args()
+    cpu = platform.processor() or platform.machine()
+    try:
+        cpu = next(l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name"))
+    except (OSError, StopIteration):
+        pass
+    print(f"machine: {cpu}; python {platform.python_version()}; numpy {np.__version__}")
+    job(16, 1e-3)  # warm-up: loads the compiled kernels
+    configs = [(32, 1e-4), (40, 1e-4), (48, 1e-4)]
+    ref = None if args.quick else job(128, 1e-6)
+    print("reference:", json.dumps(ref), flush=True)
+    for n, r in configs:
+        row = job(n, r)
+        if ref is not None:
+            row["period_err"] = abs(row["period_s"] / ref["period_s"] - 1)
+            row["advance_err"] = abs(row["advance_mm"] / ref["advance_mm"] - 1)
+        print(json.dumps(row), flush=True)
+    settled = run_to_limit_cycle(fs.PAPER.groups, n_cycles=2, n_segments=40, rtol=1e-4, atol=1e-6).final_state()
+    for method in ("radau", "bdf"):
+        ours, theirs, diff = baseline(method, 40, 1e-4, settled, 2.0)
+        print(f"baseline {method}: 2 tau (2 strokes) of the settled stroke, N=40, rtol 1e-4: ours "
+              f"{ours:.3f} s, scipy {theirs:.3f} s, ratio {theirs / ours:.1f}x, "
+              f"max |theta| difference at the end {diff:.2e}", flush=True)
+    mem = subprocess.run([sys.executable, "-c", MEMORY], capture_output=True, text=True, check=True)
+    print(f"peak RSS, 2000 frames x 100 points: {float(mem.stdout.strip()):.0f} MB")
+    print(f"load average at the end: {os.getloadavg()}")
+
+
+if __name__ == "__main__":
+    main()
