@@ -99,3 +99,24 @@ def test_internal_forces_vanish_at_free_ends_and_balance_the_moment(paper_groups
         ms = np.gradient(m, res.s)
         errs.append(np.max(np.abs(ms + v)[3:-3]) / scale)
     assert errs[1] < 0.5 * errs[0] and errs[1] < 0.05
+
+
+def test_switching_the_field_off_relaxes_kappa_exponentially(paper_groups):
+    """With strength 0 the activity law is kappa_t = -kappa: kappa(t) = kappa(t1) e^-(t - t1)."""
+    from flutterswim.field import Field, Piecewise
+
+    field = Field(direction=0.2, strength=Piecewise([0.0, 1.0], [1.0, 0.0]))
+    res = simulate(paper_groups, 3.0, field=field, initial=InitialState.straight(5.0), n_segments=16,
+                   n_frames=31, rtol=1e-9, atol=1e-12)
+    i1 = np.searchsorted(res.t, 1.0)
+    assert np.abs(res.kappa[i1]).max() > 0.1
+    decay = np.exp(-(res.t[i1:] - res.t[i1]))[:, None] * res.kappa[i1]
+    assert np.max(np.abs(res.kappa[i1:] - decay)) < 1e-7 * np.abs(res.kappa[i1]).max()
+    assert np.all(res.field_strength[res.t >= 1.0] == 0.0)
+
+
+def test_a_field_callable_returning_nan_is_reported(paper_groups):
+    from flutterswim.field import Field
+
+    with pytest.raises(fs.ParameterError, match="returned nan"):
+        simulate(paper_groups, 1.0, field=Field(direction=lambda t: float("nan")), n_segments=8)
