@@ -42,6 +42,7 @@ def main() -> None:
     ap.add_argument("--only", default=None)
     ap.add_argument("--figure", default="benchmarks/sweep_kappa_E.png")
     ap.add_argument("--n", type=int, default=101)
+    ap.add_argument("--scaling-full", action="store_true", help="scaling on the full 0:2:n grid")
     ap.add_argument("--rtol", type=float, default=None, help="override PointSettings.rtol (atol = rtol/100)")
     a = ap.parse_args()
     tmp = tempfile.mkdtemp(prefix="bench-sweep-")
@@ -78,7 +79,7 @@ def main() -> None:
             res["resume_finished_101_s"] = time.perf_counter() - t0
             print(json.dumps(res, indent=1), flush=True)
         if a.only in (None, "scaling"):
-            sub = ["kappa_E_ratio=0.7:2:27"]
+            sub = axes if a.scaling_full else ["kappa_E_ratio=0.7:2:27"]
             for w in (1, 2):
                 t0, c0 = time.perf_counter(), cpu_children()
                 sweep(sub, out=f"{tmp}/w{w}.zarr", backend="processes", workers=w, progress=False, settings=st)
