@@ -70,3 +70,18 @@ def test_changed_definition_is_refused(tmp_path):
     ds3 = sweep({"chi": [1.0, 3.0]}, out=str(out), backend="serial", point_fn=_const, progress=False,
                 overwrite=True)
     np.testing.assert_array_equal(ds3["a"].values, [1.0, 3.0])
+
+
+def test_second_writer_is_refused(tmp_path):
+    from flutterswim.sweep import SweepSpec, SweepStore, VARIABLES
+
+    spec = SweepSpec.build({"chi": [1.0, 2.0]})
+    out = tmp_path / "l.zarr"
+    first = SweepStore.open(out, spec, ["a"], 3)
+    try:
+        with pytest.raises(SweepDefinitionError, match="another sweep process"):
+            sweep({"chi": [1.0, 2.0]}, out=str(out), backend="serial", point_fn=_const, progress=False)
+    finally:
+        first.close()
+    ds = sweep({"chi": [1.0, 2.0]}, out=str(out), backend="serial", point_fn=_const, progress=False)
+    assert ds["done"].all()

@@ -118,9 +118,12 @@ def sweep(
         out = f"{tmp.name}/sweep.zarr"
     try:
         store = SweepStore.open(out, spec, variables, n_state, overwrite=overwrite)
-        _run(store, spec, fn, variables, backend=backend, workers=workers, scheduler=scheduler,
-             progress=progress, max_points=max_points)
-        ds = to_dataset(store)
+        try:
+            _run(store, spec, fn, variables, backend=backend, workers=workers, scheduler=scheduler,
+                 progress=progress, max_points=max_points)
+            ds = to_dataset(store)
+        finally:
+            store.close()
         if tmp is not None:
             ds = ds.load()
     finally:

@@ -36,15 +36,52 @@ class SweepDefinitionError(ParameterError):
     """The store holds a different sweep than the one requested."""
 
 
+def _acquire(path: Path):
+    """Exclusive advisory lock next to the store: one writer at a time."""
+    import fcntl
+
+    lock_path = path.parent / f".{path.name}.lock"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    f = open(lock_path, "a+")
+    try:
+        fcntl.flock(f.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        f.close()
+        raise SweepDefinitionError(
+            f"the store {str(path)!r} is being written by another sweep process (lock {str(lock_path)!r}); "
+            "wait for it to finish or stop it, then rerun to resume"
+        ) from None
+    return f
+
+
 class SweepStore:
     def __init__(self, path: str | Path, group, spec: SweepSpec, variables: list[str]):
         self.path, self.group, self.spec, self.variables = Path(path), group, spec, variables
+        self._lock = None
         self._arr = {k: group[k] for k in ("values", "message", "failed", "wall_time", "state", "done")}
 
     # ------------------------------------------------------------------ open/create
     @classmethod
     def open(cls, path: str | Path, spec: SweepSpec, variables: Sequence[str], n_state: int,
              *, overwrite: bool = False) -> "SweepStore":
+        """Open (resume) or create the store and take its writer lock (released by
+        :meth:`close` or when the process ends, SIGKILL included)."""
+        lock = _acquire(Path(path))
+        try:
+            store = cls._open(path, spec, variables, n_state, overwrite=overwrite)
+        except BaseException:
+            lock.close()
+            raise
+        store._lock = lock
+        return store
+
+    def close(self) -> None:
+        if self._lock is not None:
+            self._lock.close()
+            self._lock = None
+
+    @classmethod
+    def _open(cls, path, spec, variables, n_state, *, overwrite):
         import zarr
 
         path = Path(path)
