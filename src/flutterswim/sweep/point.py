@@ -23,9 +23,10 @@ from .spec import PointSettings, base_from_dict, point_params
 
 __all__ = ["run_point", "VARIABLES", "DESCRIPTOR_VARIABLES", "FLAG_VARIABLES", "CORE_VARIABLES"]
 
-_SKIP = {"leading_end"}
+#: Numeric and boolean fields of the analysis descriptors (strings such as leading_end are left out).
 DESCRIPTOR_VARIABLES = tuple(
-    f for f in Descriptors.__dataclass_fields__ if f not in _SKIP
+    name for name, f in Descriptors.__dataclass_fields__.items()
+    if str(getattr(f.type, "__name__", f.type)) in ("float", "int", "bool")
 )
 #: Classification of the point (0/1), independent of the descriptors.
 FLAG_VARIABLES = ("straight", "unstable", "swimming", "limit_cycle_reached", "saturated", "capped")
@@ -151,7 +152,7 @@ def run_point(task: Mapping[str, Any]) -> dict[str, Any]:
             c = detect_cycles(tr)
             d = describe(tr, n_last=st.n_cycles, cycles=c)
             for k, v in d.to_dict().items():
-                if k in out:
+                if k in out and (v is None or isinstance(v, (int, float))):
                     out[k] = math.nan if v is None else float(v)
             idx = c.last(st.n_cycles)
             amp = c.amplitudes[idx] / length
