@@ -19,7 +19,9 @@ _LAZY = {  # imported on first use: the stability package loads numba, plotting 
        for name in ("plot_ghosts", "plot_swimmer", "plot_descriptors", "plot_kymographs", "plot_summary",
                     "animate")},
     "run_to_limit_cycle": "flutterswim.limit_cycle",
-    "sweep": "flutterswim.sweep",
+    # not "sweep": importing flutterswim.sweep binds that name to the subpackage
+    "run_sweep": ("flutterswim.sweep", "sweep"),
+    "open_sweep": "flutterswim.sweep",
 }
 
 
@@ -27,7 +29,8 @@ def __getattr__(name: str):
     if name in _LAZY:
         import importlib
 
-        return getattr(importlib.import_module(_LAZY[name]), name)
+        module, attr = _LAZY[name] if isinstance(_LAZY[name], tuple) else (_LAZY[name], name)
+        return getattr(importlib.import_module(module), attr)
     raise AttributeError(f"module 'flutterswim' has no attribute {name!r}")
 
 try:
@@ -49,7 +52,8 @@ __all__ = [
     "__version__",
     "leading_eigenvalue",
     "run_to_limit_cycle",
-    "sweep",
+    "run_sweep",
+    "open_sweep",
     "Track",
     "Cycles",
     "Descriptors",
