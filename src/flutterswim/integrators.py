@@ -132,12 +132,16 @@ def integrate(
     check: Callable[[float, np.ndarray], str | None] | None = None,
     max_steps: int = 10_000_000,
     progress: Callable[[float], None] | None = None,
+    scale_cap: np.ndarray | None = None,
 ) -> Solution:
     """Integrate y' = fun(t, y) over t_span, returning y at t_eval (sorted, inside t_span).
 
     ``check(t, y)`` runs after each accepted step; a non-None string stops the run
     with that reason (status "stopped"). A non-finite state or step-size collapse
-    ends it with status "failed" and the reason.
+    ends it with status "failed" and the reason. ``scale_cap`` (n,) caps |y| in the
+    relative part of the error weights, atol + rtol min(|y|, cap): for components such
+    as positions and angles, whose size grows with distance swum or turned, not with
+    what needs resolving (ros34pw2 only).
     """
     scheme = METHODS.get(method)
     if scheme is None:
@@ -148,12 +152,12 @@ def integrate(
         return _integrate_scipy(fun, t_span, y0, t_eval, scheme, rtol, atol, max_step, check)
     return _integrate_rosw(
         fun, jac, t_span, y0, t_eval, scheme, rtol, atol, max_step, first_step,
-        breakpoints, time_dependent, check, max_steps, progress,
+        breakpoints, time_dependent, check, max_steps, progress, scale_cap,
     )
 
 
 def _integrate_rosw(fun, jac, t_span, y0, t_eval, tab, rtol, atol, max_step, first_step,
-                    breakpoints, time_dependent, check, max_steps, progress):
+                    breakpoints, time_dependent, check, max_steps, progress, scale_cap):
     wall0 = time.perf_counter()
     t0, t1 = float(t_span[0]), float(t_span[1])
     y = np.array(y0, dtype=float)
@@ -220,7 +224,10 @@ def _integrate_rosw(fun, jac, t_span, y0, t_eval, tab, rtol, atol, max_step, fir
         y_new = y + b @ k
         finite = np.all(np.isfinite(y_new))
         if finite:
-            err_vec = (e @ k) / (atol + rtol * np.maximum(np.abs(y), np.abs(y_new)))
+            size = np.maximum(np.abs(y), np.abs(y_new))
+            if scale_cap is not None:
+                size = np.minimum(size, scale_cap)
+            err_vec = (e @ k) / (atol + rtol * size)
             err = float(np.sqrt(np.mean(err_vec**2)))
         else:
             err = np.inf

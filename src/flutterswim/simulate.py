@@ -103,7 +103,7 @@ def simulate(
             max_step=np.inf if max_step is None else positive("max_step", max_step) / tau,
             breakpoints=fld.breakpoints, time_dependent=not fld.is_constant,
             check=_check if (stop_on_self_intersection or check is not None) else None,
-            progress=tick,
+            progress=tick, scale_cap=np.r_[1.0, 1.0, np.full(n, np.pi), np.full(n + 1, np.inf)],
         )
     finally:
         if bar is not None:
