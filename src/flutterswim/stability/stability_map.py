@@ -136,9 +136,15 @@ def _columns_numpy(etas, chis, seeds, tol, maxit):
 def stability_map(*, eta_perp=None, chi=None, eta_range: tuple[float, float] = (0.0, 350.0),
                   chi_range: tuple[float, float] = (-130.0, 130.0), step: float = 0.1,
                   max_step: float = 0.25, tol: float = 1e-10, maxit: int = 30,
-                  check_stride: int | None = None, backend: str = "auto") -> StabilityMap:
+                  check_stride: int | None = None, backend: str = "auto",
+                  executor: str | None = None, workers: int | None = None,
+                  scheduler: str | None = None) -> StabilityMap:
     """Leading eigenvalue over the grid eta_perp x chi (default: the paper's [0,350]x[-130,130]
     at ``step``; or explicit increasing 1-D arrays). Returns a :class:`StabilityMap`.
+
+    ``executor`` spreads blocks of eta_perp rows over the sweep backends
+    (:func:`flutterswim.sweep.get_backend`: "serial", "processes", "dask", "dask-local";
+    ``scheduler`` is a Dask address); by default the rows run in this process (numba threads).
 
     ``check_stride=k`` compares every k-th point in both directions with the collocation
     solver started from scratch (:func:`leading_eigenvalue`), warning if a branch was jumped.
@@ -169,12 +175,10 @@ def stability_map(*, eta_perp=None, chi=None, eta_range: tuple[float, float] = (
     path = follow_root(seed, float(apos[0]), epath, tol=tol, maxit=maxit, backend=backend)
     seeds = np.ascontiguousarray(path.omega[eidx][::-1])
     cpath, cidx = _refine(apos, max_step)
-    if backend == "numba":
-        out = np.empty((ev.size, cpath.size), dtype=complex)
-        its = np.empty((ev.size, cpath.size), dtype=np.int64)
-        _kernels._follow_columns(np.ascontiguousarray(ev), np.ascontiguousarray(cpath), seeds, tol, maxit, out, its)
+    if executor is None:
+        out, its = _follow_block((ev, cpath, seeds, tol, maxit, backend))
     else:
-        out, its = _columns_numpy(ev, cpath, seeds, tol, maxit)
+        out, its = _distributed(executor, workers, scheduler, ev, cpath, seeds, tol, maxit, backend)
     out, its = out[:, cidx], its[:, cidx]
     col = np.searchsorted(-apos, -np.abs(chis[~zero]))
     nz = np.flatnonzero(~zero)
@@ -183,6 +187,31 @@ def stability_map(*, eta_perp=None, chi=None, eta_range: tuple[float, float] = (
     if check_stride is None:
         return StabilityMap(eta, chis, omega, iters)
     return _check(StabilityMap(eta, chis, omega, iters), int(check_stride))
+
+
+def _follow_block(args) -> tuple[np.ndarray, np.ndarray]:
+    """Follow the leading root along chi for a block of eta_perp rows (a picklable task)."""
+    ev, cpath, seeds, tol, maxit, backend = args
+    if backend == "numba":
+        out = np.empty((ev.size, cpath.size), dtype=complex)
+        its = np.empty((ev.size, cpath.size), dtype=np.int64)
+        _kernels._follow_columns(np.ascontiguousarray(ev), np.ascontiguousarray(cpath),
+                                 np.ascontiguousarray(seeds), tol, maxit, out, its)
+        return out, its
+    return _columns_numpy(ev, cpath, seeds, tol, maxit)
+
+
+def _distributed(executor, workers, scheduler, ev, cpath, seeds, tol, maxit, backend):
+    from ..sweep.backends import get_backend
+
+    with get_backend(executor, workers=workers, scheduler=scheduler) as ex:
+        n_blocks = max(1, min(ev.size, 4 * int(getattr(ex, "workers", 1) or 1)))
+        blocks = np.array_split(np.arange(ev.size), n_blocks)
+        items = ((k, (ev[b], cpath, seeds[b], tol, maxit, backend)) for k, b in enumerate(blocks))
+        parts = dict(ex.imap(_follow_block, items))
+    out = np.concatenate([parts[k][0] for k in range(len(blocks))], axis=0)
+    its = np.concatenate([parts[k][1] for k in range(len(blocks))], axis=0)
+    return out, its
 
 
 def _check(smap: StabilityMap, stride: int) -> StabilityMap:

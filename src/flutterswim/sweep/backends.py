@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import sys
 from typing import Any, Callable, Iterable, Iterator
 
 from .._validate import ParameterError
@@ -179,7 +180,11 @@ def _processes(workers=None, scheduler=None):
     from concurrent.futures import ProcessPoolExecutor
 
     n = workers or default_workers()
-    ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else mp.get_context()
+    # fork is cheapest, but unsafe once numba's OpenMP threads have run in this process
+    # (the stability map's kernels): then a fresh forkserver process is forked instead
+    safe_fork = "fork" in mp.get_all_start_methods() and "numba" not in sys.modules
+    ctx = mp.get_context("fork" if safe_fork else "forkserver" if "forkserver" in
+                         mp.get_all_start_methods() else "spawn")
     with ProcessPoolExecutor(max_workers=n, mp_context=ctx, initializer=_limit_threads) as pool:
         yield PoolExecutor(pool, n)
 
