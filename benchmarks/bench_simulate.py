@@ -26,7 +26,6 @@ import numpy as np
 import flutterswim as fs
 from flutterswim.analysis.descriptors import describe
 from flutterswim.limit_cycle import run_to_limit_cycle
-from flutterswim.simulate import simulate
 
 
 def job(n: int, rtol: float) -> dict:

@@ -9,7 +9,6 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import resource
 import subprocess
 import sys
 import time
@@ -117,7 +116,7 @@ def main() -> None:
                  f"{dt:.1f} s vs {extrap:.0f} s baseline = {extrap / dt:.0f}x; roots agree to {agree:.1e} "
                  f"where both converge ({nfail_b} points from the crude 0.7-step guesses fail in both)"))
 
-    print(f"### Linear stability (`flutterswim.stability`)\n")
+    print("### Linear stability (`flutterswim.stability`)\n")
     print(f"Machine: {cpu_model()}, {os.cpu_count()} cores; Python {platform.python_version()}, "
           f"numpy {np.__version__}, numba {'yes' if _kernels.HAVE_NUMBA else 'no'}.\n")
     print("| task | measured | target | notes |\n|---|---|---|---|")

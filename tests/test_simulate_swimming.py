@@ -4,8 +4,6 @@ import numpy as np
 import pytest
 from conftest import crossings, stroke
 
-import flutterswim as fs
-from flutterswim.initial import InitialState
 from flutterswim.simulate import simulate
 
 

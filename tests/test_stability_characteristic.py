@@ -2,7 +2,6 @@
 
 import numpy as np
 import pytest
-import scipy.linalg
 
 from flutterswim.stability import boundary_matrix, char_f, quartic_roots, reduced_char
 from flutterswim.stability.characteristic import reduced_char_expm

@@ -1,7 +1,6 @@
 """A point that raises or returns non-finite values is recorded as failed; the others complete."""
 
 import math
-import time
 
 import numpy as np
 import pytest

@@ -73,7 +73,7 @@ def test_changed_definition_is_refused(tmp_path):
 
 
 def test_second_writer_is_refused(tmp_path):
-    from flutterswim.sweep import SweepSpec, SweepStore, VARIABLES
+    from flutterswim.sweep import SweepSpec, SweepStore
 
     spec = SweepSpec.build({"chi": [1.0, 2.0]})
     out = tmp_path / "l.zarr"

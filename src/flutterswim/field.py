@@ -131,12 +131,7 @@ def as_schedule(value: "float | Schedule | Callable[[float], float]", name: str)
         return value
     if callable(value):
         return FromCallable(value, name=getattr(value, "__name__", name))
-    try:
-        return Constant(finite(name, value))
-    except ParameterError:
-        raise
-    except Exception:  # pragma: no cover
-        raise ParameterError(f"{name}={value!r}: give a number, a Piecewise schedule or a callable")
+    return Constant(finite(name, value))  # raises ParameterError naming the value
 
 
 @dataclass(frozen=True)

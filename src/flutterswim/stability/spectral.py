@@ -19,7 +19,7 @@ from functools import lru_cache
 import numpy as np
 import scipy.linalg
 
-from .._validate import ParameterError, finite, positive, positive_int
+from .._validate import finite, positive, positive_int
 
 __all__ = ["Spectrum", "chebyshev", "spectrum", "spectral_matrices"]
 

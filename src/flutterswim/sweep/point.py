@@ -59,7 +59,7 @@ def run_point(task: Mapping[str, Any]) -> dict[str, Any]:
     n = st.n_segments
     state = (InitialState.straight(st.initial_angle_deg) if init is None
              else InitialState.from_state(np.asarray(init, float), n))
-    ts, xs, ys, ths = [], [], [], []
+    ts, xs, ys = [], [], []
     amps: list[float] = []
     t = 0.0
     chunk = st.chunk * tunit
@@ -77,7 +77,9 @@ def run_point(task: Mapping[str, Any]) -> dict[str, Any]:
         if not (np.all(np.isfinite(res.state_final)) and np.all(np.isfinite(res.x))):
             raise PointFailure(f"non-finite state by t={res.t_final:.6g}")
         sl = slice(1, None) if ts else slice(None)
-        ts.append(res.t[sl]); xs.append(res.x[sl]); ys.append(res.y[sl]); ths.append(res.theta[sl])
+        ts.append(res.t[sl])
+        xs.append(res.x[sl])
+        ys.append(res.y[sl])
         state = res.final_state()
         t = float(res.t_final)
         # oscillation amplitude over the second half of the chunk (past fast transients)
@@ -122,7 +124,7 @@ def run_point(task: Mapping[str, Any]) -> dict[str, Any]:
             capped = True
             break
     tt = np.concatenate(ts)
-    x, y, theta = np.concatenate(xs), np.concatenate(ys), np.concatenate(ths)
+    x, y = np.concatenate(xs), np.concatenate(ys)
     # growth rate of the oscillation amplitude [1/tau] over the last two chunks
     if len(amps) >= 3 and amps[-1] > 0 and amps[-2] > 0:
         rate = math.log(amps[-1] / amps[-2]) / st.chunk

@@ -10,7 +10,6 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
-from .._validate import ParameterError
 from ..params import Groups, Parameters
 from .backends import get_backend
 from .point import CORE_VARIABLES, DESCRIPTOR_VARIABLES, FLAG_VARIABLES, VARIABLES, run_point, timed
