@@ -34,7 +34,7 @@ import scipy.linalg as sla
 
 from . import _mobility_kernel as _kernel
 
-__all__ = ["Filament", "split_state", "node_angles", "centreline"]
+__all__ = ["Filament", "centreline"]
 
 
 @dataclass(frozen=True)
@@ -233,17 +233,6 @@ def _joint_difference(n: int) -> np.ndarray:
         else:
             diff[j - 1, j - 1 : j + 1] = (-n, n)
     return diff
-
-
-def split_state(y: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(r0 (...,2), theta (...,N), kappa (...,N+1)) views of states y (..., 2N+3)."""
-    return y[..., :2], y[..., 2 : n + 2], y[..., n + 2 :]
-
-
-def node_angles(theta: np.ndarray) -> np.ndarray:
-    """Tangent angle at the joints (..., N+1): mean of neighbouring segments, ends copied."""
-    mid = 0.5 * (theta[..., 1:] + theta[..., :-1])
-    return np.concatenate((theta[..., :1], mid, theta[..., -1:]), axis=-1)
 
 
 def centreline(r0: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
