@@ -12,8 +12,6 @@ from ._validate import ParameterError, finite, finite_array
 
 __all__ = ["InitialState"]
 
-Profile = "float | np.ndarray | Callable[[np.ndarray], np.ndarray]"
-
 
 @dataclass(frozen=True)
 class InitialState:
@@ -40,8 +38,8 @@ class InitialState:
         """Discrete state vector for N = n segments."""
         s_mid = (np.arange(n) + 0.5) / n
         s_nodes = np.arange(n + 1) / n
-        theta = _sample("theta", self.theta, s_mid, n, staggered=True)
-        kappa = _sample("kappa", self.kappa, s_nodes, n, staggered=False)
+        theta = _sample("theta", self.theta, s_mid)
+        kappa = _sample("kappa", self.kappa, s_nodes)
         pos = finite_array("position", self.position, (2,))
         return np.concatenate((pos, theta, kappa))
 
@@ -55,7 +53,9 @@ class InitialState:
         return f"theta={d(self.theta)}; kappa={d(self.kappa)}; position={tuple(self.position)}"
 
 
-def _sample(name: str, value, s: np.ndarray, n: int, *, staggered: bool) -> np.ndarray:
+def _sample(name: str, value, s: np.ndarray) -> np.ndarray:
+    """Values at the points s: a number, a callable of s, samples already at s, or samples on
+    a uniform grid over [0, 1] including both ends (linearly interpolated)."""
     if callable(value):
         out = np.broadcast_to(np.asarray(value(s), dtype=float), s.shape).copy()
         return finite_array(name, out)
@@ -66,5 +66,4 @@ def _sample(name: str, value, s: np.ndarray, n: int, *, staggered: bool) -> np.n
         raise ParameterError(f"{name} has shape {arr.shape}; give a number, a callable of s or a 1-D array")
     if arr.size == s.size:
         return arr.copy()
-    grid = (np.arange(arr.size) + 0.5) / arr.size if (staggered and arr.size == n) else np.linspace(0, 1, arr.size)
-    return np.interp(s, grid, arr)
+    return np.interp(s, np.linspace(0.0, 1.0, arr.size), arr)
