@@ -13,7 +13,6 @@ import numpy as np
 from ._validate import ParameterError, finite, positive, positive_int
 from .field import Field
 from .filament import Filament, centreline
-from .analysis.intersection import polyline_self_intersects as self_intersects
 from .initial import InitialState
 from .integrators import METHODS, integrate
 from .params import Groups, Parameters
@@ -88,6 +87,8 @@ def simulate(
         return fil.jacobian(y, direction(t), strength(t))
 
     n = n_segments
+    if stop_on_self_intersection:
+        from .analysis.intersection import polyline_self_intersects as self_intersects
 
     def _check(t: float, y: np.ndarray) -> str | None:
         if stop_on_self_intersection:
