@@ -78,8 +78,8 @@ class Filament:
 
     # --- kernels ------------------------------------------------------------
     def node_theta(self, theta: np.ndarray, kappa: np.ndarray) -> np.ndarray:
-        """Tangent angle at the joints (N+1,): mean of the neighbouring segments; the end
-        segments' angles at the free ends.
+        """Tangent angle at the joints (N+1,), interpolated from the segments
+        (:func:`_joint_average`); the end segments' angles at the free ends.
 
         (Extrapolating the ends with theta_s = kappa, theta_0 - h kappa_0 / 2, feeds kappa_0
         back into its own activity law with gain chi h / 2 and, for chi h > 2, creates a
