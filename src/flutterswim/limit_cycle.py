@@ -27,8 +27,9 @@ def run_to_limit_cycle(
     or until ``t_max``. Times in s for :class:`Parameters`, in tau for :class:`Groups`.
 
     Defaults: ``chunk`` 10 tau, ``t_max`` 200 tau. The result's settings record
-    ``limit_cycle`` (bool) and ``limit_cycle_time``; a straight (stable) filament, which
-    has no cycles, runs to ``t_max`` unless it has already come to rest.
+    ``limit_cycle`` (bool) and ``limit_cycle_time``; a filament that never settles (a
+    straight, stable one has no cycles at all) runs to ``t_max``. The sweeps
+    (:mod:`flutterswim.sweep.point`) add early stops for decaying and saturated points.
     """
     from .analysis import detect_cycles
 
