@@ -33,3 +33,20 @@ def test_piecewise_schedules():
     assert hold.scaled(2.0).breakpoints == (0.0, 0.5, 1.0)
     with pytest.raises(fs.ParameterError, match="increasing"):
         Piecewise([0.0, 0.0], [1.0, 2.0])
+
+
+def test_a_piecewise_hold_field_needs_no_time_derivative(paper_groups):
+    """Between breakpoints a held field does not depend on time: the run must equal one
+    restarted at the breakpoint, and use no extra right-hand side per step."""
+    from flutterswim.field import Field
+
+    field = Field(direction=Piecewise([0.0, 1.0], [0.0, 0.2]))
+    opts = dict(n_segments=12, rtol=1e-8, atol=1e-10, initial=fs.InitialState.straight(3.0))
+    held = fs.simulate(paper_groups, 2.0, field=field, n_frames=3, **opts)
+    first = fs.simulate(paper_groups, 1.0, n_frames=2, **opts)
+    second = fs.simulate(paper_groups, 2.0, t_start=1.0, field=Field(direction=0.2), n_frames=2,
+                         **{**opts, "initial": first.final_state()})
+    np.testing.assert_allclose(held.theta[-1], second.theta[-1], atol=1e-6)
+    # the constant-field runs evaluate f once per stage; so does the held one
+    per_step = held.stats.n_rhs / (held.stats.n_steps + held.stats.n_rejected)
+    assert per_step < 4.5
