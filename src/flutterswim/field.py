@@ -24,6 +24,12 @@ class Schedule:
     breakpoints: tuple[float, ...] = ()
     is_constant: bool = False
 
+    @property
+    def steady_between_breakpoints(self) -> bool:
+        """True if the value only changes at the breakpoints (the integrator steps to
+        them, so within a step the field does not depend on time)."""
+        return self.is_constant
+
     def __call__(self, t: float) -> float:  # pragma: no cover - interface
         raise NotImplementedError
 
@@ -80,6 +86,10 @@ class Piecewise(Schedule):
     def breakpoints(self) -> tuple[float, ...]:  # type: ignore[override]
         return self.times
 
+    @property
+    def steady_between_breakpoints(self) -> bool:
+        return self.kind == "hold"
+
     def __call__(self, t: float) -> float:
         if self.kind == "linear":
             return float(np.interp(t, self.times, self.values))
@@ -119,6 +129,10 @@ class _Rescaled(Schedule):
     def breakpoints(self) -> tuple[float, ...]:  # type: ignore[override]
         return tuple(b / self.time_scale for b in self.base.breakpoints)
 
+    @property
+    def steady_between_breakpoints(self) -> bool:
+        return self.base.steady_between_breakpoints
+
     def __call__(self, t: float) -> float:
         return self.base(t * self.time_scale)
 
@@ -149,6 +163,10 @@ class Field:
     @property
     def is_constant(self) -> bool:
         return self.direction.is_constant and self.strength.is_constant
+
+    @property
+    def steady_between_breakpoints(self) -> bool:
+        return self.direction.steady_between_breakpoints and self.strength.steady_between_breakpoints
 
     @property
     def breakpoints(self) -> tuple[float, ...]:

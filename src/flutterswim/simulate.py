@@ -102,7 +102,7 @@ def simulate(
         sol = integrate(
             fun, jac, (t0, t1), y0, t_eval, method=method, rtol=rtol, atol=atol,
             max_step=np.inf if max_step is None else positive("max_step", max_step) / tau,
-            breakpoints=fld.breakpoints, time_dependent=not fld.is_constant,
+            breakpoints=fld.breakpoints, time_dependent=not fld.steady_between_breakpoints,
             check=_check if (stop_on_self_intersection or check is not None) else None,
             progress=tick, scale_cap=np.r_[1.0, 1.0, np.full(n, np.pi), np.full(n + 1, np.inf)],
         )
