@@ -113,13 +113,35 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--step", type=float, default=0.1, help="map grid step in eta_perp and chi")
     p.set_defaults(func=_stability)
 
-    try:
-        from .sweep.cli import register
-    except ImportError:  # the sweep extra is not installed
-        pass
-    else:
-        register(sub)
+    _register_extensions(sub)
     return ap
+
+
+#: Subpackages that add subcommands: each module has ``register(subparsers)``.
+EXTENSIONS = (
+    "flutterswim.sweep.cli",
+    "flutterswim.orbits.cli",
+    "flutterswim.tracking.cli",
+    "flutterswim.steering.cli",
+    "flutterswim.fitting.cli",
+    "flutterswim.reproduce.cli",
+)
+
+
+def _register_extensions(sub) -> None:
+    import importlib
+
+    for name in EXTENSIONS:
+        try:
+            module = importlib.import_module(name)
+        except ModuleNotFoundError as exc:
+            # the subpackage is absent, or an optional extra it needs is not installed
+            absent = exc.name is not None and name.startswith(exc.name)
+            extra_missing = exc.name is not None and exc.name.split(".")[0] != "flutterswim"
+            if not (absent or extra_missing):
+                raise
+            continue
+        module.register(sub)
 
 
 def main(argv: list[str] | None = None) -> int:
