@@ -19,9 +19,8 @@ def test_total_drag_force_and_torque_vanish(paper_groups):
     for y in _states(res)[1:]:  # t = 0 is a stress-free rest state
         fx, fy, tq = fil.drag_totals(y)
         # scale: the drag on a filament translating at the speed of its fastest point
-        g, wfx, wfy = fil.mobility(y[2:26], y[26:])
-        z = np.linalg.solve(g, np.r_[0, 0, -fil.moment(y[2:26], y[26:]), 0])
-        scale = np.abs(wfx @ z).sum() + np.abs(wfy @ z).sum()
+        wfx, wfy, _, _ = fil.joint_drag(y)
+        scale = np.abs(wfx).sum() + np.abs(wfy).sum()
         assert scale > 0
         assert abs(fx) < 1e-12 * scale and abs(fy) < 1e-12 * scale and abs(tq) < 1e-12 * scale
 
@@ -74,16 +73,51 @@ def test_self_intersection_stops_the_run_with_a_reason():
     assert res.t_final < 1.0
 
 
-def test_compiled_and_numpy_mobility_agree():
-    pytest.importorskip("numba")
+def test_assembled_matrix_and_matrix_free_product_agree():
+    """G assembled column by column and the O(N) product G z are two codings of one balance."""
     rng = np.random.default_rng(1)
     for n in (5, 17, 40):
         theta = np.cumsum(rng.normal(scale=0.4, size=n))
-        kappa = rng.normal(size=n + 1)
         fil = Filament(n, 30.0, 55.0, 12.0)
-        g_numpy = fil.mobility(theta, kappa)[0]
-        g_compiled = fil.matrix(theta, kappa)
-        assert np.max(np.abs(g_compiled - g_numpy)) < 1e-12 * np.max(np.abs(g_numpy))
+        g = fil.matrix(theta)
+        for _ in range(3):
+            z = rng.normal(size=n + 2)
+            r = fil._k.apply(*fil._args(theta), z)
+            assert np.max(np.abs(g @ z - r)) < 1e-12 * np.max(np.abs(r))
+
+
+def test_compiled_and_plain_kernels_agree():
+    pytest.importorskip("numba")
+    rng = np.random.default_rng(2)
+    n = 9
+    y = np.r_[0.0, 0.0, np.cumsum(rng.normal(scale=0.4, size=n)), rng.normal(size=n + 1)]
+    fast, plain = Filament(n, 30.0, 55.0, 12.0), Filament(n, 30.0, 55.0, 12.0, compiled=False)
+    assert np.max(np.abs(fast.rhs(y, 0.3, 1.0) - plain.rhs(y, 0.3, 1.0))) < 1e-12 * np.abs(plain.rhs(y, 0.3, 1.0)).max()
+    ja, jb = fast.jacobian(y, 0.3, 1.0, exact=True), plain.jacobian(y, 0.3, 1.0, exact=True)
+    assert np.max(np.abs(ja - jb)) < 1e-11 * np.abs(jb).max()
+
+
+@pytest.mark.parametrize("n", [6, 20])
+def test_exact_jacobian_matches_central_differences(n):
+    """The exact Jacobian (with d(G z)/d theta) against central differences of rhs: the
+    error must fall as the difference step squared; the W-method Jacobian must not match."""
+    rng = np.random.default_rng(n)
+    fil = Filament(n, 41.5, 71.5, 70.7)
+    y = np.r_[0.1, -0.2, np.cumsum(rng.normal(scale=0.3, size=n)), rng.normal(size=n + 1)]
+    jac = fil.jacobian(y, 0.2, 1.0, exact=True)
+
+    def fd(eps):
+        out = np.empty_like(jac)
+        for i in range(y.size):
+            e = np.zeros_like(y)
+            e[i] = eps
+            out[:, i] = (fil.rhs(y + e, 0.2, 1.0) - fil.rhs(y - e, 0.2, 1.0)) / (2 * eps)
+        return out
+
+    scale = np.abs(jac).max()
+    e1, e2 = np.abs(fd(1e-3) - jac).max() / scale, np.abs(fd(5e-4) - jac).max() / scale
+    assert e1 < 1e-5 and 3.0 < e1 / e2 < 5.0  # second-order convergence of the differences
+    assert np.abs(fil.jacobian(y, 0.2, 1.0) - jac).max() > 1e-3 * scale
 
 
 def test_internal_forces_vanish_at_free_ends_and_balance_the_moment(paper_groups):

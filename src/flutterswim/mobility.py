@@ -1,0 +1,150 @@
+"""The mobility problem of the discrete filament: without inertia, the joint rates follow
+from a linear balance of drag and bending at each instant (eqs. MOD:eq:nondim_MBLs).
+
+Unknowns z = [U0x, U0y, omega_0..omega_{N-1}] (N+2,): the velocity of r(0) and the segment
+rotation rates. Joint velocities V_j = U0 + sum_{k<j} h n_k omega_k; weighted drag
+w_j F_j = -w_j R(a_j) V_j (:func:`flutterswim.drag.resistance`, trapezoidal weights w_j,
+joint tangent angle a_j); joint positions X_j = sum_{k<j} h t_k. Rows of G z = b:
+  sum_j w_j F_j = 0                                   (rows 0, 1: total force)
+  sum_{k<j} (X_k - X_j) x w_k F_k = b_{1+j},  j=1..N  (moment balance at each cut; j=N: torque)
+with b_{1+j} = -M_j (bending moment) inside and 0 at j = N.
+
+Every kernel is written once and compiled with numba when it is installed
+(:mod:`flutterswim._jit`); ``kernels()`` returns the module with its compiled kernels.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import _jit
+from .drag import resistance
+
+__all__ = ["kernels", "assemble", "joint_drag", "apply", "apply_theta_derivative", "solve", "inverse"]
+
+KERNELS = ("resistance", "joint_drag", "apply", "assemble", "apply_theta_derivative", "solve", "inverse")
+
+
+def kernels():
+    """This module, with its kernels compiled if numba is installed."""
+    import sys
+
+    mod = sys.modules[__name__]
+    _jit.compile_module(mod, KERNELS)
+    return mod
+
+
+def joint_drag(theta, tn, weights, eta_par, eta_perp, h, z):
+    """Weighted drag w_j F_j = (wfx, wfy) at the joints for rates z, and the joint positions
+    (x_j, y_j) relative to r(0); each (N+1,). Complex theta and tn are allowed."""
+    n = theta.size
+    wfx = np.zeros_like(tn)
+    wfy = np.zeros_like(tn)
+    xj = np.zeros_like(tn)
+    yj = np.zeros_like(tn)
+    zero = 0.0 * tn[0]
+    vx = z[0] + zero
+    vy = z[1] + zero
+    x = zero
+    y = zero
+    for j in range(n + 1):
+        rxx, rxy, ryy = resistance(tn[j], weights[j], eta_par, eta_perp)
+        wfx[j] = -(rxx * vx + rxy * vy)
+        wfy[j] = -(rxy * vx + ryy * vy)
+        xj[j] = x
+        yj[j] = y
+        if j < n:
+            c = np.cos(theta[j])
+            s = np.sin(theta[j])
+            vx = vx - h * s * z[2 + j]
+            vy = vy + h * c * z[2 + j]
+            x = x + h * c
+            y = y + h * s
+    return wfx, wfy, xj, yj
+
+
+def apply(theta, tn, weights, eta_par, eta_perp, h, z):
+    """G(theta) z without forming G, O(N): the force and cut-moment rows, (N+2,)."""
+    n = theta.size
+    wfx, wfy, xj, yj = joint_drag(theta, tn, weights, eta_par, eta_perp, h, z)
+    r = np.zeros(n + 2, dtype=wfx.dtype)
+    sx = 0.0 * wfx[0]
+    sy = 0.0 * wfx[0]
+    p = 0.0 * wfx[0]
+    for j in range(n + 1):
+        if j > 0:
+            r[1 + j] = p - xj[j] * sy + yj[j] * sx
+        sx = sx + wfx[j]
+        sy = sy + wfy[j]
+        p = p + xj[j] * wfy[j] - yj[j] * wfx[j]
+    r[0] = sx
+    r[1] = sy
+    return r
+
+
+def assemble(theta, tn, weights, eta_par, eta_perp, h):
+    """The mobility matrix G (N+2, N+2), O(N^2): column q is G e_q (same sums as :func:`apply`)."""
+    n = theta.size
+    m = n + 2
+    c = np.cos(theta)
+    s = np.sin(theta)
+    g = np.zeros((m, m))
+    sx = np.zeros(m)  # sum_{k<j} w F_x,k as a row over z
+    sy = np.zeros(m)
+    p = np.zeros(m)  # sum_{k<j} X_k x w F_k
+    fx = np.zeros(m)
+    fy = np.zeros(m)
+    xk = 0.0
+    yk = 0.0
+    for k in range(n + 1):
+        rxx, rxy, ryy = resistance(tn[k], weights[k], eta_par, eta_perp)
+        if k > 0:
+            for q in range(m):
+                g[1 + k, q] = p[q] - xk * sy[q] + yk * sx[q]
+        fx[0] = -rxx
+        fx[1] = -rxy
+        fy[0] = -rxy
+        fy[1] = -ryy
+        for q in range(k):
+            vx = -h * s[q]
+            vy = h * c[q]
+            fx[2 + q] = -(rxx * vx + rxy * vy)
+            fy[2 + q] = -(rxy * vx + ryy * vy)
+        for q in range(k + 2):
+            sx[q] += fx[q]
+            sy[q] += fy[q]
+            p[q] += xk * fy[q] - yk * fx[q]
+        if k < n:
+            xk += h * c[k]
+            yk += h * s[k]
+    for q in range(m):
+        g[0, q] = sx[q]
+        g[1, q] = sy[q]
+    return g
+
+
+def apply_theta_derivative(theta, tn, avg, weights, eta_par, eta_perp, h, z):
+    """D = d(G(theta) z)/d theta at fixed z, (N+2, N), by complex step (exact to rounding):
+    the term of the exact Jacobian that a W-method may leave out. ``avg`` (N+1, N) maps
+    segment angles to joint angles (tn = avg @ theta)."""
+    n = theta.size
+    eps = 1e-30
+    d = np.zeros((n + 2, n))
+    for m in range(n):
+        thc = theta + 0j
+        thc[m] = thc[m] + 1j * eps
+        tnc = tn + 1j * eps * avg[:, m]
+        r = apply(thc, tnc, weights, eta_par, eta_perp, h, z)
+        for i in range(n + 2):
+            d[i, m] = r[i].imag / eps
+    return d
+
+
+def solve(theta, tn, weights, eta_par, eta_perp, h, b):
+    """z = G^-1 b."""
+    return np.linalg.solve(assemble(theta, tn, weights, eta_par, eta_perp, h), b)
+
+
+def inverse(theta, tn, weights, eta_par, eta_perp, h):
+    """G^-1 (N+2, N+2)."""
+    return np.linalg.inv(assemble(theta, tn, weights, eta_par, eta_perp, h))
