@@ -1,30 +1,66 @@
-"""The ``flutterswim`` command line: a thin layer over the Python API."""
+"""The ``flutterswim`` command line: a thin layer over the Python API.
+
+Errors are one line on stderr: exit status 2 for bad input (parameters, files), 1 for a
+failed computation, 130 for Ctrl-C; ``--debug`` shows the traceback.
+"""
 
 from __future__ import annotations
 
 import argparse
 import json
+import re
 import sys
 from pathlib import Path
 
+from . import defaults
+
 PLOTS = ("ghosts", "swimmer", "kymograph", "descriptors", "summary")
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors (exit 2) and negative numbers read as values
+    (``--rtol -1e-4`` reaches the parameter check instead of "expected one argument")."""
+
+    def __init__(self, *a, **kw):
+        super().__init__(*a, **kw)
+        self._negative_number_matcher = re.compile(
+            r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
+
+    def error(self, message: str):  # noqa: D401 - argparse API
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
 def _simulate(args: argparse.Namespace) -> int:
-    from .limit_cycle import run_to_limit_cycle
+    from ._paths import check_output_file
+    from ._validate import ParameterError
     from .params import preset
-    from .simulate import simulate
 
+    if args.cycles is not None and args.t_end is not None:
+        raise ParameterError(
+            f"--cycles={args.cycles} and --t-end={args.t_end} were both given; --cycles runs to that many "
+            "settled cycles of the limit cycle, --t-end for a fixed time: give one of them")
+    out = check_output_file(args.out, (".nc",), what="--out")
     params = preset(args.preset)
     if args.kappa_E_ratio is not None:
-        params = params.replace(kappa_E=params.kappa_E * args.kappa_E_ratio)
+        from ._validate import finite
+
+        params = params.replace(kappa_E=params.kappa_E * finite("kappa_E_ratio", args.kappa_E_ratio))
     opts = dict(n_segments=args.segments, rtol=args.rtol, atol=args.atol, progress=not args.quiet)
     if args.t_end is not None:
+        from .simulate import simulate
+
         run = simulate(params, args.t_end, **opts)
     else:
-        run = run_to_limit_cycle(params, n_cycles=args.cycles, **opts)
-    path = run.save(args.out)
-    print(f"{run.status}: {run.message}; {run.t[-1]:.3f} s simulated, "
+        from .limit_cycle import run_to_limit_cycle
+
+        cycles = defaults.N_CYCLES if args.cycles is None else args.cycles
+        run = run_to_limit_cycle(params, n_cycles=cycles, **opts)
+    path = run.save(out)
+    note = ""
+    if args.t_end is None and not run.settings.get("limit_cycle", False):
+        note = " (no limit cycle reached by t_max)"
+    print(f"{run.status}: {run.message}; {run.t[-1]:.3f} s simulated{note}, "
           f"{run.stats.n_steps} steps in {run.stats.wall_time:.2f} s; wrote {path}")
     return 0 if run.ok else 1
 
@@ -33,17 +69,30 @@ def _describe(args: argparse.Namespace) -> int:
     from .analysis.descriptors import describe
     from .result import load
 
-    d = describe(load(args.run), n_last=args.last).to_dict()
+    desc = describe(load(args.run), n_last=args.last)
+    d = desc.to_dict()
     if args.json:
         print(json.dumps(d, indent=2))
     else:
+        if desc.note:
+            print(f"note: {desc.note}")
         width = max(len(k) for k in d)
         for k, v in d.items():
+            if k == "note":
+                continue
+            if v is None:
+                v = "unknown"
             print(f"{k:<{width}}  {v:.6g}" if isinstance(v, float) else f"{k:<{width}}  {v}")
+    if desc.note:
+        print(f"flutterswim describe: note: {desc.note}", file=sys.stderr)
     return 0
 
 
 def _plot(args: argparse.Namespace) -> int:
+    from ._paths import check_output_file
+
+    out = args.out or str(Path(args.run).with_suffix("")) + f"_{args.kind}.png"
+    check_output_file(out, FIGURE_SUFFIXES, what="--out")
     from .plotting import figures
     from .result import load
 
@@ -51,66 +100,79 @@ def _plot(args: argparse.Namespace) -> int:
     func = {"ghosts": figures.plot_ghosts, "swimmer": figures.plot_swimmer,
             "kymograph": figures.plot_kymographs, "descriptors": figures.plot_descriptors,
             "summary": figures.plot_summary}[args.kind]
-    out = args.out or str(Path(args.run).with_suffix("")) + f"_{args.kind}.png"
     func(run, out)
     print(f"wrote {out}")
     return 0
 
 
 def _animate(args: argparse.Namespace) -> int:
+    from ._paths import check_output_file
+
+    check_output_file(args.out, (".mp4", ".gif"), what="out")
     from .plotting.animation import animate
     from .result import load
 
-    animate(load(args.run), args.out, fps=args.fps)
+    animate(load(args.run), args.out, fps=args.fps, progress=not args.quiet)
     print(f"wrote {args.out}")
     return 0
 
 
 def _stability(args: argparse.Namespace) -> int:
+    from ._paths import check_output_dir
     from .stability import stability_figures
 
-    res = stability_figures(args.out, step=args.step)
+    check_output_dir(args.out, what="--out")
+    res = stability_figures(args.out, step=args.step, progress=not args.quiet,
+                            dtype="float32" if args.float32 else "float64")
     print(f"wrote stability figures to {args.out}")
     return 0 if res is not None else 1
 
 
 def build_parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="flutterswim", description="Soft filaments that swim by flutter.")
-    sub = ap.add_subparsers(dest="command", required=True)
+    from . import __version__
+
+    ap = _Parser(prog="flutterswim", description="Soft filaments that swim by flutter.")
+    ap.add_argument("--version", action="version", version=f"flutterswim {__version__}")
+    ap.add_argument("--debug", action="store_true", help="show the traceback of an error")
+    sub = ap.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     p = sub.add_parser("simulate", help="simulate a preset to a settled stroke (or to --t-end) and save NetCDF")
     p.add_argument("--preset", default="paper")
     p.add_argument("--kappa-E-ratio", type=float, default=None, help="scale the preset's kappa_E")
-    p.add_argument("--cycles", type=int, default=15, help="settled cycles to simulate")
-    p.add_argument("--t-end", type=float, default=None, help="simulate to this time [s] instead")
-    p.add_argument("--segments", type=int, default=48)
-    p.add_argument("--rtol", type=float, default=1e-4)
-    p.add_argument("--atol", type=float, default=1e-6)
-    p.add_argument("--out", default="run.nc")
+    p.add_argument("--cycles", type=int, default=None,
+                   help=f"settled cycles to simulate (default {defaults.N_CYCLES}; not with --t-end)")
+    p.add_argument("--t-end", type=float, default=None, help="simulate to this time [s] instead of --cycles")
+    p.add_argument("--segments", type=int, default=defaults.N_SEGMENTS, help=f"N (default {defaults.N_SEGMENTS})")
+    p.add_argument("--rtol", type=float, default=defaults.RTOL, help=f"(default {defaults.RTOL:g})")
+    p.add_argument("--atol", type=float, default=defaults.ATOL, help=f"(default {defaults.ATOL:g})")
+    p.add_argument("--out", default="run.nc", help="NetCDF file (.nc)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_simulate)
 
     p = sub.add_parser("describe", help="stroke descriptors of a saved run")
     p.add_argument("run")
-    p.add_argument("--last", type=int, default=15, help="average over the last N cycles")
+    p.add_argument("--last", type=int, default=defaults.N_CYCLES, help="average over the last N cycles")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=_describe)
 
     p = sub.add_parser("plot", help="figures of a saved run")
     p.add_argument("run")
     p.add_argument("--kind", choices=PLOTS, default="ghosts")
-    p.add_argument("--out", default=None)
+    p.add_argument("--out", default=None, help="figure file (.png, .pdf, .svg, .jpg)")
     p.set_defaults(func=_plot)
 
     p = sub.add_parser("animate", help="MP4 or GIF of a saved run")
     p.add_argument("run")
-    p.add_argument("out")
-    p.add_argument("--fps", type=int, default=25)
+    p.add_argument("out", help="video file (.mp4 or .gif)")
+    p.add_argument("--fps", type=float, default=25.0)
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_animate)
 
     p = sub.add_parser("stability", help="stability map, neutral curve, bifurcation plots and eigenmodes")
-    p.add_argument("--out", default="out/stability")
+    p.add_argument("--out", default="out/stability", help="output folder")
     p.add_argument("--step", type=float, default=0.1, help="map grid step in eta_perp and chi")
+    p.add_argument("--float32", action="store_true", help="store the map in single precision (half the size)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_stability)
 
     _register_extensions(sub)
@@ -144,15 +206,77 @@ def _register_extensions(sub) -> None:
         module.register(sub)
 
 
-def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def _describe_error(exc: BaseException) -> tuple[int, str]:
+    """(exit status, one-line message) of an exception escaping a subcommand."""
     from ._validate import ParameterError
 
+    if isinstance(exc, ParameterError):
+        return 2, _one_line(exc)
+    if isinstance(exc, ModuleNotFoundError) and exc.name and not exc.name.startswith("flutterswim"):
+        return 1, (f"this command needs the optional package {exc.name!r}; install it with "
+                   "pip install 'flutterswim[all]'")
+    if isinstance(exc, (FileNotFoundError, IsADirectoryError, NotADirectoryError, PermissionError,
+                        FileExistsError)):
+        what = {FileNotFoundError: "does not exist", IsADirectoryError: "is a directory",
+                NotADirectoryError: "has a part that is not a directory", PermissionError: "is not accessible "
+                "(permission denied)", FileExistsError: "already exists"}[type(exc)]
+        name = exc.filename if exc.filename is not None else ""
+        return 2, f"{str(name)!r} {what}" if name else _one_line(exc)
+    if isinstance(exc, OSError) and getattr(exc, "filename", None):
+        return 2, f"{str(exc.filename)!r}: {_one_line(exc.strerror or exc)}"
+    if isinstance(exc, MemoryError):
+        return 1, "out of memory; reduce the problem size (grid, N, duration)"
+    msg = _one_line(exc) or type(exc).__name__
+    return 1, f"failed: {type(exc).__name__}: {msg}"
+
+
+def _quiet_warnings() -> None:
+    """Warnings as one line each (no source line)."""
+    import warnings
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        print(f"flutterswim: warning: {_one_line(message)}", file=sys.stderr if file is None else file)
+
+    warnings.showwarning = show
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in argv
+    if debug:
+        argv = [a for a in argv if a != "--debug"]
+    try:
+        args = build_parser().parse_args(argv)
+    except KeyboardInterrupt:
+        print("flutterswim: interrupted", file=sys.stderr)
+        return 130
+    if not debug:
+        _quiet_warnings()
     try:
         return int(args.func(args) or 0)
-    except ParameterError as exc:
-        print(f"flutterswim {args.command}: {exc}", file=sys.stderr)
-        return 2
+    except KeyboardInterrupt as exc:
+        if debug:
+            import traceback
+
+            traceback.print_exc()
+        msg = _one_line(exc) or "interrupted"
+        print(f"flutterswim {args.command}: {msg}", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        return 1
+    except Exception as exc:  # noqa: BLE001 - every error becomes one line (traceback with --debug)
+        if debug:
+            import traceback
+
+            traceback.print_exc()
+        status, msg = _describe_error(exc)
+        hint = "" if status == 2 or debug else " (rerun with --debug for the traceback)"
+        print(f"flutterswim {args.command}: {msg}{hint}", file=sys.stderr)
+        return status
 
 
 if __name__ == "__main__":

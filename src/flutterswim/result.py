@@ -95,57 +95,80 @@ class SimulationResult:
 
     # --- labelled arrays and files --------------------------------------------
     def to_xarray(self):
-        """An xarray.Dataset with coordinates t, s, s_mid and the metadata as attributes."""
+        """A CF-style xarray.Dataset: coordinates t, s, s_mid; every variable and coordinate
+        with ``units`` and ``long_name``; the parameters and groups as numeric attributes
+        (``parameter_<name>`` with ``parameter_<name>_units``, ``group_<name>``) and as JSON."""
         import xarray as xr
 
         from . import __version__
 
-        lu = "m" if self.units == "SI" else "l"
-        tu = "s" if self.units == "SI" else "tau"
+        si = self.units == "SI"
+        lu = "m" if si else "l"
+        tu = "s" if si else "tau"
+        fu = "N" if si else "B/l^2"
         data = {
-            "x": (("t", "s"), self.x, {"units": lu, "long_name": "centreline x"}),
-            "y": (("t", "s"), self.y, {"units": lu, "long_name": "centreline y"}),
-            "theta": (("t", "s_mid"), self.theta, {"units": "rad", "long_name": "tangent angle"}),
+            "x": (("t", "s"), self.x, {"units": lu, "long_name": "centreline x coordinate"}),
+            "y": (("t", "s"), self.y, {"units": lu, "long_name": "centreline y coordinate"}),
+            "theta": (("t", "s_mid"), self.theta, {"units": "rad", "long_name": "tangent angle to the x axis"}),
             "kappa": (("t", "s"), self.kappa, {"units": f"1/{lu}", "long_name": "spontaneous curvature"}),
-            "r0": (("t", "xy"), self.r0, {"units": lu, "long_name": "position of the s=0 end"}),
-            "field_angle": (("t",), self.field_angle, {"units": "rad"}),
-            "field_strength": (("t",), self.field_strength, {"units": "1", "long_name": "kappa_E multiplier"}),
+            "r0_x": (("t",), self.r0[:, 0], {"units": lu, "long_name": "x coordinate of the s=0 end"}),
+            "r0_y": (("t",), self.r0[:, 1], {"units": lu, "long_name": "y coordinate of the s=0 end"}),
+            "field_angle": (("t",), self.field_angle,
+                            {"units": "rad", "long_name": "direction of the electric field to the x axis"}),
+            "field_strength": (("t",), self.field_strength,
+                               {"units": "1", "long_name": "field strength as a multiple of kappa_E"}),
+            # the integrator's own state: always in the scaled units, whatever self.units says
+            "state_final": (("state",), self.state_final, {
+                "units": "1", "long_name": "final integrator state, dimensionless: r0/l (2), theta [rad] "
+                "(N), kappa l (N+1)"}),
         }
-        fu = "N" if self.units == "SI" else "B/l^2"
-        for name, unit in (("A", fu), ("V", fu), ("M", f"{fu} {lu}")):
+        for name, unit, long in (("A", fu, "internal force along e1"), ("V", fu, "internal force along e2"),
+                                 ("M", f"{fu} {lu}", "bending moment")):
             arr = getattr(self, name)
             if arr is not None:
-                data[name] = (("t", "s"), arr, {"units": unit})
+                data[name] = (("t", "s"), arr, {"units": unit, "long_name": long})
         ds = xr.Dataset(
             data,
             coords={
-                "t": ("t", self.t, {"units": tu}),
-                "s": ("s", self.s, {"units": lu}),
-                "s_mid": ("s_mid", self.s_mid, {"units": lu}),
-                "xy": ("xy", np.array(["x", "y"])),
+                "t": ("t", self.t, {"units": tu, "long_name": "time", "standard_name": "time"}
+                      if si else {"units": tu, "long_name": "time"}),
+                "s": ("s", self.s, {"units": lu, "long_name": "arc length at the joints"}),
+                "s_mid": ("s_mid", self.s_mid, {"units": lu, "long_name": "arc length at segment midpoints"}),
             },
         )
-        ds["state_final"] = (("state",), self.state_final)
-        ds.attrs.update(
-            {
-                "flutterswim_version": __version__,
-                "units": self.units,
-                "status": self.status,
-                "message": self.message,
-                "t_final": float(self.t_final),
-                "groups": json.dumps(self.groups.to_dict()),
-                "params": json.dumps(self.params.to_dict() if self.params is not None else None),
-                "stats": json.dumps(self.stats.to_dict()),
-                "settings": json.dumps(self.settings),
-            }
-        )
+        attrs = {
+            "Conventions": "CF-1.10",
+            "title": "flutterswim simulation of an active filament",
+            "source": f"flutterswim {__version__}",
+            "flutterswim_version": __version__,
+            "units": self.units,
+            "status": self.status,
+            "message": self.message,
+            "t_final": float(self.t_final),
+            "t_final_units": tu,
+            "groups": json.dumps(self.groups.to_dict()),
+            "params": json.dumps(self.params.to_dict() if self.params is not None else None),
+            "stats": json.dumps(self.stats.to_dict()),
+            "settings": json.dumps(self.settings),
+        }
+        for k, v in self.groups.to_dict().items():
+            attrs[f"group_{k}"] = float(v)
+            attrs[f"group_{k}_units"] = "1"
+        if self.params is not None:
+            for k, v in self.params.to_dict().items():
+                attrs[f"parameter_{k}"] = float(v)
+                attrs[f"parameter_{k}_units"] = PARAMETER_UNITS.get(k, "")
+        ds.attrs.update(attrs)
         return ds
 
     def save(self, path: str | Path) -> Path:
-        """Write the run to NetCDF (h5netcdf engine). Returns the path."""
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        self.to_xarray().to_netcdf(path, engine="h5netcdf")
+        """Write the run to NetCDF (h5netcdf engine), atomically (a temporary file in the same
+        folder renamed onto ``path``). Returns the path."""
+        from ._paths import atomic_path, check_output_file
+
+        path = check_output_file(path, (".nc", ".nc4", ".h5", ".hdf5"), what="path")
+        with atomic_path(path) as tmp:
+            self.to_xarray().to_netcdf(tmp, engine="h5netcdf")
         return path
 
     @classmethod
@@ -155,10 +178,11 @@ class SimulationResult:
         opt = {k: (ds[k].values if k in ds else None) for k in ("A", "V", "M")}
         names = {f.name for f in fields(SolverStats)}
         stats = SolverStats(**{k: v for k, v in json.loads(a["stats"]).items() if k in names})
+        r0 = ds["r0"].values if "r0" in ds else np.stack([ds["r0_x"].values, ds["r0_y"].values], axis=1)
         return cls(
             t=ds["t"].values, s=ds["s"].values, s_mid=ds["s_mid"].values, x=ds["x"].values,
             y=ds["y"].values, theta=ds["theta"].values, kappa=ds["kappa"].values,
-            r0=ds["r0"].values, field_angle=ds["field_angle"].values,
+            r0=r0, field_angle=ds["field_angle"].values,
             field_strength=ds["field_strength"].values, groups=Groups(**json.loads(a["groups"])),
             params=None if params is None else Parameters(**params), stats=stats,
             status=str(a["status"]), message=str(a["message"]), state_final=ds["state_final"].values,
@@ -167,12 +191,49 @@ class SimulationResult:
         )
 
 
+#: Units of the physical parameters (attributes ``parameter_<name>_units`` of a saved run).
+PARAMETER_UNITS = {"l": "m", "a": "m", "b": "m", "B": "N m2", "tau": "s", "kappa_E": "1/m", "mu": "Pa s"}
+_REQUIRED = ("t", "s", "s_mid", "x", "y", "theta", "kappa", "field_angle", "field_strength", "state_final")
+
+
 def load(path: str | Path) -> SimulationResult:
-    """Read a run written by :meth:`SimulationResult.save`."""
+    """Read a run written by :meth:`SimulationResult.save`. A missing, empty, truncated or
+    foreign file raises ParameterError naming the file and what is wrong."""
     import xarray as xr
 
-    with xr.open_dataset(path, engine="h5netcdf") as ds:
-        return SimulationResult.from_xarray(ds.load())
+    from ._validate import ParameterError
+
+    p = Path(path)
+    if not p.exists():
+        raise ParameterError(f"run={str(p)!r} does not exist")
+    if p.is_dir():
+        raise ParameterError(f"run={str(p)!r} is a directory; a NetCDF file written by flutterswim is required")
+    if p.stat().st_size == 0:
+        raise ParameterError(f"run={str(p)!r} is empty; a NetCDF file written by flutterswim is required")
+    try:
+        with open(p, "rb") as f:
+            head = f.read(8)
+    except OSError as exc:
+        raise ParameterError(f"run={str(p)!r} cannot be read: {exc.strerror}") from None
+    if head != b"\x89HDF\r\n\x1a\n":
+        raise ParameterError(f"run={str(p)!r} is not a NetCDF-4 (HDF5) file; a run saved by flutterswim "
+                             "(flutterswim simulate, SimulationResult.save) is required")
+    try:
+        with xr.open_dataset(p, engine="h5netcdf") as ds:
+            missing = [k for k in _REQUIRED if k not in ds.variables]
+            if "r0" not in ds.variables and not {"r0_x", "r0_y"} <= set(ds.variables):
+                missing.append("r0_x/r0_y")
+            missing += [k for k in ("params", "groups", "stats", "settings", "status", "t_final", "units")
+                        if k not in ds.attrs]
+            if missing:
+                raise ParameterError(f"run={str(p)!r} is a NetCDF file but not a flutterswim run (missing "
+                                     f"{', '.join(missing[:6])})")
+            return SimulationResult.from_xarray(ds.load())
+    except ParameterError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - truncated or corrupt files fail in many ways
+        raise ParameterError(f"run={str(p)!r} cannot be read as a flutterswim run (truncated or corrupt "
+                             f"file?): {type(exc).__name__}: {' '.join(str(exc).split())[:200]}") from None
 
 
 def concatenate(parts: "list[SimulationResult]") -> SimulationResult:

@@ -10,7 +10,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from .._validate import ParameterError
-from .cycles import Cycles, detect_cycles, sample_cycle
+from .cycles import Cycles, detect_cycles, sample_cycle, tip_index
 from .intersection import self_intersections
 from .track import Track, as_track
 
@@ -116,6 +116,11 @@ class Descriptors:
     transient_duration_s: float
     growth_rate_per_s: float
     growth_rate_stderr_per_s: float
+    leading_lateral_p2p_mm: float = math.nan
+    leading_lateral_p2p_bl: float = math.nan
+    trailing_lateral_p2p_mm: float = math.nan
+    trailing_lateral_p2p_bl: float = math.nan
+    note: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict: floats (None for NaN), ints, bools and strings."""
@@ -134,13 +139,15 @@ class Descriptors:
 
 
 def per_cycle(obj: Any, cycles: Cycles | None = None, *, tip: int | str = "end", harmonics: int = 6,
-              swim_angle: float | None = None) -> dict[str, np.ndarray]:
+              swim_angle: float | None = None, end: int | str | None = None) -> dict[str, np.ndarray]:
     """Per-cycle measurements, each (K,) (``swim_angle``: direction(s) across which the tip's
     lateral peak-to-peak is measured, scalar or (K,); default the mean displacement): period, advance along the field, displacement,
     speed, tip lateral peak-to-peak, nonreciprocity, self_intersecting (any frame of the
-    cycle crosses itself); lengths in track units."""
+    cycle crosses itself); lengths in track units. ``end``: the end whose lateral peak-to-peak
+    is measured ("start" s=0 or "end" s=l; default the section tip of the cycles)."""
     tr = as_track(obj)
     cyc = detect_cycles(tr, tip=tip) if cycles is None else cycles
+    i_end = cyc.tip if end is None else tip_index(tr, end)
     st = cyc.starts
     K = st.size - 1
     xc, yc = tr.centroid()
@@ -157,7 +164,7 @@ def per_cycle(obj: Any, cycles: Cycles | None = None, *, tip: int | str = "end",
     for k in range(K):
         m = (tr.t >= st[k]) & (tr.t < st[k + 1])
         if np.count_nonzero(m) >= 4:
-            q = -tr.x[m, cyc.tip] * math.sin(ang[k]) + tr.y[m, cyc.tip] * math.cos(ang[k])
+            q = -tr.x[m, i_end] * math.sin(ang[k]) + tr.y[m, i_end] * math.cos(ang[k])
             p2p[k] = _fourier_p2p((tr.t[m] - st[k]) / (st[k + 1] - st[k]), q, harmonics)
     nrec = np.full(K, np.nan)
     if K:
@@ -238,6 +245,19 @@ def describe(
     ahead = float(np.mean((w.x[:, 0] - w.x[:, -1]) * e[0] + (w.y[:, 0] - w.y[:, -1]) * e[1]))
     nrec = pc["nonreciprocity"]
     nrec_mean = float(np.mean(nrec))
+    # lateral peak-to-peak of both ends, named by the swimming direction
+    ang_used = chord if pc is not None and np.ndim(chord) and chord.size > 1 and np.max(
+        np.abs(np.angle(np.exp(1j * (chord - swim))))) > math.radians(1.0) else swim
+    p2p_end = {}
+    for e_name in ("start", "end"):
+        pe = per_cycle(tr, sub, tip=tip, harmonics=harmonics, swim_angle=ang_used, end=e_name)["tip_p2p"]
+        p2p_end[e_name] = float(np.nanmean(pe)) if np.any(np.isfinite(pe)) else math.nan
+    lead, trail = ("start", "end") if ahead > 0 else ("end", "start")
+    settled = bool(cyc.limit_cycle)
+    note = "" if settled else (
+        "no limit cycle: the stroke is still changing from cycle to cycle (onset or transient), so the "
+        "averages describe unsettled cycles and the limit-cycle time, transient duration and onset time "
+        "are unknown; simulate longer (run_to_limit_cycle)")
     inter = self_intersections(w) > 0
     adv_total = (xc[-1] - xc[0]) * math.cos(float(np.mean(tr.field_angle))) + (yc[-1] - yc[0]) * math.sin(
         float(np.mean(tr.field_angle))
@@ -278,8 +298,13 @@ def describe(
         self_intersection_fraction=float(np.mean(inter)),
         limit_cycle=cyc.limit_cycle,
         limit_cycle_time_s=cyc.limit_cycle_time,
-        onset_time_s=cyc.onset_time,
+        onset_time_s=cyc.onset_time if settled else math.nan,
         transient_duration_s=cyc.transient_duration,
         growth_rate_per_s=cyc.growth_rate,
         growth_rate_stderr_per_s=cyc.growth_rate_stderr,
+        leading_lateral_p2p_mm=p2p_end[lead] * mm,
+        leading_lateral_p2p_bl=p2p_end[lead] / L,
+        trailing_lateral_p2p_mm=p2p_end[trail] * mm,
+        trailing_lateral_p2p_bl=p2p_end[trail] / L,
+        note=note,
     )

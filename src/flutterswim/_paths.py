@@ -1,0 +1,164 @@
+"""Safe output paths: checks before computing, atomic writes, and the store marker.
+
+- :func:`check_output_file`: the path is not a directory, its folder exists or can be created
+  and is writable, its suffix is one of those allowed. Call it before any computation.
+- :func:`atomic_path`: write to a temporary name in the same folder, then ``os.replace``:
+  an interrupted save leaves the old file or the new one, never a truncated one.
+- :func:`check_store_path` / :func:`remove_own_store`: a store directory is replaced only if
+  it carries our marker file (:data:`MARKER`); the current directory, plain directories,
+  files and Zarr stores of other tools are refused.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import shutil
+import tempfile
+from pathlib import Path
+from typing import Iterator, Sequence
+
+from ._validate import ParameterError
+
+__all__ = ["MARKER", "check_output_file", "check_output_dir", "atomic_path", "atomic_write_text",
+           "check_store_path", "write_marker", "has_marker", "remove_own_store"]
+
+#: File inside every store flutterswim creates; nothing without it is ever deleted.
+MARKER = ".flutterswim-store"
+
+
+def _writable_dir(folder: Path, what: str, path: Path) -> None:
+    probe = folder
+    while not probe.exists():
+        if probe.parent == probe:
+            break
+        probe = probe.parent
+    if not probe.is_dir():
+        raise ParameterError(f"{what}={str(path)!r}: {str(probe)!r} is not a directory, so the folder "
+                             f"{str(folder)!r} cannot be created")
+    # a real probe: os.access says yes to root on read-only or virtual file systems
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=".flutterswim-probe-", dir=probe)
+    except OSError as exc:
+        raise ParameterError(f"{what}={str(path)!r}: the folder {str(probe)!r} is not writable "
+                             f"({exc.strerror or exc})") from None
+    os.close(fd)
+    with contextlib.suppress(OSError):
+        os.unlink(tmp)
+
+
+def check_output_file(path: str | os.PathLike, suffixes: Sequence[str], *, what: str = "out") -> Path:
+    """Check an output file path before computing; return it as a Path.
+
+    Raises ParameterError naming the path if it is a directory, an existing read-only file,
+    has a suffix not in ``suffixes`` (lower case, with the dot), or its folder is not writable."""
+    try:
+        p = Path(os.fspath(path))
+    except TypeError:
+        raise ParameterError(f"{what}={path!r} is not a path") from None
+    if str(p) in ("", "."):
+        raise ParameterError(f"{what}={str(path)!r} is not a file name")
+    if p.is_dir():
+        raise ParameterError(f"{what}={str(p)!r} is a directory; give a file name ending in "
+                             f"{' or '.join(suffixes)}")
+    if p.suffix.lower() not in tuple(s.lower() for s in suffixes):
+        raise ParameterError(f"{what}={str(p)!r} has the suffix {p.suffix or '(none)'!r}; use "
+                             f"{' or '.join(suffixes)}")
+    if p.exists() and not os.access(p, os.W_OK):
+        raise ParameterError(f"{what}={str(p)!r} exists and is not writable")
+    _writable_dir(p.parent if str(p.parent) else Path("."), what, p)
+    return p
+
+
+def check_output_dir(path: str | os.PathLike, *, what: str = "out") -> Path:
+    """An output folder: an existing directory or one that can be created, and writable."""
+    p = Path(os.fspath(path))
+    if p.exists() and not p.is_dir():
+        raise ParameterError(f"{what}={str(p)!r} exists and is not a directory; give a folder")
+    _writable_dir(p, what, p)
+    return p
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
+    """Yield a temporary path next to ``path`` (same suffix); on success rename it onto
+    ``path`` atomically, on any error remove it and leave ``path`` untouched."""
+    p = Path(os.fspath(path))
+    p.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{p.stem}.", suffix=f".part{p.suffix}", dir=p.parent)
+    os.close(fd)
+    tmp_p = Path(tmp)
+    try:
+        yield tmp_p
+        if tmp_p.is_dir():
+            raise RuntimeError("atomic_path: a directory was written instead of a file")
+        os.replace(tmp_p, p)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp_p.unlink()
+        raise
+
+
+def atomic_write_text(path: str | os.PathLike, text: str) -> Path:
+    with atomic_path(path) as tmp:
+        tmp.write_text(text)
+    return Path(path)
+
+
+def write_marker(store: Path, kind: str, **info) -> None:
+    (Path(store) / MARKER).write_text(json.dumps({"kind": kind, **info}))
+
+
+def has_marker(store: Path) -> bool:
+    return (Path(store) / MARKER).is_file()
+
+
+def _is_cwd_or_parent(p: Path) -> bool:
+    try:
+        rp, cwd = p.resolve(), Path.cwd().resolve()
+    except OSError:
+        return False
+    return rp == cwd or rp in cwd.parents or rp == Path(rp.anchor)
+
+
+def check_store_path(path: str | os.PathLike, *, overwrite: bool, what: str = "out") -> Path:
+    """Check a store directory before computing.
+
+    Allowed: a path that does not exist (its folder writable), an empty directory, or one of
+    our stores (marker present; it is resumed, or replaced when ``overwrite``). Refused, with
+    the reason: the current directory or one of its parents, a file, a non-empty directory
+    without our marker (user files, or a Zarr store of another tool)."""
+    p = Path(os.fspath(path))
+    if str(p) in ("", "."):
+        raise ParameterError(f"{what}={str(path)!r} is the current directory; give a new store name "
+                             "such as sweep.zarr")
+    if _is_cwd_or_parent(p):
+        raise ParameterError(f"{what}={str(p)!r} is the current directory or one of its parents; "
+                             "give a new store name such as sweep.zarr")
+    if p.exists() and not p.is_dir():
+        raise ParameterError(f"{what}={str(p)!r} is an existing file, not a sweep store; nothing was "
+                             "changed. Give a new store name such as sweep.zarr")
+    if p.is_dir() and not has_marker(p) and any(p.iterdir()):
+        zarrish = any((p / f).exists() for f in ("zarr.json", ".zgroup", ".zattrs", ".zarray"))
+        why = "a Zarr store written by another tool" if zarrish else "a directory holding other files"
+        raise ParameterError(f"{what}={str(p)!r} is {why}, not a flutterswim store (no {MARKER} marker); "
+                             "it is never overwritten. Give a new store name")
+    if p.is_dir() and not os.access(p, os.W_OK | os.X_OK):
+        raise ParameterError(f"{what}={str(p)!r} is not writable")
+    if not p.exists():
+        _writable_dir(p.parent if str(p.parent) else Path("."), what, p)
+    return p
+
+
+def remove_own_store(path: str | os.PathLike) -> None:
+    """Delete a store that carries our marker (checked again here); anything else raises."""
+    p = Path(os.fspath(path))
+    if not p.exists():
+        return
+    if not (p.is_dir() and has_marker(p)) or _is_cwd_or_parent(p):
+        raise ParameterError(f"{str(p)!r} is not a flutterswim store; it is never deleted")
+    # rename first: a crash mid-delete leaves a hidden remnant, never a half store at the path
+    trash = p.parent / f".{p.name}.deleting-{os.getpid()}"
+    os.replace(p, trash)
+    shutil.rmtree(trash)

@@ -1,0 +1,101 @@
+"""The CLI: one line, no traceback, exit 2 for bad input; --version, python -m flutterswim,
+negative numbers after options, --cycles with --t-end, output paths checked before computing."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import flutterswim as fs
+
+
+def _cli(*args, cwd=None, timeout=120):
+    return subprocess.run([sys.executable, "-m", "flutterswim", *map(str, args)], capture_output=True, text=True,
+                          cwd=cwd, timeout=timeout)
+
+
+def _one_line_error(out, status=2):
+    assert out.returncode == status, (out.returncode, out.stderr)
+    assert "Traceback" not in out.stderr
+    lines = [ln for ln in out.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1, out.stderr
+    return lines[0]
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    d = tmp_path_factory.mktemp("cli")
+    rng = np.random.default_rng(1)
+    (d / "random.nc").write_bytes(rng.bytes(5000))
+    (d / "empty.nc").write_bytes(b"")
+    import xarray as xr
+
+    xr.Dataset({"a": ("x", np.arange(3.0), {"units": "1"})}).to_netcdf(d / "other.nc", engine="h5netcdf")
+    run = fs.simulate(fs.PAPER, 0.3, n_segments=8)
+    run.save(d / "run.nc")
+    (d / "truncated.nc").write_bytes((d / "run.nc").read_bytes()[:3000])
+    return d
+
+
+@pytest.mark.parametrize("name, words", [("missing.nc", "does not exist"), ("random.nc", "not a NetCDF"),
+                                         ("other.nc", "not a flutterswim run"), ("empty.nc", "is empty"),
+                                         ("truncated.nc", "cannot be read")])
+@pytest.mark.parametrize("command", ["describe", "plot"])
+def test_bad_run_files_give_one_line_and_status_2(files, name, words, command):
+    line = _one_line_error(_cli(command, files / name, cwd=files))
+    assert name in line and words in line
+
+
+def test_directory_as_run_and_as_out(files):
+    assert "directory" in _one_line_error(_cli("describe", files))
+    line = _one_line_error(_cli("simulate", "--t-end", "0.1", "--out", files, "--quiet"))
+    assert "is a directory" in line
+
+
+def test_version_and_module_entry():
+    a = _cli("--version")
+    assert a.returncode == 0 and a.stdout.strip() == f"flutterswim {fs.__version__}"
+    b = subprocess.run([sys.executable, "-m", "flutterswim", "--help"], capture_output=True, text=True)
+    assert b.returncode == 0 and "simulate" in b.stdout
+
+
+def test_negative_number_after_option_is_a_value(tmp_path):
+    line = _one_line_error(_cli("simulate", "--rtol", "-1e-4", "--t-end", "1", "--out", tmp_path / "r.nc",
+                                "--quiet"))
+    assert "rtol=-0.0001" in line and "> 0" in line
+    assert not (tmp_path / "r.nc").exists()
+
+
+def test_cycles_with_t_end_is_refused(tmp_path):
+    line = _one_line_error(_cli("simulate", "--cycles", "3", "--t-end", "1", "--out", tmp_path / "r.nc"))
+    assert "--cycles" in line and "--t-end" in line
+
+
+@pytest.mark.parametrize("out, words", [("/proc/run.nc", "not writable"), ("run.txt", "suffix")])
+def test_output_checked_before_computing(tmp_path, out, words):
+    # t_end long enough that a computation before the check would take minutes
+    r = _cli("simulate", "--t-end", "1000", "--out", out, "--quiet", cwd=tmp_path, timeout=30)
+    assert words in _one_line_error(r)
+
+
+def test_unknown_option_is_one_line():
+    line = _one_line_error(_cli("simulate", "--bogus"))
+    assert "--bogus" in line
+
+
+def test_debug_shows_the_traceback(files):
+    r = _cli("--debug", "describe", files / "random.nc")
+    assert r.returncode == 2 and "Traceback" in r.stderr
+
+
+def test_describe_without_limit_cycle_says_so(tmp_path):
+    fs.simulate(fs.PAPER, 4.0, n_segments=12).save(tmp_path / "onset.nc")  # still in onset at 4 s
+    r = _cli("describe", tmp_path / "onset.nc")
+    assert r.returncode == 0 and "note: no limit cycle" in r.stdout.splitlines()[0]
+    j = _cli("describe", tmp_path / "onset.nc", "--json")
+    import json
+
+    d = json.loads(j.stdout)
+    assert d["limit_cycle"] is False and "no limit cycle" in d["note"]
+    assert d["limit_cycle_time_s"] is None and d["onset_time_s"] is None
