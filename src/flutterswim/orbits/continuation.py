@@ -1,0 +1,297 @@
+"""``continue_orbits``: the branch of strokes by pseudo-arclength continuation from the Hopf
+point of the discrete model.
+
+Unknowns X = (u0, T, p): a shape on the orbit, the period and the parameter. Equations:
+Phi(u0, T; p) = u0 (the discrete flow closes), the Poincare phase condition through the
+previous orbit, and the arclength condition <t, X - X_k>_w = ds with t the secant tangent in
+the scaled metric |dX|_w^2 = (dp / L_p)^2 + (|du| / L_u)^2 (L_p: the parameter range asked
+for, L_u: the shape amplitude the normal form predicts over it), so the branch is followed
+through folds. The first orbit comes from the Hopf normal form (:mod:`.normal_form`).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .._validate import ParameterError, finite, positive, positive_int
+from .linear import hopf_point
+from .normal_form import normal_form
+from .parameter import Axis
+from .periodic import DEFAULT_SEGMENTS, DEFAULT_STEPS, OrbitNotFound, PeriodicOrbit, orbit_from_flow
+from .shooting import StepFailure, flow
+from .system import ShapeSystem
+
+__all__ = ["Branch", "continue_orbits"]
+
+N_MULTIPLIERS = 6
+
+
+@dataclass(frozen=True)
+class Branch:
+    """The orbits along the branch, with the Hopf point and normal form."""
+
+    axis: Axis
+    values: np.ndarray
+    orbits: list[PeriodicOrbit] = field(repr=False)
+    hopf_value: float
+    hopf_omega: float
+    lyapunov_coefficient: float
+    amplitude2_slope: float
+    n_segments: int
+    steps: int
+    wall_time: float
+    message: str
+
+    def to_dataset(self):
+        """The branch as an xarray Dataset (CF attributes, units), indexed by the parameter."""
+        import xarray as xr
+
+        name = self.axis.name
+        orbs = self.orbits
+        si = bool(orbs) and orbs[0].units == "SI"
+        tu, lu = ("s", "m") if si else ("tau", "l")
+
+        def col(key):
+            return np.array([getattr(o, key) for o in orbs], dtype=float)
+
+        data = {
+            "period": (col("period"), tu, "period of the stroke"),
+            "advance": (col("advance"), lu, "net advance per cycle"),
+            "speed": (col("speed"), f"{lu} {tu}-1", "mean swimming speed"),
+            "lateral_leading": (col("lateral_leading"), lu, "lateral peak-to-peak excursion of the leading end"),
+            "lateral_trailing": (col("lateral_trailing"), lu, "lateral peak-to-peak excursion of the trailing end"),
+            "amplitude": (col("amplitude"), "1", "2 |first Fourier coefficient of the shape (theta, kappa)|"),
+            "nonreciprocity": (col("nonreciprocity"), "1", "signed area of the stroke in the first two shape modes"),
+            "self_intersecting": (col("self_intersecting").astype("i1"), "1", "filament crosses itself during the stroke (0/1)"),
+            "stable": (col("stable").astype("i1"), "1", "orbit stable: all non-trivial Floquet multipliers inside the unit circle (0/1)"),
+            "max_multiplier": (np.array([o.max_multiplier for o in orbs]), "1", "largest modulus of the non-trivial Floquet multipliers"),
+            "trivial_multiplier_error": (col("trivial_multiplier_error"), "1", "|trivial Floquet multiplier - 1| (accuracy gauge)"),
+            "residual": (col("residual"), "1", "max-norm residual of the closing condition"),
+            "n_newton": (col("n_newton").astype("i4"), "1", "Newton iterations"),
+        }
+        mults = np.array([o.multipliers[:N_MULTIPLIERS] for o in orbs]) if orbs else np.zeros((0, N_MULTIPLIERS))
+        ds = xr.Dataset(
+            {k: ((name,), v, {"units": u, "long_name": ln}) for k, (v, u, ln) in data.items()},
+            coords={name: ((name,), self.values, {"units": self.axis.units, "long_name": self.axis.long_name})},
+        )
+        ds["multiplier_real"] = ((name, "multiplier"), mults.real, {"units": "1", "long_name": "Floquet multipliers (largest moduli), real part"})
+        ds["multiplier_imag"] = ((name, "multiplier"), mults.imag, {"units": "1", "long_name": "Floquet multipliers (largest moduli), imaginary part"})
+        ds = ds.assign_coords(multiplier=("multiplier", np.arange(N_MULTIPLIERS), {"units": "1", "long_name": "rank by modulus"}))
+        crossings = self.multiplier_crossings()
+        from .. import __version__
+
+        ds.attrs.update({
+            "Conventions": "CF-1.10",
+            "title": f"flutterswim periodic-orbit branch in {name}",
+            "source": f"flutterswim {__version__}: Newton shooting (Radau IIA, {self.steps} steps per period) and pseudo-arclength continuation",
+            "parameter": name,
+            f"hopf_{name}": self.hopf_value,
+            "hopf_omega_per_tau": self.hopf_omega,
+            "hopf_period": (2 * math.pi / self.hopf_omega) * (orbs[0].period / orbs[0].period_dimensionless if orbs else 1.0),
+            "lyapunov_coefficient": self.lyapunov_coefficient,
+            "lyapunov_amplitude2_slope": self.amplitude2_slope,
+            "bifurcation": "supercritical" if self.lyapunov_coefficient < 0 else "subcritical",
+            "multiplier_crossings": "; ".join(f"{name}={v:.6g}" for v in crossings) if crossings else "none",
+            "n_segments": self.n_segments,
+            "steps_per_period": self.steps,
+            "message": self.message,
+        })
+        return ds
+
+    def multiplier_crossings(self) -> list[float]:
+        """Parameter values (linearly interpolated) where the largest non-trivial multiplier
+        crosses the unit circle along the branch."""
+        m = np.array([o.max_multiplier for o in self.orbits]) - 1.0
+        out = []
+        for i in range(len(m) - 1):
+            if m[i] * m[i + 1] < 0:
+                f = m[i] / (m[i] - m[i + 1])
+                out.append(float(self.values[i] + f * (self.values[i + 1] - self.values[i])))
+        return out
+
+    def save(self, path) -> None:
+        """Write the branch to NetCDF atomically (temporary name, then rename)."""
+        import os
+        import tempfile
+        from pathlib import Path
+
+        path = Path(path)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
+        os.close(fd)
+        try:
+            self.to_dataset().to_netcdf(tmp, engine="h5netcdf")
+            os.replace(tmp, path)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+
+
+def _systems(axis: Axis, value: float, n: int) -> ShapeSystem:
+    return ShapeSystem.of(axis.at(value), n)
+
+
+def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
+                    n_segments: int = DEFAULT_SEGMENTS, steps: int = DEFAULT_STEPS, tol: float = 1e-10,
+                    max_newton: int = 8, progress: bool = False, max_points: int | None = None) -> Branch:
+    """Continue the stroke from the Hopf point along ``parameter`` up to ``to``, with about
+    ``n_points`` orbits (at least that many; more where the branch bends)."""
+    t_start = time.perf_counter()
+    axis = Axis(params, parameter)
+    to = finite("to", to)
+    n_points = positive_int("n_points", n_points, minimum=2)
+    n_segments = positive_int("n_segments", n_segments, minimum=4)
+    steps = positive_int("steps", steps, minimum=8)
+    tol = positive("tol", tol)
+    max_points = 4 * n_points if max_points is None else positive_int("max_points", max_points)
+    base = axis.value()
+    lo, hi = sorted((base, to))
+    span = hi - lo
+    hopf = hopf_point(params, parameter, n_segments=n_segments,
+                      bracket=None if span == 0 else _hopf_bracket(axis, n_segments, base, to))
+    nf = normal_form(hopf)
+    side = nf.direction if nf.supercritical else -nf.direction
+    if (to - hopf.value) * side <= 0:
+        raise ParameterError(f"to={to:g}: the stroke branch exists for {parameter} "
+                             f"{'above' if side > 0 else 'below'} the Hopf point {hopf.value:.6g}")
+    length_p = abs(to - hopf.value)
+    length_u = math.sqrt(nf.amplitude2_slope * length_p) / 2 * math.sqrt(2)
+    # first orbit from the normal form, a small distance into the branch
+    d1 = side * min(0.01 * length_p, 0.002 * max(1.0, abs(hopf.value)))
+    amp = math.sqrt(nf.amplitude2_slope * abs(d1))
+    sysm = _systems(axis, hopf.value + d1, n_segments)
+    u_guess = sysm.straight() + amp * hopf.q.real
+    T_guess = 2 * math.pi / hopf.omega
+    orbits: list[PeriodicOrbit] = []
+    values: list[float] = []
+    from .periodic import solve_orbit
+
+    u, T, fl, res, it = solve_orbit(sysm, u_guess, T_guess, steps=steps, tol=tol, max_newton=2 * max_newton)
+    values.append(hopf.value + d1)
+    orbits.append(orbit_from_flow(axis.at(values[-1]), sysm, fl, res, it, steps))
+    X = [np.concatenate((u, [T, values[-1]]))]
+    fls = [fl]
+    w = _weights(u.size, length_u, length_p)
+    ds = 1.0 / n_points
+    ds_max = 1.5 / n_points
+    bar = _bar(progress, length_p)
+    message = f"reached {parameter}={to:g}"
+    while True:
+        if len(orbits) >= max_points:
+            message = f"stopped after max_points={max_points} orbits before {parameter}={to:g}"
+            break
+        xk = X[-1]
+        if len(X) == 1:
+            tangent = np.zeros_like(xk)
+            tangent[-1] = side
+            tangent[:-2] = (u - sysm.straight()) / (2 * abs(d1)) * side  # d(amp)/dp of the sqrt law
+        else:
+            tangent = X[-1] - X[-2]
+        tangent = tangent / math.sqrt(np.sum((tangent * w) ** 2))
+        step_ds = ds
+        finishing = (xk[-1] + step_ds * tangent[-1] - to) * side >= 0 and tangent[-1] * side > 0
+        try:
+            if finishing:
+                xn, fl, res, it = _newton_natural(axis, n_segments, steps, xk, fls[-1], to, tol, max_newton)
+            else:
+                xn, fl, res, it = _newton_arclength(axis, n_segments, steps, xk, fls[-1], tangent, w,
+                                                    step_ds, tol, max_newton)
+        except (OrbitNotFound, StepFailure, np.linalg.LinAlgError) as exc:
+            ds *= 0.5
+            if ds < 1e-4 / n_points:
+                message = f"continuation stopped at {parameter}={xk[-1]:.6g}: {exc}"
+                break
+            continue
+        pval = float(xn[-1])
+        sysn = _systems(axis, pval, n_segments)
+        orbits.append(orbit_from_flow(axis.at(pval), sysn, fl, res, it, steps))
+        values.append(pval)
+        X.append(xn)
+        fls.append(fl)
+        if bar is not None:
+            bar.update(abs(values[-1] - values[-2]))
+        if finishing:
+            break
+        ds = min(ds_max, ds * (1.3 if it <= 3 else 0.7 if it >= 6 else 1.0))
+    if bar is not None:
+        bar.close()
+    return Branch(axis, np.array(values), orbits, hopf.value, hopf.omega, nf.lyapunov_coefficient,
+                  nf.amplitude2_slope, n_segments, steps, time.perf_counter() - t_start, message)
+
+
+def _hopf_bracket(axis: Axis, n: int, base: float, to: float) -> tuple[float, float] | None:
+    """A bracket of the Hopf point between the values the user asked about, if there is one;
+    else None (search around the base value)."""
+    from .linear import leading_pair
+
+    grid = np.linspace(min(base, to), max(base, to), 9)
+    g = [leading_pair(axis.at(v), n).real for v in grid]
+    for i in range(len(grid) - 1):
+        if g[i] * g[i + 1] <= 0:
+            return float(grid[i]), float(grid[i + 1])
+    return None
+
+
+def _weights(m: int, length_u: float, length_p: float) -> np.ndarray:
+    w = np.empty(m + 2)
+    w[:m] = 1.0 / max(length_u, 1e-12)
+    w[m] = 0.0  # the period does not count in the arclength
+    w[m + 1] = 1.0 / length_p
+    return w
+
+
+def _closing(axis, n, steps, u, T, p, warm, variational):
+    sysm = _systems(axis, p, n)
+    fl = flow(sysm, u, T, steps, variational=variational, warm=warm)
+    return sysm, fl
+
+
+def _newton_arclength(axis, n, steps, xk, warm, tangent, w, ds, tol, max_newton):
+    m = xk.size - 2
+    x = xk + ds * tangent
+    sys_k = _systems(axis, xk[-1], n)
+    normal = sys_k.f(xk[:m])
+    normal /= np.linalg.norm(normal)
+    fl = warm
+    for it in range(1, max_newton + 1):
+        u, T, p = x[:m], x[m], x[-1]
+        sysm, fl = _closing(axis, n, steps, u, T, p, fl, True)
+        r = fl.y[-1, 2:] - u
+        res = float(np.max(np.abs(r)))
+        arc = float(np.sum(w * w * tangent * (x - xk))) - ds
+        if res < tol and abs(arc) < 1e-8:
+            return x, fl, res, it
+        dp = 1e-6 * max(1.0, abs(p))
+        _, fl_p = _closing(axis, n, steps, u, T, p + dp, fl, False)
+        a = np.zeros((m + 2, m + 2))
+        a[:m, :m] = fl.monodromy - np.eye(m)
+        a[:m, m] = fl.f[-1, 2:]
+        a[:m, m + 1] = (fl_p.y[-1, 2:] - fl.y[-1, 2:]) / dp
+        a[m, :m] = normal
+        a[m + 1] = w * w * tangent
+        rhs = -np.concatenate((r, [normal @ (u - xk[:m]), arc]))
+        x = x + np.linalg.solve(a, rhs)
+        if not (np.all(np.isfinite(x)) and x[m] > 0):
+            raise OrbitNotFound(f"Newton left the admissible region at iteration {it}")
+    raise OrbitNotFound(f"no convergence in {max_newton} iterations (residual {res:.3g})")
+
+
+def _newton_natural(axis, n, steps, xk, warm, p, tol, max_newton):
+    from .periodic import solve_orbit
+
+    m = xk.size - 2
+    sysm = _systems(axis, p, n)
+    u, T, fl, res, it = solve_orbit(sysm, xk[:m], xk[m], steps=steps, tol=tol, max_newton=max_newton,
+                                    u_ref=xk[:m])
+    return np.concatenate((u, [T, p])), fl, res, it
+
+
+def _bar(enabled: bool, total: float):
+    if not enabled:
+        return None
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, desc="branch", unit="", leave=False)

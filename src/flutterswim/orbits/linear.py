@@ -1,0 +1,110 @@
+"""Linear stability of the straight state from the simulator's own discrete model, and its
+Hopf point.
+
+The eigenvalues of the exact Jacobian of the shape dynamics (:class:`.system.ShapeSystem`)
+at the straight state aligned with the field. One eigenvalue is exactly zero: the straight
+state belongs to the family of bent equilibria theta_s = kappa = -chi sin(theta). The
+leading complex pair converges at second order in h = 1/N to the root of the continuum
+characteristic equation (:mod:`flutterswim.stability`), which stays an independent reference.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import brentq
+
+from .._validate import ParameterError
+from .parameter import Axis
+from .system import ShapeSystem
+
+__all__ = ["discrete_spectrum", "leading_pair", "HopfPoint", "hopf_point"]
+
+
+def discrete_spectrum(params, n_segments: int) -> np.ndarray:
+    """All eigenvalues (2N+1,) of the discrete shape dynamics at the straight state [1/tau],
+    sorted by decreasing real part."""
+    sysm = ShapeSystem.of(params, n_segments)
+    lam = np.linalg.eigvals(sysm.jac(sysm.straight()))
+    return lam[np.argsort(-lam.real)]
+
+
+def leading_pair(params, n_segments: int) -> complex:
+    """The complex eigenvalue with Im > 0 of largest real part [1/tau]."""
+    lam = discrete_spectrum(params, n_segments)
+    cplx = lam[lam.imag > 1e-8 * max(1.0, np.abs(lam).max())]
+    if cplx.size == 0:
+        raise ParameterError("the straight state has no oscillatory mode here (no complex eigenvalue)")
+    return complex(cplx[np.argmax(cplx.real)])
+
+
+@dataclass(frozen=True)
+class HopfPoint:
+    """Hopf bifurcation of the discrete model along ``axis``: the parameter value, the onset
+    angular frequency omega [1/tau], the rate d Re(lambda)/d value, the right and left
+    eigenvectors q, p (A q = i omega q, A^T p = -i omega p, |q| = 1, conj(p).q = 1), and the
+    Jacobian A there."""
+
+    axis: Axis
+    value: float
+    omega: float
+    growth_slope: float
+    q: np.ndarray
+    p: np.ndarray
+    jacobian: np.ndarray
+    n_segments: int
+
+    @property
+    def params(self):
+        return self.axis.at(self.value)
+
+
+def hopf_point(params, parameter: str = "kappa_E_ratio", *, n_segments: int = 48,
+               bracket: tuple[float, float] | None = None, xtol: float = 1e-13) -> HopfPoint:
+    """The Hopf point of the straight state along ``parameter`` (see :class:`.parameter.Axis`),
+    where the leading complex pair crosses the imaginary axis. ``bracket``: values on either
+    side; by default it is searched from the base value towards zero and upwards."""
+    axis = Axis(params, parameter)
+
+    def growth(v: float) -> float:
+        return leading_pair(axis.at(v), n_segments).real
+
+    if bracket is None:
+        bracket = _bracket(growth, axis.value())
+    lo, hi = bracket
+    glo, ghi = growth(lo), growth(hi)
+    if glo * ghi > 0:
+        raise ParameterError(f"{parameter} in [{lo:g}, {hi:g}] does not bracket a Hopf point "
+                             f"(growth rates {glo:.3g} and {ghi:.3g} have one sign)")
+    v = brentq(growth, lo, hi, xtol=xtol, rtol=4 * np.finfo(float).eps, maxiter=200)
+    sysm = ShapeSystem.of(axis.at(v), n_segments)
+    a = sysm.jac(sysm.straight())
+    lam, vr = np.linalg.eig(a)
+    i = int(np.argmin(np.abs(lam - leading_pair(axis.at(v), n_segments))))
+    omega = float(lam[i].imag)
+    q = vr[:, i] / np.linalg.norm(vr[:, i])
+    lam_l, vl = np.linalg.eig(a.T)
+    j = int(np.argmin(np.abs(lam_l - np.conj(lam[i]))))
+    p = vl[:, j]
+    p = p / np.conj(np.vdot(p, q))  # conj(p).q = 1
+    dv = 1e-6 * max(1.0, abs(v))
+    slope = (growth(v + dv) - growth(v - dv)) / (2 * dv)
+    return HopfPoint(axis, float(v), omega, float(slope), q, p, a, n_segments)
+
+
+def _bracket(growth, v0: float) -> tuple[float, float]:
+    g0 = growth(v0)
+    factors = (0.8, 0.6, 0.45, 0.3, 0.2, 0.1, 0.05) if g0 > 0 else (1.25, 1.6, 2.0, 3.0, 5.0, 10.0)
+    prev = v0
+    for f in factors:
+        v = v0 * f
+        if growth(v) * g0 <= 0:
+            return (v, prev) if v < prev else (prev, v)
+        prev = v
+    raise ParameterError(f"no Hopf point found between {v0 * factors[-1]:g} and {v0:g}")
+
+
+def omega_to_period(omega: float) -> float:
+    return 2 * math.pi / omega

@@ -1,0 +1,298 @@
+"""``periodic_orbit``: the stroke as a periodic orbit of the shape dynamics.
+
+Unknowns (u0, T): a shape on the orbit and the period. Equations: the discrete flow map
+closes, Phi(u0, T) = u0 (2N+1 rows; :mod:`.shooting`), and a phase condition fixes where on
+the orbit u0 sits: the Poincare plane through the guess u_ref, normal to the flow there,
+f(u_ref) . (u0 - u_ref) = 0. Newton's method with the monodromy S from the variational
+equation: [[S - I, dPhi/dT], [f(u_ref)^T, 0]] (dPhi/dT = f(Phi)). The advance per cycle is
+the quadrature of the velocity of r(0) along the orbit (the translation drops out of the
+shape dynamics). Floquet multipliers: the eigenvalues of S; the trivial one (along the
+flow) equals 1 and gauges the accuracy.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .._validate import ParameterError, positive, positive_int
+from ..params import Groups, Parameters
+from .shooting import Flow, flow
+from .system import ShapeSystem
+
+__all__ = ["PeriodicOrbit", "OrbitNotFound", "periodic_orbit", "solve_orbit", "DEFAULT_STEPS"]
+
+#: Rosenbrock steps per period. The period's time-discretisation error is below 1e-7 at the
+#: paper's parameters (measured by halving, see tests/test_orbits_periodic.py).
+DEFAULT_STEPS = 64
+DEFAULT_SEGMENTS = 48
+
+
+class OrbitNotFound(RuntimeError):
+    """Newton's method did not converge to a periodic orbit; the message says why."""
+
+
+@dataclass(frozen=True)
+class PeriodicOrbit:
+    """A periodic stroke. Lengths and times in SI (m, s) for physical parameters, in l and
+    tau for :class:`Groups` (``units``). Shapes are dimensionless on the phase grid ``phase``
+    (M,) in [0, 1): theta (M, N), kappa (M, N+1)."""
+
+    params: Parameters | Groups
+    n_segments: int
+    steps: int
+    period: float
+    advance: float
+    speed: float
+    swim_direction: float  # radians, of the advance per cycle
+    lateral_leading: float
+    lateral_trailing: float
+    leading_end: str  # "s=0" or "s=l": the end that leads
+    nonreciprocity: float
+    self_intersecting: bool
+    amplitude: float  # 2 |first Fourier coefficient of the shape| (dimensionless)
+    multipliers: np.ndarray
+    trivial_multiplier_error: float
+    stable: bool
+    residual: float
+    n_newton: int
+    phase: np.ndarray = field(repr=False)
+    theta: np.ndarray = field(repr=False)
+    kappa: np.ndarray = field(repr=False)
+    r0: np.ndarray = field(repr=False)  # (M, 2), dimensionless, r(0) = 0 at phase 0
+    units: str = "SI"
+
+    @property
+    def u0(self) -> np.ndarray:
+        """The shape at phase 0, (2N+1,), a seed for neighbouring orbits."""
+        return np.concatenate((self.theta[0], self.kappa[0]))
+
+    @property
+    def period_dimensionless(self) -> float:
+        return self.period / _scales(self.params)[0]
+
+    @property
+    def max_multiplier(self) -> float:
+        """Largest modulus among the non-trivial Floquet multipliers."""
+        mods = np.abs(self.multipliers)
+        i = int(np.argmin(np.abs(self.multipliers - 1.0)))
+        return float(np.max(np.delete(mods, i)))
+
+    def descriptors(self) -> dict[str, float | bool | str]:
+        """The stroke descriptors as a JSON-ready dict."""
+        keys = ("period", "advance", "speed", "swim_direction", "lateral_leading", "lateral_trailing",
+                "leading_end", "nonreciprocity", "self_intersecting", "amplitude", "stable",
+                "trivial_multiplier_error", "residual", "n_newton")
+        out = {k: getattr(self, k) for k in keys}
+        out["max_multiplier"] = self.max_multiplier
+        return {k: (bool(v) if isinstance(v, (bool, np.bool_)) else v if isinstance(v, str) else
+                    int(v) if isinstance(v, (int, np.integer)) else float(v)) for k, v in out.items()}
+
+    def to_result(self, n_cycles: int = 1):
+        """The orbit as a :class:`flutterswim.SimulationResult` over ``n_cycles`` periods (one
+        frame per step), positions rebuilt by the quadrature: for describe, plots, kymographs."""
+        from ..field import Field
+        from ..filament import Filament
+        from ..integrators import SolverStats, Solution
+        from ..simulate import _package
+
+        n_cycles = positive_int("n_cycles", n_cycles)
+        tau, length = _scales(self.params)
+        g = self.params.groups if isinstance(self.params, Parameters) else self.params
+        m = self.phase.size
+        T = self.period_dimensionless
+        d = (self.advance / length) * np.array([math.cos(self.swim_direction), math.sin(self.swim_direction)])
+        reps = [np.concatenate((self.r0 + c * d, self.theta, self.kappa), axis=1) for c in range(n_cycles)]
+        last = np.concatenate((self.r0[:1] + n_cycles * d, self.theta[:1], self.kappa[:1]), axis=1)
+        y = np.concatenate(reps + [last])
+        t = np.arange(n_cycles * m + 1) * (T / m)
+        stats = SolverStats("periodic_orbit", 3, self.steps, 0, 0, 0, 0, 0.0)
+        sol = Solution(t, y, "completed", "periodic orbit", float(t[-1]), y[-1], stats)
+        fil = Filament(self.n_segments, g.eta_par, g.eta_perp, g.chi)
+        return _package(sol, fil, Field().scaled(tau), g, self.params, tau, False,
+                        {"n_segments": self.n_segments, "source": "periodic_orbit",
+                         "limit_cycle": True, "limit_cycle_time": 0.0})
+
+
+def _scales(params) -> tuple[float, float]:
+    if isinstance(params, Parameters):
+        return params.tau, params.l
+    return 1.0, 1.0
+
+
+def _check_params(params) -> None:
+    if not isinstance(params, (Parameters, Groups)):
+        raise ParameterError(f"params={params!r} must be flutterswim.Parameters or flutterswim.Groups")
+
+
+def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: int = DEFAULT_STEPS,
+                tol: float = 1e-10, max_newton: int = 12, u_ref: np.ndarray | None = None
+                ) -> tuple[np.ndarray, float, Flow, float, int]:
+    """Newton shooting from the guess (u0, period). Returns (u0, T, flow, residual, steps)."""
+    u = np.array(u0, float)
+    T = float(period)
+    u_ref = u.copy() if u_ref is None else np.asarray(u_ref, float)
+    normal = system.f(u_ref)
+    normal /= np.linalg.norm(normal)
+    m = u.size
+    res = math.inf
+    fl = None
+    for it in range(1, max_newton + 1):
+        fl = flow(system, u, T, steps, variational=True, warm=fl)
+        r = fl.y[-1, 2:] - u
+        res = float(np.max(np.abs(r)))
+        if res < tol:
+            return u, T, fl, res, it
+        a = np.zeros((m + 1, m + 1))
+        a[:m, :m] = fl.monodromy - np.eye(m)
+        a[:m, m] = fl.f[-1, 2:]
+        a[m, :m] = normal
+        rhs = np.concatenate((-r, [-(normal @ (u - u_ref))]))
+        dx = np.linalg.solve(a, rhs)
+        # damp steps that would change the period by more than a fifth
+        lam = min(1.0, 0.2 * T / max(abs(dx[m]), 1e-300))
+        u = u + lam * dx[:m]
+        T = T + lam * dx[m]
+        if not (np.all(np.isfinite(u)) and T > 0):
+            raise OrbitNotFound(f"Newton left the admissible region at iteration {it} (T={T:.4g})")
+    fl = flow(system, u, T, steps, variational=True, warm=fl)
+    res = float(np.max(np.abs(fl.y[-1, 2:] - u)))
+    if res < tol:
+        return u, T, fl, res, max_newton
+    raise OrbitNotFound(f"Newton shooting did not converge in {max_newton} iterations "
+                        f"(residual {res:.3g}, tolerance {tol:.3g})")
+
+
+def orbit_from_flow(params, system: ShapeSystem, fl: Flow, residual: float, n_newton: int,
+                    steps: int) -> PeriodicOrbit:
+    """Package a converged flow as a :class:`PeriodicOrbit` with its descriptors."""
+    n = system.n
+    y = fl.y[:-1]
+    T = float(fl.t[-1])
+    d = fl.y[-1, :2] - fl.y[0, :2]
+    adv = float(np.hypot(*d))
+    e = d / adv if adv > 0 else np.array([math.cos(system.phi), math.sin(system.phi)])
+    ep = np.array([-e[1], e[0]])
+    theta, kappa, r0 = y[:, 2 : n + 2], y[:, n + 2 :], y[:, :2]
+    h = 1.0 / n
+    tip = r0 + h * np.stack((np.cos(theta).sum(axis=1), np.sin(theta).sum(axis=1)), axis=1)
+    lat0, lat1 = _p2p(r0 @ ep), _p2p(tip @ ep)
+    s_l_leads = float(np.mean((tip - r0) @ e)) > 0
+    leading, trailing = (lat1, lat0) if s_l_leads else (lat0, lat1)
+    mult = np.linalg.eigvals(fl.monodromy)
+    mult = mult[np.argsort(-np.abs(mult))]
+    i1 = int(np.argmin(np.abs(mult - 1.0)))
+    others = np.delete(np.abs(mult), i1)
+    shape = np.concatenate((theta, kappa), axis=1)
+    c1 = np.fft.fft(shape, axis=0)[1] / shape.shape[0]
+    tau, length = _scales(params)
+    orb = PeriodicOrbit(
+        params=params, n_segments=n, steps=steps, period=T * tau, advance=adv * length,
+        speed=adv / T * length / tau, swim_direction=float(math.atan2(e[1], e[0])),
+        lateral_leading=leading * length, lateral_trailing=trailing * length,
+        leading_end="s=l" if s_l_leads else "s=0", nonreciprocity=float("nan"),
+        self_intersecting=False, amplitude=float(2 * np.linalg.norm(c1)), multipliers=mult,
+        trivial_multiplier_error=float(abs(mult[i1] - 1.0)),
+        stable=bool(others.size == 0 or others.max() < 1.0), residual=residual, n_newton=n_newton,
+        phase=np.arange(y.shape[0]) / y.shape[0], theta=theta, kappa=kappa, r0=r0,
+        units="SI" if isinstance(params, Parameters) else "dimensionless",
+    )
+    return _with_shape_descriptors(orb)
+
+
+def _with_shape_descriptors(orb: PeriodicOrbit) -> PeriodicOrbit:
+    from ..analysis.descriptors import shape_modes, stroke_area
+    from ..analysis.intersection import polyline_self_intersects
+    from ..filament import centreline
+
+    coef, *_ = shape_modes(orb.to_result(1))
+    nr = stroke_area(coef[:-1, 0], coef[:-1, 1]) if coef.shape[1] >= 2 else 0.0
+    x, y = centreline(np.zeros((orb.theta.shape[0], 2)), orb.theta)
+    crossing = any(polyline_self_intersects(xi, yi) for xi, yi in zip(x, y))
+    return replace(orb, nonreciprocity=float(nr), self_intersecting=bool(crossing))
+
+
+def _p2p(q: np.ndarray) -> float:
+    """Peak-to-peak of a periodic signal sampled uniformly over one period, from its
+    trigonometric interpolant on a grid 16 times finer (exact for band-limited signals)."""
+    m = q.size
+    c = np.fft.rfft(q)
+    fine = np.fft.irfft(c, 16 * m) * 16
+    return float(fine.max() - fine.min())
+
+
+def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = None, *,
+                   n_segments: int = DEFAULT_SEGMENTS, steps: int = DEFAULT_STEPS, tol: float = 1e-10,
+                   max_newton: int = 12, phi: float = 0.0) -> PeriodicOrbit:
+    """The stroke at ``params`` as a periodic orbit of the shape dynamics.
+
+    ``guess``: a neighbouring :class:`PeriodicOrbit` (same resolution), or None to seed from
+    a simulation of the onset from the straight state. Raises :class:`OrbitNotFound` if the
+    straight state is stable (no stroke to find) or Newton fails."""
+    _check_params(params)
+    n_segments = positive_int("n_segments", n_segments, minimum=4)
+    steps = positive_int("steps", steps, minimum=16)
+    tol = positive("tol", tol)
+    system = ShapeSystem.of(params, n_segments, phi)
+    if guess is None:
+        u0, T = seed_from_simulation(system)
+    else:
+        if not isinstance(guess, PeriodicOrbit):
+            raise ParameterError(f"guess={guess!r} must be a PeriodicOrbit or None")
+        if guess.n_segments != n_segments:
+            raise ParameterError(f"guess has n_segments={guess.n_segments}; this orbit needs {n_segments}")
+        u0, T = guess.u0, guess.period_dimensionless
+    u, T, fl, res, it = solve_orbit(system, u0, T, steps=steps, tol=tol, max_newton=max_newton)
+    return orbit_from_flow(params, system, fl, res, it, steps)
+
+
+def seed_from_simulation(system: ShapeSystem, *, t_max: float = 80.0) -> tuple[np.ndarray, float]:
+    """A point near the stroke and its period, from a simulation of the onset (tau units):
+    the last upward crossing of the trailing segment's angle through its mean."""
+    from ..integrators import integrate
+
+    fil = system.filament
+    n = fil.n
+    y0 = np.zeros(fil.size)
+    y0[2 : n + 2] = system.phi + math.radians(1.0)
+    t_eval = np.arange(0.0, t_max, 0.02)
+    sol = integrate(lambda t, y: system.rhs_full(y), lambda t, y: fil.jacobian(y, system.phi, 1.0),
+                    (0.0, t_max), y0, t_eval, rtol=1e-6, atol=1e-8,
+                    check=_settled_check(n, system.phi))
+    q = sol.y[:, 2] - system.phi
+    amp = np.abs(q)
+    if amp[-1] < 1e-6 or amp[-1] < 0.5 * amp[: max(2, amp.size // 10)].max():
+        raise OrbitNotFound("the straight state is stable here: the onset decays, no stroke to find")
+    mean = q[q.size // 2 :].mean()
+    up = np.nonzero((q[:-1] - mean < 0) & (q[1:] - mean >= 0))[0]
+    if up.size < 3:
+        raise OrbitNotFound(f"no periodic stroke within {t_max:g} tau of the onset")
+    i, j = up[-2], up[-1]
+    frac = lambda k: (mean - q[k]) / (q[k + 1] - q[k])  # noqa: E731
+    t_i, t_j = sol.t[i] + frac(i) * 0.02, sol.t[j] + frac(j) * 0.02
+    u = sol.y[j, 2:] + frac(j) * (sol.y[j + 1, 2:] - sol.y[j, 2:])
+    return u, float(t_j - t_i)
+
+
+def _settled_check(n: int, phi: float):
+    """Stop once ten consecutive oscillations of the end angle have equal amplitude to 1%."""
+    state = {"last": None, "peaks": [], "rising": False}
+
+    def check(t, y):
+        q = y[2] - phi
+        last = state["last"]
+        state["last"] = q
+        if last is None:
+            return None
+        rising = q > last
+        if state["rising"] and not rising:
+            state["peaks"].append(abs(last))
+        state["rising"] = rising
+        pk = state["peaks"]
+        if len(pk) >= 12 and max(pk[-10:]) < 1.01 * min(pk[-10:]) and pk[-1] > 1e-3:
+            return "settled"
+        return None
+
+    return check

@@ -1,0 +1,111 @@
+"""Fixed-step flow map of the shape dynamics and its exact derivative (the monodromy).
+
+With a fixed number of steps M per period, the discrete flow map Phi(u0, T) is a smooth
+function of (u0, T), so Newton's method on Phi(u0, T) = u0 converges quadratically to the
+fixed point of the discrete map. The steps are those of the 3-stage Radau IIA collocation
+method (order 5, L-stable and stiffly accurate, so the stiff bending modes are damped as
+in the ODE, not reflected as with Gauss collocation), with stage equations solved by full
+Newton with the exact Jacobian of the simulator's rhs.
+
+Stage equations, Z_i = Y_i - u_n:  Z_i = h sum_j A_ij f(u_n + Z_j).
+The derivative of the step follows from the implicit function theorem,
+  P dZ/du_n = h [sum_j A_ij J_j]_i,   P_ij = delta_ij I - h A_ij J_j,  J_j = f'(Y_j),
+and du_{n+1}/du_n = I + dZ_3/du_n (the last stage is the step's end). The product over the
+M steps is the exact derivative of the discrete map: its trivial Floquet multiplier equals
+1 up to the time-discretisation error O(h^5). The position r(0) follows by the same
+quadrature, r_{n+1} = r_n + h sum_j b_j U0(Y_j).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+
+from .system import ShapeSystem
+
+__all__ = ["Flow", "flow", "RADAU_A", "RADAU_C"]
+
+_S6 = math.sqrt(6.0)
+RADAU_C = np.array([(4.0 - _S6) / 10.0, (4.0 + _S6) / 10.0, 1.0])
+RADAU_A = np.array([
+    [(88.0 - 7.0 * _S6) / 360.0, (296.0 - 169.0 * _S6) / 1800.0, (-2.0 + 3.0 * _S6) / 225.0],
+    [(296.0 + 169.0 * _S6) / 1800.0, (88.0 + 7.0 * _S6) / 360.0, (-2.0 - 3.0 * _S6) / 225.0],
+    [(16.0 - _S6) / 36.0, (16.0 + _S6) / 36.0, 1.0 / 9.0],
+])
+RADAU_B = RADAU_A[2]
+ORDER = 5
+
+
+@dataclass(frozen=True)
+class Flow:
+    """States at the M+1 step times (M+1, 2N+3) (position and shape), the full rhs there,
+    the converged stage increments (M, 3, 2N+1) (a warm start for the next call), and the
+    monodromy of the shape part (2N+1, 2N+1) or None."""
+
+    t: np.ndarray
+    y: np.ndarray
+    f: np.ndarray
+    stages: np.ndarray
+    monodromy: np.ndarray | None
+
+
+class StepFailure(FloatingPointError):
+    """A Radau step's stage equations did not converge."""
+
+
+def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
+         variational: bool = False, warm: Flow | None = None, r0=(0.0, 0.0),
+         stage_tol: float = 1e-13, max_iter: int = 12) -> Flow:
+    """Integrate the shape from u0 over ``period`` in ``steps`` equal Radau IIA steps."""
+    a = RADAU_A
+    h = period / steps
+    u = np.array(u0, float)
+    m = u.size
+    r = np.array(r0, float)
+    ys = np.empty((steps + 1, m + 2))
+    fs = np.empty((steps + 1, m + 2))
+    zs = np.empty((steps, 3, m))
+    ys[0, :2], ys[0, 2:] = r, u
+    fs[0] = system.rhs_full(ys[0])
+    smat = np.eye(m) if variational else None
+    eye3 = np.eye(3 * m)
+    for step in range(steps):
+        if warm is not None and warm.stages.shape == zs.shape:
+            z = warm.stages[step].copy()
+        else:
+            z = np.outer(RADAU_C * h, fs[step, 2:])  # explicit predictor
+        scale = 1.0 + np.max(np.abs(u))
+        for _it in range(max_iter + 1):
+            full = [system.full(u + z[i]) for i in range(3)]
+            fz = np.array([system.rhs_full(y) for y in full])
+            jac = [system.jac_full(y)[2:, 2:] for y in full]
+            p = eye3.copy()
+            for i in range(3):
+                for j in range(3):
+                    p[i * m:(i + 1) * m, j * m:(j + 1) * m] -= (h * a[i, j]) * jac[j]
+            lu = sla.lu_factor(p, check_finite=False)
+            res = (z - h * (a @ fz[:, 2:])).ravel()
+            dz = sla.lu_solve(lu, -res, check_finite=False).reshape(3, m)
+            z += dz
+            if not np.all(np.isfinite(z)):
+                raise StepFailure(f"non-finite stage values at step {step} of {steps}")
+            if np.max(np.abs(dz)) < stage_tol * scale:
+                break
+        else:
+            raise StepFailure(f"stage equations did not converge at step {step} of {steps} (h={h:.3g})")
+        if variational:
+            # P dZ/du = h [sum_j A_ij J_j]_i; p and jac are at the last-but-one iterate,
+            # within stage_tol of the solution
+            rhs = np.concatenate([h * sum(a[i, j] * jac[j] for j in range(3)) for i in range(3)])
+            dzdu = sla.lu_solve(lu, rhs, check_finite=False)[2 * m:]
+            smat = smat + dzdu @ smat
+        fz = np.array([system.rhs_full(system.full(u + z[i])) for i in range(3)])
+        r = r + h * (RADAU_B @ fz[:, :2])
+        u = u + z[2]
+        zs[step] = z
+        ys[step + 1, :2], ys[step + 1, 2:] = r, u
+        fs[step + 1] = fz[2]
+    return Flow(np.linspace(0.0, period, steps + 1), ys, fs, zs, smat)
