@@ -6,8 +6,11 @@ returning an object with ``imap(fn, items)``: it calls ``fn(item)`` for every
 compute and return; the caller alone writes results.
 
 - ``"serial"``: in this process, in order.
-- ``"processes"`` (default): a local process pool, all cores unless ``workers``.
-- ``"dask"``: a running dask.distributed scheduler at ``scheduler`` (``tcp://host:port``).
+- ``"processes"`` (default): local worker programs, all cores unless ``workers`` (they never
+  re-import the caller's main module, die with the parent, and a dead worker costs only its
+  own item, yielded as :class:`WorkerLost`).
+- ``"dask"``: a running dask.distributed scheduler at ``scheduler`` (``tcp://host:port``); an
+  unreachable address raises :class:`SchedulerUnreachable` after ``defaults.SCHEDULER_TIMEOUT_S``.
 - ``"dask-local"``: a dask.distributed LocalCluster started on demand (``workers`` processes,
   one thread each), closed at the end.
 
@@ -23,9 +26,14 @@ from typing import Any, Callable, Iterable, Iterator
 
 from .._validate import ParameterError
 
-__all__ = ["BACKENDS", "register_backend", "get_backend", "available_backends", "default_workers", "blas_threads"]
+__all__ = ["BACKENDS", "register_backend", "get_backend", "available_backends", "default_workers", "blas_threads",
+           "WorkerLost", "SchedulerUnreachable"]
 
 BACKENDS: dict[str, Callable[..., Any]] = {}
+
+
+class SchedulerUnreachable(ParameterError):
+    """No Dask scheduler answered at the given address within the timeout."""
 
 
 def register_backend(name: str, factory: Callable[..., Any]) -> None:
@@ -145,48 +153,155 @@ def single_blas_thread():
                 st(n)
 
 
+class WorkerLost:
+    """Yielded by ``imap`` instead of a result when the worker computing the item died
+    (killed, crashed, out of memory): only that item is lost, the others go on."""
+
+    def __init__(self, message: str):
+        self.message = message
+
+    def __repr__(self) -> str:
+        return f"WorkerLost({self.message!r})"
+
+
+class _Worker:
+    """One worker program and its two pipes."""
+
+    def __init__(self, env: dict[str, str]):
+        import subprocess
+        from multiprocessing.connection import Connection
+
+        r_task, w_task = os.pipe()  # parent -> worker
+        r_res, w_res = os.pipe()  # worker -> parent
+        try:
+            self.proc = subprocess.Popen(
+                [sys.executable, "-m", "flutterswim.sweep._worker", str(os.getpid()), str(r_task), str(w_res)],
+                pass_fds=(r_task, w_res), stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL, env=env, close_fds=True)
+        finally:
+            os.close(r_task)
+            os.close(w_res)
+        self.send_conn = Connection(w_task, readable=False)
+        self.recv_conn = Connection(r_res, writable=False)
+        self.key: Any = None
+        self.send_conn.send(list(sys.path))
+
+    def submit(self, key, payload: bytes) -> None:
+        self.key = key
+        self.send_conn.send((key, payload))
+
+    def death(self) -> str:
+        try:
+            rc = self.proc.wait(timeout=5)
+        except Exception:  # noqa: BLE001
+            self.proc.kill()
+            rc = self.proc.wait()
+        if rc is not None and rc < 0:
+            import signal
+
+            try:
+                return f"killed by signal {signal.Signals(-rc).name}"
+            except ValueError:
+                return f"killed by signal {-rc}"
+        return f"exited with status {rc}"
+
+    def stop(self, kill: bool = False) -> None:
+        for c in (self.send_conn, self.recv_conn):
+            try:
+                if c is self.send_conn and not kill:
+                    c.send(None)
+            except OSError:
+                pass
+        for c in (self.send_conn, self.recv_conn):
+            try:
+                c.close()
+            except OSError:
+                pass
+        if kill and self.proc.poll() is None:
+            self.proc.kill()
+        try:
+            self.proc.wait(timeout=5)
+        except Exception:  # noqa: BLE001
+            self.proc.kill()
+            self.proc.wait()
+
+
 class PoolExecutor:
+    """Local worker programs (``python -m flutterswim.sweep._worker``), one task each at a time.
+
+    Unlike multiprocessing pools, the workers never re-import the caller's main module, hold
+    none of its open files, die with the parent (SIGKILL or SIGTERM included), and a worker
+    that dies costs only the item it was computing (:class:`WorkerLost`); a replacement is
+    started for the remaining items."""
+
     name = "processes"
 
-    def __init__(self, pool, workers: int):
-        self.pool, self.workers = pool, workers
+    def __init__(self, workers: int):
+        self.workers = workers
+        env = dict(os.environ)
+        for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
+            env[k] = "1"
+        self._env = env
+        self._pool: list[_Worker] = []
+
+    def close(self, kill: bool = False) -> None:
+        for w in self._pool:
+            w.stop(kill=kill)
+        self._pool = []
 
     def imap(self, fn, items):
-        from concurrent.futures import FIRST_COMPLETED, wait
+        import pickle
+        from multiprocessing.connection import wait
 
         it = iter(items)
-        pending: dict[Any, Any] = {}
-
-        def fill():
-            while len(pending) < 2 * self.workers:
+        idle: list[_Worker] = list(self._pool)
+        busy: dict[Any, _Worker] = {}  # recv_conn -> worker
+        exhausted = False
+        while True:
+            while not exhausted and (idle or len(self._pool) < self.workers):
                 try:
                     key, item = next(it)
                 except StopIteration:
-                    return
-                pending[self.pool.submit(fn, item)] = key
+                    exhausted = True
+                    break
+                w = idle.pop() if idle else self._spawn()
+                w.submit(key, pickle.dumps((fn, item)))
+                busy[w.recv_conn] = w
+            if not busy:
+                return
+            for conn in wait(list(busy)):
+                w = busy.pop(conn)
+                try:
+                    key, status, value = conn.recv()
+                except (EOFError, OSError):
+                    key = w.key
+                    why = w.death()
+                    w.stop(kill=True)
+                    self._pool.remove(w)
+                    yield key, WorkerLost(f"the worker process computing this point died ({why})")
+                    continue
+                idle.append(w)
+                if status == "error":
+                    raise RuntimeError(f"worker: {value}")
+                yield key, value
 
-        fill()
-        while pending:
-            done, _ = wait(list(pending), return_when=FIRST_COMPLETED)
-            for f in done:
-                key = pending.pop(f)
-                yield key, f.result()
-            fill()
+    def _spawn(self) -> _Worker:
+        w = _Worker(self._env)
+        self._pool.append(w)
+        return w
 
 
 @contextlib.contextmanager
 def _processes(workers=None, scheduler=None):
-    import multiprocessing as mp
-    from concurrent.futures import ProcessPoolExecutor
-
     n = workers or default_workers()
-    # fork is cheapest, but unsafe once numba's OpenMP threads have run in this process
-    # (the stability map's kernels): then a fresh forkserver process is forked instead
-    safe_fork = "fork" in mp.get_all_start_methods() and "numba" not in sys.modules
-    ctx = mp.get_context("fork" if safe_fork else "forkserver" if "forkserver" in
-                         mp.get_all_start_methods() else "spawn")
-    with ProcessPoolExecutor(max_workers=n, mp_context=ctx, initializer=_limit_threads) as pool:
-        yield PoolExecutor(pool, n)
+    ex = PoolExecutor(n)
+    try:
+        yield ex
+    except BaseException:
+        ex.close(kill=True)
+        raise
+    else:
+        ex.close()
 
 
 class DaskExecutor:
@@ -201,6 +316,7 @@ class DaskExecutor:
 
     def imap(self, fn, items):
         from distributed import as_completed
+        from distributed.scheduler import KilledWorker
 
         it = iter(items)
         futs: dict[Any, Any] = {}
@@ -225,7 +341,11 @@ class DaskExecutor:
         while futs:
             f = next(ac)
             key = futs.pop(f)
-            yield key, f.result()
+            try:
+                res = f.result()
+            except KilledWorker as exc:
+                res = WorkerLost(f"the Dask worker computing this point died ({exc})")
+            yield key, res
             f.release()
             fill()
 
@@ -236,7 +356,16 @@ def _dask(workers=None, scheduler=None):
         raise ParameterError("backend='dask' needs scheduler='tcp://host:port' (or use backend='dask-local')")
     from distributed import Client
 
-    with Client(scheduler, set_as_default=False) as client:
+    from ..defaults import SCHEDULER_TIMEOUT_S
+
+    try:
+        client = Client(scheduler, set_as_default=False, timeout=SCHEDULER_TIMEOUT_S)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise SchedulerUnreachable(
+            f"scheduler={scheduler!r}: no Dask scheduler answered within {SCHEDULER_TIMEOUT_S:g} s "
+            f"({type(exc).__name__}); check the address (tcp://host:port) and that the scheduler is running"
+        ) from None
+    with client:
         yield DaskExecutor(client)
 
 

@@ -7,6 +7,9 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..defaults import N_SEGMENTS, SWEEP_ADVANCE_ERROR, SWEEP_PERIOD_ERROR
+from .spec import PointSettings
+
 __all__ = ["register", "main"]
 
 
@@ -21,10 +24,16 @@ def register(subparsers) -> None:
     p.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
     p.add_argument("--mode", choices=("grid", "list"), default="grid")
     p.add_argument("--continuation", action="store_true", help="start each point from the previous one, up then down")
-    p.add_argument("--overwrite", action="store_true", help="discard a store with a different definition")
-    p.add_argument("--no-progress", action="store_true")
-    for name, typ, help_ in (("n-cycles", int, "cycles averaged (15)"), ("t-cap", float, "time cap [tau] (60)"),
-                             ("n-segments", int, "segments (24)"), ("rtol", float, "(1e-4)"), ("atol", float, "(1e-6)")):
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace an existing flutterswim store at --out (nothing else is ever replaced)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar (failures are still listed)")
+    st = PointSettings()
+    for name, typ, help_ in (
+            ("n-cycles", int, f"cycles averaged ({st.n_cycles})"), ("t-cap", float, f"time cap [tau] ({st.t_cap:g})"),
+            ("n-segments", int, f"segments ({st.n_segments}; period within {SWEEP_PERIOD_ERROR:g}, advancement "
+                                f"within {SWEEP_ADVANCE_ERROR:g} at the paper's point; {N_SEGMENTS} for the "
+                                "accuracy of simulate)"),
+            ("rtol", float, f"({st.rtol:g})"), ("atol", float, f"({st.atol:g})")):
         p.add_argument(f"--{name}", type=typ, default=None, help=help_)
     p.add_argument("--plot", default=None, help="also save the sweep figure here (1-d sweeps)")
     p.set_defaults(func=_cmd_sweep)
@@ -38,6 +47,11 @@ def register(subparsers) -> None:
 
 def _cmd_sweep(args) -> int:
     from .run import sweep
+
+    if args.plot:
+        from .._paths import check_output_file
+
+        check_output_file(args.plot, (".png", ".pdf", ".svg"), what="--plot")
 
     settings = {k: v for k, v in (("n_cycles", args.n_cycles), ("t_cap", args.t_cap), ("n_segments", args.n_segments),
                                   ("rtol", args.rtol), ("atol", args.atol)) if v is not None}
@@ -55,8 +69,11 @@ def _cmd_sweep(args) -> int:
 
 
 def _cmd_plot(args) -> int:
+    from .._paths import check_output_file
     from .plot import plot_sweep
     from .run import open_sweep
+
+    check_output_file(args.out, (".png", ".pdf", ".svg"), what="--out")
 
     plot_sweep(open_sweep(args.store), args.out, branch=args.branch)
     print(f"figure: {args.out}")
@@ -69,7 +86,7 @@ def main(argv=None) -> int:
     sub = ap.add_subparsers(dest="command", required=True)
     register(sub)
     args = ap.parse_args(argv)
-    return args.func(args)
+    return args.func(args)  # (flutterswim.cli.main adds one-line errors and exit codes)
 
 
 if __name__ == "__main__":

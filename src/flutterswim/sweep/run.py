@@ -6,17 +6,19 @@ import json
 import math
 import sys
 import tempfile
+from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
 from ..params import Groups, Parameters
-from .backends import get_backend
-from .point import CORE_VARIABLES, DESCRIPTOR_VARIABLES, FLAG_VARIABLES, VARIABLES, run_point, timed
+from .._validate import ParameterError
+from .backends import WorkerLost, get_backend
+from .point import CORE_VARIABLES, FLAG_VARIABLES, VARIABLES, run_point, timed
 from .spec import PointSettings, SweepSpec
 from .store import SweepStore
 
-__all__ = ["sweep", "open_sweep", "to_dataset", "BOOL_VARIABLES"]
+__all__ = ["sweep", "open_sweep", "to_dataset", "BOOL_VARIABLES", "SweepInterrupted"]
 
 BOOL_VARIABLES = FLAG_VARIABLES + ("limit_cycle", "self_intersecting", "towards_field", "reciprocal")
 
@@ -72,6 +74,10 @@ def _check(result: Any, variables: Sequence[str], required: Sequence[str] | None
     return values, state, ""
 
 
+class SweepInterrupted(KeyboardInterrupt):
+    """Ctrl-C during a sweep; the message says how many points are saved and how to resume."""
+
+
 def sweep(
     axes: Iterable[str] | Mapping[str, Iterable[float]] | SweepSpec,
     base: Parameters | Groups | str = "paper",
@@ -96,20 +102,35 @@ def sweep(
     runs to a converged limit cycle or ``settings.t_cap`` (:class:`PointSettings`) and is
     described over ``settings.n_cycles`` cycles. ``backend``: "processes" (default, all
     cores), "serial", "dask" (with ``scheduler``), "dask-local"; the result does not depend
-    on it. ``out``: Zarr store written point by point; rerunning the same call resumes
-    (finished points are not recomputed), a different definition is refused. ``continuation``:
-    each point starts from the previous one's final state, up the axis and back down (adds a
-    ``branch`` dimension). ``point_fn(task) -> dict`` replaces the simulation (tests, custom
-    measurements; it must be picklable for parallel backends; give its ``variables`` and
-    optionally ``required``, the variables that must be finite, as attributes).
-    ``max_points``: stop after computing that many points (the rest stay undone).
-    A failing point (exception, non-finite values) is recorded with its message and never
-    stops the sweep.
+    on it. ``out``: Zarr store written point by point (an ordinary xarray dataset, see
+    :mod:`.store`); rerunning the same call resumes (finished points are not recomputed), a
+    different definition is refused; ``overwrite=True`` replaces only a flutterswim store.
+    ``continuation``: each point starts from the previous one's final state, up the axis and
+    back down (adds a ``branch`` dimension). ``point_fn(task) -> dict`` replaces the
+    simulation (tests, custom measurements; for the "processes" backend it must live in an
+    importable module, not in the main script; give its ``variables`` and optionally
+    ``required``, the variables that must be finite, as attributes). ``max_points``: stop
+    after computing that many points (the rest stay undone).
+
+    Everything is checked before any point runs (definition, settings, grid size, output
+    path). A failing point (exception, non-finite values) is recorded with its message and
+    never stops the sweep; a point whose worker process died is left undone (the next run
+    recomputes it). Failures are summarised on stderr. Ctrl-C raises
+    :class:`SweepInterrupted` saying how many points are saved.
     """
     spec = axes if isinstance(axes, SweepSpec) else SweepSpec.build(
         axes, base, mode=mode, continuation=continuation, settings=settings)
     fn = point_fn or run_point
     variables = list(variables or getattr(fn, "variables", None) or VARIABLES)
+    if backend not in ("serial",) and getattr(fn, "__module__", None) == "__main__" and backend == "processes":
+        raise ParameterError(
+            f"point_fn={getattr(fn, '__name__', fn)!r} is defined in the main script; the worker processes "
+            "never run your script (so that scripts without an if __name__ == '__main__' guard work), so "
+            "they cannot import it. Move it into a module, or use backend='serial' or 'dask-local'")
+    if max_points is not None:
+        from .._validate import positive_int
+
+        max_points = positive_int("max_points", max_points)
     n_state = 2 * spec.settings.n_segments + 3
     tmp = None
     if out is None:
@@ -119,7 +140,7 @@ def sweep(
         store = SweepStore.open(out, spec, variables, n_state, overwrite=overwrite)
         try:
             _run(store, spec, fn, variables, backend=backend, workers=workers, scheduler=scheduler,
-                 progress=progress, max_points=max_points)
+                 progress=progress, max_points=max_points, temporary=tmp is not None)
             ds = to_dataset(store)
         finally:
             store.close()
@@ -132,37 +153,42 @@ def sweep(
 
 
 def _run(store: SweepStore, spec: SweepSpec, fn, variables, *, backend, workers, scheduler, progress,
-         max_points) -> None:
+         max_points, temporary=False) -> None:
     done = store.done_mask()
     todo = [k for k in range(spec.n_points) if not done[k]]
     if max_points is not None:
         todo = todo[: int(max_points)]
     bar = None
-    if progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=spec.n_points, initial=int(done.sum()), desc="sweep", unit="pt", smoothing=0.1)
     call = _Call(fn)
-    n_failed = 0
+    counts = {"failed": 0, "lost": 0, "saved": int(done.sum())}
 
     def record(k, out):
-        nonlocal n_failed
-        result, err, wall = out
-        values = state = None
-        if not err:
-            values, state, err = _check(result, variables, getattr(fn, "required", None))
-        store.write_point(k, None if err else values, failed=bool(err), message=err, wall_time=wall,
-                          state=None if err else state)
-        n_failed += bool(err)
+        if isinstance(out, WorkerLost):
+            # not done: the next run recomputes it
+            store.write_point(k, None, failed=True, message=out.message, wall_time=math.nan, done=False)
+            counts["lost"] += 1
+        else:
+            result, err, wall = out
+            values = state = None
+            if not err:
+                values, state, err = _check(result, variables, getattr(fn, "required", None))
+            store.write_point(k, None if err else values, failed=bool(err), message=err, wall_time=wall,
+                              state=None if err else state)
+            counts["failed"] += bool(err)
+            counts["saved"] += 1
         if bar is not None:
             bar.update(1)
-            if n_failed:
-                bar.set_postfix(failed=n_failed)
+            if counts["failed"] or counts["lost"]:
+                bar.set_postfix(failed=counts["failed"] + counts["lost"])
 
     try:
         if not todo:
             return
         with get_backend(backend, workers=workers, scheduler=scheduler) as ex:
+            if progress:
+                from tqdm.auto import tqdm
+
+                bar = tqdm(total=spec.n_points, initial=int(done.sum()), desc="sweep", unit="pt", smoothing=0.1)
             if not spec.continuation:
                 items = ((k, _task(spec, k, None)) for k in todo)
                 for k, out in ex.imap(call, items):
@@ -173,11 +199,18 @@ def _run(store: SweepStore, spec: SweepSpec, fn, variables, *, backend, workers,
                     init = _continue_from(store, k)
                     for kk, out in ex.imap(call, [(k, _task(spec, k, init))]):
                         record(kk, out)
+    except KeyboardInterrupt:
+        if bar is not None:
+            bar.close()
+            bar = None
+        where = "in a temporary store (discarded)" if temporary else f"in {str(store.path)!r}"
+        resume = "" if temporary else "; rerun the same command to resume"
+        raise SweepInterrupted(f"interrupted: {counts['saved']} of {spec.n_points} points are saved "
+                               f"{where}{resume}") from None
     finally:
         if bar is not None:
             bar.close()
-    if progress:
-        _summary(store, file=sys.stderr)
+    _summary(store, file=sys.stderr, lost=counts["lost"])
 
 
 def _continue_from(store: SweepStore, k: int) -> np.ndarray | None:
@@ -192,79 +225,73 @@ def _continue_from(store: SweepStore, k: int) -> np.ndarray | None:
     return store.state(k - 1)
 
 
-def _summary(store: SweepStore, file=None) -> None:
+def _summary(store: SweepStore, file=None, lost: int = 0) -> None:
+    """Failure reasons on ``file`` (always, progress bar or not)."""
     data = store.read()
-    bad = np.nonzero(data["failed"] & data["done"])[0]
+    bad = np.nonzero(data["failed"])[0]
     if bad.size:
         print(f"sweep: {bad.size} of {store.spec.n_points} points failed:", file=file)
         for k in bad[:20]:
-            print(f"  point {k} {store.spec.point(int(k))[2]}: {data['message'][k]}", file=file)
+            tag = "" if data["done"][k] else " (not saved; rerun to recompute)"
+            print(f"  point {k} {store.spec.point(int(k))[2]}: {data['message'][k]}{tag}", file=file)
         if bad.size > 20:
             print(f"  ... and {bad.size - 20} more (see the 'reason' variable)", file=file)
 
 
 def open_sweep(path: str):
-    """The Dataset of a sweep store (finished or not) without running anything."""
+    """The Dataset of a sweep store (finished or not) without running anything (the store is
+    also readable with plain ``xarray.open_zarr(path)``)."""
     import zarr
 
-    g = zarr.open_group(str(path), mode="r")
-    spec = SweepSpec.from_dict(g.attrs["spec"])
-    store = SweepStore(path, g, spec, list(g.attrs["variables"]))
+    from .._paths import has_marker
+    from .store import FORMAT, SweepStoreError
+
+    p = Path(path)
+    if not p.exists():
+        raise ParameterError(f"store={str(path)!r} does not exist")
+    if not (p.is_dir() and has_marker(p)):
+        raise ParameterError(f"store={str(path)!r} is not a flutterswim sweep store")
+    try:
+        g = zarr.open_group(str(p), mode="r")
+        attrs = dict(g.attrs)
+        if attrs.get("format") != FORMAT:
+            raise SweepStoreError(f"store={str(path)!r} has the format {attrs.get('format')!r}; this version "
+                                  f"reads {FORMAT!r}")
+        spec = SweepSpec.from_dict(json.loads(attrs["sweep_spec"]))
+        store = SweepStore(p, g, spec, json.loads(attrs["variables"]))
+    except ParameterError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - damaged store
+        raise ParameterError(f"store={str(path)!r} cannot be read ({type(exc).__name__}: {exc})") from None
     return to_dataset(store)
 
 
 def to_dataset(store: SweepStore):
     """xarray Dataset of the store: dims = swept axes (grid) or ``point`` (list), plus
-    ``branch`` ("up", "down") with continuation."""
+    ``branch`` ("up", "down") with continuation; flags as booleans, undone points NaN."""
     import xarray as xr
 
     spec = store.spec
-    data = store.read()
-    n = spec.n_values
-    nb = len(spec.branches)
-    # point order -> (branch, value index)
-    order = np.empty((nb, n), dtype=int)
-    for k in range(spec.n_points):
-        b, i, _ = spec.point(k)
-        order[spec.branches.index(b), i] = k
-
-    if spec.mode == "grid":
-        dims = list(spec.names)
-        coords: dict[str, Any] = {a.name: np.array(a.values) for a in spec.axes}
-        shape = spec.shape
-    else:
-        dims = ["point"]
-        coords = {a.name: ("point", np.array(a.values)) for a in spec.axes}
-        coords["point"] = np.arange(n)
-        shape = (n,)
-    if spec.continuation:
-        dims = ["branch"] + dims
-        coords["branch"] = list(spec.branches)
-        full = (nb,) + shape
-        take = order.reshape(full)
-    else:
-        full = shape
-        take = order[0].reshape(shape)
-
-    variables = store.variables
-    ds_vars: dict[str, Any] = {}
-    done = data["done"][take]
-    failed = data["failed"][take] & done
-    for j, name in enumerate(variables):
-        v = data["values"][:, j][take]
+    with xr.open_zarr(str(store.path), consolidated=True, chunks=None) as raw:
+        ds = raw.drop_vars("state").load()
+    done = ds["done"].values == 1
+    for name in store.variables:
+        v = np.where(done, ds[name].values, np.nan)
+        attrs = ds[name].attrs
         if name in BOOL_VARIABLES:
             v = np.where(np.isfinite(v), v, 0.0) > 0.5
-        ds_vars[name] = (dims, v)
-    ds_vars["done"] = (dims, done)
-    ds_vars["failed"] = (dims, failed)
-    msgs = np.array(data["message"], dtype=object)[take]
-    ds_vars["reason"] = (dims, msgs.astype(str))
-    ds_vars["wall_time_s"] = (dims, data["wall_time"][take])
-    ds = xr.Dataset(ds_vars, coords=coords)
+        ds[name] = (ds[name].dims, v, attrs)
+    failed = (ds["failed"].values == 1) & done
+    ds["done"] = (ds["done"].dims, done, ds["done"].attrs)
+    ds["failed"] = (ds["failed"].dims, failed, ds["failed"].attrs)
+    reasons = np.array([str(r) for r in ds["reason"].values.ravel()], dtype=object).reshape(done.shape)
+    ds["reason"] = (ds["reason"].dims, np.where(done, reasons, "").astype(str), ds["reason"].attrs)
     b = spec.base
-    units_t = "s" if isinstance(b, Parameters) else "tau"
+    data = store.read()
+    for k in ("spec", "n_state", "variables", "swept"):
+        ds.attrs.pop(k, None)
     ds.attrs.update({
-        "sweep_spec": spec.to_json(), "fingerprint": spec.fingerprint, "time_unit": units_t,
+        "sweep_spec": spec.to_json(), "fingerprint": spec.fingerprint,
         "base_kappa_E": float(b.kappa_E) if isinstance(b, Parameters) else float("nan"),
         "base_chi": float(b.chi),
         "n_failed": int(failed.sum()), "n_done": int(done.sum()), "n_points": int(spec.n_points),
@@ -273,7 +300,4 @@ def to_dataset(store: SweepStore):
             for k in np.nonzero(data["failed"] & data["done"])[0]
         ]),
     })
-    for name in DESCRIPTOR_VARIABLES:
-        if name.endswith("_s") and name in ds and units_t == "tau":
-            ds[name].attrs["note"] = "time in tau (dimensionless sweep)"
     return ds

@@ -18,7 +18,8 @@ from typing import Any, Iterable, Mapping
 
 import numpy as np
 
-from .._validate import ParameterError
+from .._validate import ParameterError, finite, positive, positive_int
+from ..defaults import ATOL, MAX_SWEEP_POINTS, N_CYCLES, RTOL, SWEEP_FRAMES_PER_TAU, SWEEP_N_SEGMENTS
 from ..params import Groups, Parameters, preset
 
 __all__ = ["Axis", "PointSettings", "SweepSpec", "parse_axis", "PHYSICAL", "GROUPS", "AXIS_NAMES"]
@@ -53,6 +54,7 @@ def parse_axis(text: str) -> Axis:
         )
     name, _, rhs = text.partition("=")
     name, rhs = name.strip(), rhs.strip()
+    too_many = 0
     try:
         if ":" in rhs:
             parts = rhs.split(":")
@@ -61,12 +63,18 @@ def parse_axis(text: str) -> Axis:
             lo, hi, n = float(parts[0]), float(parts[1]), int(parts[2])
             if n < 1:
                 raise ValueError
+            if n > MAX_SWEEP_POINTS:  # before anything is allocated
+                too_many = n
+                raise ValueError
             vals = np.linspace(lo, hi, n) if n > 1 else np.array([lo])
             # round to suppress linspace noise so the definition is reproducible as text
             vals = [float(f"{v:.12g}") for v in vals]
         else:
             vals = [float(v) for v in rhs.split(",") if v.strip()]
     except ValueError:
+        if too_many:
+            raise ParameterError(f"sweep axis {text!r} has {too_many} values; at most {MAX_SWEEP_POINTS} points "
+                                 "are allowed in a sweep (flutterswim.defaults.MAX_SWEEP_POINTS)") from None
         raise ParameterError(
             f"sweep axis {text!r} is not understood; write name=lo:hi:n (n >= 1 integer), "
             "name=v1,v2,... or name=v"
@@ -86,13 +94,13 @@ class PointSettings:
     over ``saturated_chunks`` chunks (at least ``n_cycles`` cycles) but never meets the
     limit-cycle test stops early and is flagged ``saturated`` (stationary, not periodic)."""
 
-    n_cycles: int = 15
+    n_cycles: int = N_CYCLES
     t_cap: float = 60.0
     chunk: float = 5.0
-    n_segments: int = 24
-    rtol: float = 1e-4
-    atol: float = 1e-6
-    frames_per_tau: int = 25
+    n_segments: int = SWEEP_N_SEGMENTS
+    rtol: float = RTOL
+    atol: float = ATOL
+    frames_per_tau: int = SWEEP_FRAMES_PER_TAU
     straight_tol: float = 1e-2
     swim_tol: float = 0.05
     damped_tol: float = 1e-6
@@ -101,14 +109,17 @@ class PointSettings:
     initial_angle_deg: float = 0.01
 
     def __post_init__(self) -> None:
+        # the checks of flutterswim.simulate, up front (not at every point)
         for k in ("t_cap", "chunk", "rtol", "atol", "straight_tol", "swim_tol", "damped_tol", "rate_tol"):
-            v = float(getattr(self, k))
-            if not (math.isfinite(v) and v > 0):
-                raise ParameterError(f"{k}={getattr(self, k)!r} must be a finite number > 0")
+            object.__setattr__(self, k, positive(k, getattr(self, k)))
         for k in ("n_cycles", "n_segments", "frames_per_tau", "saturated_chunks"):
             v = getattr(self, k)
-            if isinstance(v, bool) or int(v) != v or v < 1:
-                raise ParameterError(f"{k}={v!r} must be an integer >= 1")
+            if isinstance(v, float) and v.is_integer():
+                v = int(v)
+            object.__setattr__(self, k, positive_int(k, v, minimum=4 if k == "n_segments" else 1))
+        object.__setattr__(self, "initial_angle_deg", finite("initial_angle_deg", self.initial_angle_deg))
+        if not -90.0 <= self.initial_angle_deg <= 90.0:
+            raise ParameterError(f"initial_angle_deg={self.initial_angle_deg!r} must be in [-90, 90]")
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -187,6 +198,11 @@ class SweepSpec:
             )
         if self.continuation and len(axes) != 1:
             raise ParameterError("continuation needs exactly one swept axis")
+        n = math.prod(len(a.values) for a in axes) if self.mode == "grid" else len(axes[0].values)
+        n *= 2 if self.continuation else 1
+        if n > MAX_SWEEP_POINTS:
+            raise ParameterError(f"the sweep has {n} points; at most {MAX_SWEEP_POINTS} are allowed "
+                                 "(flutterswim.defaults.MAX_SWEEP_POINTS); split it into several sweeps")
         object.__setattr__(self, "axes", axes)
 
     @classmethod
@@ -205,6 +221,10 @@ class SweepSpec:
         if settings is None:
             settings = PointSettings()
         elif isinstance(settings, Mapping):
+            known = set(PointSettings.__dataclass_fields__)
+            unknown = sorted(set(settings) - known)
+            if unknown:
+                raise ParameterError(f"sweep settings {unknown} are unknown; choose from {sorted(known)}")
             settings = PointSettings(**settings)
         return cls(base=base, axes=ax, settings=settings, preset_name=preset_name, **kw)
 

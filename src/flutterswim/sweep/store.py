@@ -1,64 +1,169 @@
-"""Durable point-by-point sweep store (Zarr v3 directory, no pickle, JSON metadata).
+"""Durable point-by-point sweep store: an ordinary xarray Zarr dataset.
 
-Layout (k = point index, one chunk per point so every point is its own files):
+``xarray.open_zarr(path)`` reads it without flutterswim: dimensions are the swept
+parameters (grid), or ``point`` (list mode), plus ``branch`` ("up", "down") for
+continuation sweeps; every variable and coordinate has ``units`` and ``long_name``; failure
+reasons are strings (``reason``); the definition is in the attributes (``sweep_spec`` JSON,
+``fingerprint``, ``variables``). Per point: the point function's variables, ``failed``,
+``reason``, ``wall_time_s``, ``state`` (final state, for continuation) and ``done``.
 
-- ``values`` (n_points, n_vars) float64: the point's variables (names in attrs ``variables``)
-- ``message`` (n_points, 1024) uint8: UTF-8 failure reason, zero padded ("" if ok)
-- ``failed`` (n_points,) int8, ``wall_time`` (n_points,) float64 [s]
-- ``state`` (n_points, n_state) float64: final state (for continuation)
-- ``done`` (n_points,) int8: written last; a point counts only once ``done == 1``
+Durability:
 
-Only the parent process writes. A SIGKILL between the value writes and the ``done`` write
-leaves the point undone: it is recomputed and overwritten on resume. The definition
-(:class:`~flutterswim.sweep.spec.SweepSpec` as JSON) is in the group attributes; opening
-a store with a different definition raises :class:`SweepDefinitionError`.
+- the store is built under a temporary name next to ``path`` and renamed into place, so a
+  store at ``path`` always holds its definition; it carries the marker file
+  :data:`flutterswim._paths.MARKER`, and nothing without that marker is ever replaced;
+- only the parent process writes, under an exclusive lock (``.<name>.lock`` next to the
+  store; the file is opened close-on-exec and workers are separate programs, so only the
+  parent holds it);
+- each point is written as its own region, ``done`` last (Zarr writes each chunk file
+  atomically): a kill between the value writes and ``done`` leaves the point undone, and
+  it is recomputed on resume;
+- an own store that is incomplete or holds another definition is never recomputed
+  silently: :class:`SweepStoreError` / :class:`SweepDefinitionError` say what is wrong.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import os
+import warnings
 from pathlib import Path
 from typing import Any, Sequence
 
 import numpy as np
 
+from .._paths import MARKER, check_store_path, has_marker, remove_own_store, write_marker
 from .._validate import ParameterError
 from .spec import SweepSpec
 
-__all__ = ["SweepStore", "SweepDefinitionError", "MESSAGE_BYTES"]
+__all__ = ["SweepStore", "SweepDefinitionError", "SweepStoreError", "SweepLockedError", "FORMAT", "variable_attrs",
+           "store_dims"]
 
-MESSAGE_BYTES = 1024
-FORMAT = "flutterswim-sweep/1"
+FORMAT = "flutterswim-sweep/2"
+#: Per-point bookkeeping variables (besides the point function's own).
+BOOKKEEPING = ("done", "failed", "reason", "wall_time_s", "state")
+FLAGS = ("straight", "unstable", "swimming", "limit_cycle_reached", "saturated", "capped", "limit_cycle",
+         "self_intersecting", "towards_field", "reciprocal")
+AXIS_UNITS = {"l": "m", "a": "m", "b": "m", "B": "N m2", "tau": "s", "kappa_E": "1/m", "mu": "Pa s",
+              "eta_par": "1", "eta_perp": "1", "chi": "1", "kappa_E_ratio": "1"}
+AXIS_NAMES = {"l": "filament length", "a": "ribbon half thickness", "b": "ribbon half width",
+              "B": "bending stiffness", "tau": "activity relaxation time", "kappa_E": "target curvature",
+              "mu": "fluid viscosity", "eta_par": "tangential drag group eta_par",
+              "eta_perp": "normal drag group eta_perp", "chi": "activity group chi = kappa_E l",
+              "kappa_E_ratio": "kappa_E over the base kappa_E"}
 
 
 class SweepDefinitionError(ParameterError):
     """The store holds a different sweep than the one requested."""
 
 
+class SweepStoreError(ParameterError):
+    """The path holds an own store that is incomplete or inconsistent."""
+
+
+class SweepLockedError(SweepDefinitionError):
+    """Another live sweep process holds the store's lock."""
+
+
+def variable_attrs(name: str, time_unit: str) -> dict[str, str]:
+    """CF-style ``units`` and ``long_name`` of a sweep variable (by name convention)."""
+    tu = time_unit
+    phys = tu == "s"
+    words = name.replace("_", " ")
+    if name in FLAGS:
+        return {"units": "1", "long_name": f"{words} (1 yes, 0 no)"}
+    table = {
+        "t_simulated": ("tau", "simulated time"),
+        "oscillation_amplitude": ("rad", "half-range of the body-frame tangent angle over the last chunk"),
+        "amplitude_growth_rate": ("1/tau", "growth rate of the oscillation amplitude over the last chunk"),
+        "n_chunks": ("1", "number of simulated chunks"),
+        "cycle_amplitude": ("1", "section amplitude of the stroke in body lengths"),
+        "cycle_amplitude_std": ("1", "cycle-to-cycle std of the section amplitude in body lengths"),
+        "n_cycles_used": ("1", "cycles averaged"), "n_cycles_detected": ("1", "cycles detected"),
+        "nonreciprocity": ("1", "signed stroke area in the plane of the first two shape modes"),
+        "nonreciprocity_std": ("1", "cycle-to-cycle std of the nonreciprocity"),
+        "self_intersection_fraction": ("1", "fraction of frames in which the filament crosses itself"),
+        "done": ("1", "point computed and stored (1 yes, 0 no)"),
+        "failed": ("1", "point failed (1 yes, 0 no)"),
+        "reason": ("1", "failure reason (empty if the point succeeded)"),
+        "wall_time_s": ("s", "wall-clock time of the point"),
+        "state": ("1", "final integrator state, dimensionless (r0/l, theta, kappa l), for continuation"),
+    }
+    if name in table:
+        u, ln = table[name]
+        return {"units": u, "long_name": ln}
+    if name.endswith("_mm"):
+        return {"units": "mm" if phys else "1e-3 l", "long_name": words[:-3]}
+    if name.endswith("_bl"):
+        return {"units": "1", "long_name": f"{words[:-3]} in body lengths"}
+    if name.endswith("_per_s"):
+        return {"units": "1/s" if phys else "1/tau", "long_name": words[:-6]}
+    if name.endswith("_hz"):
+        return {"units": "Hz" if phys else "1/tau", "long_name": words[:-3]}
+    if name.endswith("_deg"):
+        return {"units": "degree", "long_name": words[:-4]}
+    if name.endswith("_s"):
+        return {"units": tu, "long_name": words[:-2]}
+    return {"units": "1", "long_name": words}
+
+
+def store_dims(spec: SweepSpec) -> tuple[list[str], tuple[int, ...], dict[str, Any]]:
+    """(dims, shape, coords) of the dataset of ``spec``."""
+    if spec.mode == "grid":
+        dims = list(spec.names)
+        shape = spec.shape
+        coords: dict[str, Any] = {a.name: (a.name, np.array(a.values, float),
+                                           {"units": AXIS_UNITS[a.name], "long_name": AXIS_NAMES[a.name]})
+                                  for a in spec.axes}
+    else:
+        dims, shape = ["point"], (spec.n_values,)
+        coords = {a.name: ("point", np.array(a.values, float),
+                           {"units": AXIS_UNITS[a.name], "long_name": AXIS_NAMES[a.name]}) for a in spec.axes}
+        coords["point"] = ("point", np.arange(spec.n_values), {"units": "1", "long_name": "point number"})
+    if spec.continuation:
+        dims = ["branch"] + dims
+        shape = (2,) + tuple(shape)
+        coords["branch"] = ("branch", np.array(["up", "down"]),
+                            {"units": "1", "long_name": "continuation branch (up: increasing, down: decreasing)"})
+    return dims, tuple(shape), coords
+
+
+def _time_unit(spec: SweepSpec) -> str:
+    from ..params import Parameters
+
+    return "s" if isinstance(spec.base, Parameters) else "tau"
+
+
 def _acquire(path: Path):
-    """Exclusive advisory lock next to the store: one writer at a time."""
+    """Exclusive advisory lock next to the store: one writer at a time (close-on-exec)."""
     import fcntl
 
     lock_path = path.parent / f".{path.name}.lock"
     path.parent.mkdir(parents=True, exist_ok=True)
-    f = open(lock_path, "a+")
+    f = open(lock_path, "a+")  # Python opens files non-inheritable (O_CLOEXEC)
     try:
         fcntl.flock(f.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
     except OSError:
         f.close()
-        raise SweepDefinitionError(
-            f"the store {str(path)!r} is being written by another sweep process (lock {str(lock_path)!r}); "
-            "wait for it to finish or stop it, then rerun to resume"
+        raise SweepLockedError(
+            f"the store {str(path)!r} is being written by another sweep process (lock {str(lock_path)!r} "
+            "is held); wait for it to finish or stop it, then rerun the same command to resume"
         ) from None
     return f
 
 
 class SweepStore:
     def __init__(self, path: str | Path, group, spec: SweepSpec, variables: list[str]):
-        self.path, self.group, self.spec, self.variables = Path(path), group, spec, variables
+        self.path, self.group, self.spec, self.variables = Path(path), group, spec, list(variables)
         self._lock = None
-        self._arr = {k: group[k] for k in ("values", "message", "failed", "wall_time", "state", "done")}
+        self._dims, self._shape, _ = store_dims(spec)
+        # flat position of point k in the row-major dataset (continuation: the down branch
+        # runs back along the axis)
+        n = spec.n_values
+        k = np.arange(spec.n_points)
+        self._pos = np.where(k < n, k, n + (2 * n - 1 - k)) if spec.continuation else k
+        self._arr = {k: group[k] for k in (*self.variables, *BOOKKEEPING)}
 
     # ------------------------------------------------------------------ open/create
     @classmethod
@@ -66,9 +171,10 @@ class SweepStore:
              *, overwrite: bool = False) -> "SweepStore":
         """Open (resume) or create the store and take its writer lock (released by
         :meth:`close` or when the process ends, SIGKILL included)."""
-        lock = _acquire(Path(path))
+        path = check_store_path(path, overwrite=overwrite)
+        lock = _acquire(path)
         try:
-            store = cls._open(path, spec, variables, n_state, overwrite=overwrite)
+            store = cls._open(path, spec, list(variables), n_state, overwrite=overwrite)
         except BaseException:
             lock.close()
             raise
@@ -81,99 +187,172 @@ class SweepStore:
             self._lock = None
 
     @classmethod
-    def _open(cls, path, spec, variables, n_state, *, overwrite):
-        import zarr
-
-        path = Path(path)
-        variables = list(variables)
-        if path.exists() and not overwrite:
-            g = zarr.open_group(str(path), mode="r+")
-            attrs = dict(g.attrs)
-            if attrs.get("format") == FORMAT and "spec" in attrs:
-                stored = attrs["spec"]
-                if stored != json.loads(spec.to_json()) or attrs.get("variables") != variables:
-                    diffs = spec.diff(stored)
-                    if attrs.get("variables") != variables:
-                        diffs.append("variables: the point function returns a different set of variables")
-                    raise SweepDefinitionError(
-                        f"the store {str(path)!r} holds a different sweep (definition "
-                        f"{attrs.get('fingerprint')}, requested {spec.fingerprint}); differences: "
-                        + "; ".join(diffs[:8]) + ". Use another --out path, or overwrite=True "
-                        "(--overwrite) to discard the stored points."
-                    )
-                return cls(path, g, spec, variables)
-            if any(True for _ in g.array_keys()) and attrs.get("format") not in (None, FORMAT):
-                raise SweepDefinitionError(f"{str(path)!r} is a Zarr group but not a flutterswim sweep store")
-            # an incomplete creation (killed before the definition was written): start again
+    def _open(cls, path: Path, spec, variables, n_state, *, overwrite):
+        if path.exists() and has_marker(path):
+            if overwrite:
+                remove_own_store(path)
+            else:
+                return cls._resume(path, spec, variables)
+        elif path.is_dir():  # empty directory (checked): replaced by the new store
+            path.rmdir()
         return cls._create(path, spec, variables, n_state)
 
     @classmethod
-    def _create(cls, path: Path, spec: SweepSpec, variables: list[str], n_state: int) -> "SweepStore":
+    def _resume(cls, path: Path, spec: SweepSpec, variables: list[str]) -> "SweepStore":
         import zarr
 
-        g = zarr.open_group(str(path), mode="w")
-        n, nv = spec.n_points, len(variables)
-        kw = {"compressors": None}
-        g.create_array("values", shape=(n, nv), chunks=(1, max(nv, 1)), dtype="f8", fill_value=np.nan, **kw)
-        g.create_array("message", shape=(n, MESSAGE_BYTES), chunks=(1, MESSAGE_BYTES), dtype="u1", fill_value=0, **kw)
-        g.create_array("failed", shape=(n,), chunks=(1,), dtype="i1", fill_value=0, **kw)
-        g.create_array("wall_time", shape=(n,), chunks=(1,), dtype="f8", fill_value=np.nan, **kw)
-        g.create_array("state", shape=(n, max(n_state, 1)), chunks=(1, max(n_state, 1)), dtype="f8",
-                       fill_value=np.nan, **kw)
-        g.create_array("done", shape=(n,), chunks=(1,), dtype="i1", fill_value=0, **kw)
-        # the definition last: a store without it is an unfinished creation
-        g.attrs.update({"variables": variables, "n_state": int(n_state), "fingerprint": spec.fingerprint,
-                        "spec": json.loads(spec.to_json()), "format": FORMAT})
+        hint = (" Nothing was recomputed. Rerun with --overwrite (overwrite=True) to discard it and start "
+                "again, or give another --out path.")
+        try:
+            g = zarr.open_group(str(path), mode="r+")
+            attrs = dict(g.attrs)
+        except Exception as exc:  # noqa: BLE001 - unreadable metadata
+            raise SweepStoreError(f"the store {str(path)!r} is a flutterswim store but its metadata cannot be "
+                                  f"read ({type(exc).__name__}: {exc})." + hint) from None
+        missing = [k for k in ("format", "sweep_spec", "fingerprint", "variables") if k not in attrs]
+        if missing:
+            raise SweepStoreError(f"the store {str(path)!r} is a flutterswim store but incomplete: the "
+                                  f"attribute(s) {', '.join(missing)} are missing." + hint)
+        if attrs["format"] != FORMAT:
+            raise SweepStoreError(f"the store {str(path)!r} has the format {attrs['format']!r}; this version "
+                                  f"reads {FORMAT!r}." + hint)
+        stored_vars = json.loads(attrs["variables"])
+        stored_spec = json.loads(attrs["sweep_spec"])
+        if stored_spec != json.loads(spec.to_json()) or stored_vars != variables:
+            diffs = spec.diff(stored_spec)
+            if stored_vars != variables:
+                diffs.append("variables: the point function returns a different set of variables")
+            raise SweepDefinitionError(
+                f"the store {str(path)!r} holds a different sweep (definition {attrs.get('fingerprint')}, "
+                f"requested {spec.fingerprint}); differences: " + "; ".join(diffs[:8]) + ". Use another "
+                "--out path, or overwrite=True (--overwrite) to discard the stored points."
+            )
+        if attrs["fingerprint"] != spec.fingerprint:
+            raise SweepStoreError(f"the store {str(path)!r} is inconsistent: its fingerprint "
+                                  f"{attrs['fingerprint']} does not match its definition." + hint)
+        names = set(g.array_keys())
+        need = [*variables, *BOOKKEEPING]
+        # the files themselves, not only the consolidated listing
+        absent = [k for k in need if k not in names or not (path / k / "zarr.json").is_file()]
+        if absent:
+            raise SweepStoreError(f"the store {str(path)!r} is a flutterswim store but incomplete: the "
+                                  f"variable(s) {', '.join(absent[:6])} are missing." + hint)
+        dims, shape, _ = store_dims(spec)
+        bad = [k for k in need if tuple(g[k].shape[: len(shape)]) != shape]
+        if bad:
+            raise SweepStoreError(f"the store {str(path)!r} is inconsistent: variable(s) {', '.join(bad[:6])} "
+                                  f"do not have the grid shape {shape}." + hint)
         return cls(path, g, spec, variables)
 
+    @classmethod
+    def _create(cls, path: Path, spec: SweepSpec, variables: list[str], n_state: int) -> "SweepStore":
+        """Build the store under a temporary name next to ``path``, then rename it into place."""
+        import shutil
+
+        import xarray as xr
+        import zarr
+
+        dims, shape, coords = store_dims(spec)
+        tu = _time_unit(spec)
+        chunk = tuple([1] * (len(shape) - 1) + [min(shape[-1], 64)])
+        data: dict[str, Any] = {}
+        enc: dict[str, Any] = {}
+        for name in variables:
+            data[name] = (dims, np.full(shape, np.nan), variable_attrs(name, tu))
+        data["done"] = (dims, np.zeros(shape, np.int8), variable_attrs("done", tu))
+        data["failed"] = (dims, np.zeros(shape, np.int8), variable_attrs("failed", tu))
+        data["reason"] = (dims, np.full(shape, "", dtype=object), variable_attrs("reason", tu))
+        data["wall_time_s"] = (dims, np.full(shape, np.nan), variable_attrs("wall_time_s", tu))
+        ns = max(int(n_state), 1)
+        data["state"] = ([*dims, "state"], np.full((*shape, ns), np.nan), variable_attrs("state", tu))
+        for name in data:
+            enc[name] = {"chunks": chunk + ((ns,) if name == "state" else ())}
+        ds = xr.Dataset(data, coords=coords)
+        from .. import __version__
+
+        ds.attrs.update({
+            "title": "flutterswim parameter sweep", "Conventions": "CF-1.10",
+            "source": f"flutterswim {__version__}", "format": FORMAT,
+            "sweep_spec": spec.to_json(), "spec": json.loads(spec.to_json()),
+            "fingerprint": spec.fingerprint, "variables": json.dumps(variables), "n_state": ns,
+            "time_unit": tu,
+            "swept": json.dumps(list(spec.names)),
+        })
+        tmp = path.parent / f".{path.name}.creating-{os.getpid()}"
+        if tmp.exists():
+            shutil.rmtree(tmp)
+        tmp.mkdir(parents=True)
+        try:
+            with warnings.catch_warnings():
+                # consolidated metadata lets plain xarray.open_zarr(path) read it without a warning
+                warnings.filterwarnings("ignore", message="Consolidated metadata", category=UserWarning)
+                ds.to_zarr(str(tmp), mode="w", encoding=enc, consolidated=True, zarr_format=3)
+            write_marker(tmp, "sweep", format=FORMAT)  # after consolidation, which lists the files
+            os.rename(tmp, path)
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+        assert (path / MARKER).is_file()
+        return cls(path, zarr.open_group(str(path), mode="r+"), spec, variables)
+
     # ------------------------------------------------------------------ points
+    def index(self, k: int) -> tuple[int, ...]:
+        """Region (index tuple) of point k in the dataset."""
+        branch, i, _ = self.spec.point(k)
+        shp = self._shape[1:] if self.spec.continuation else self._shape
+        idx = tuple(int(j) for j in np.unravel_index(i, shp))
+        return ((self.spec.branches.index(branch),) + idx) if self.spec.continuation else idx
+
+    def _flat(self, name: str) -> np.ndarray:
+        """Variable ``name`` as a flat (n_points,) array in point order."""
+        a = np.asarray(self._arr[name][...]).reshape(-1)
+        return a[self._pos]
+
     def done_mask(self) -> np.ndarray:
-        return np.asarray(self._arr["done"][:], dtype=np.int8) == 1
+        return self._flat("done") == 1
 
     def write_point(self, k: int, values: dict[str, float] | None, *, failed: bool, message: str,
-                    wall_time: float, state: np.ndarray | None = None) -> None:
-        """Write point k: values, message, flags, then mark it done (last)."""
-        row = np.full(len(self.variables), np.nan)
-        if values is not None:
-            for i, name in enumerate(self.variables):
-                v = values.get(name, math.nan)
+                    wall_time: float, state: np.ndarray | None = None, done: bool = True) -> None:
+        """Write point k as its own region: values, reason, flags, state, then ``done`` (last)."""
+        idx = self.index(k)
+        for name in self.variables:
+            v = math.nan
+            if values is not None:
                 try:
-                    row[i] = float(v)
+                    v = float(values.get(name, math.nan))
                 except (TypeError, ValueError):
-                    row[i] = math.nan
-        self._arr["values"][k] = row
-        msg = np.zeros(MESSAGE_BYTES, np.uint8)
-        b = message.encode("utf-8")[:MESSAGE_BYTES]
-        b = b.decode("utf-8", errors="ignore").encode("utf-8")
-        msg[: len(b)] = np.frombuffer(b, np.uint8)
-        self._arr["message"][k] = msg
-        self._arr["failed"][k] = 1 if failed else 0
-        self._arr["wall_time"][k] = float(wall_time)
+                    v = math.nan
+            self._arr[name][idx] = v
+        self._arr["reason"][idx] = str(message)
+        self._arr["failed"][idx] = 1 if failed else 0
+        self._arr["wall_time_s"][idx] = float(wall_time)
         st = self._arr["state"]
-        srow = np.full(st.shape[1], np.nan)
+        srow = np.full(st.shape[-1], np.nan)
         if state is not None:
-            s = np.asarray(state, float).ravel()[: st.shape[1]]
+            s = np.asarray(state, float).ravel()[: st.shape[-1]]
             srow[: s.size] = s
-        st[k] = srow
-        self._arr["done"][k] = 1
+        st[idx] = srow
+        self._arr["done"][idx] = 1 if done else 0
 
     def state(self, k: int) -> np.ndarray | None:
-        s = np.asarray(self._arr["state"][k])
+        s = np.asarray(self._arr["state"][self.index(k)])
         return None if not np.all(np.isfinite(s)) else s
 
     def value(self, k: int, j: int) -> float:
-        return float(self._arr["values"][k, j])
+        return float(self._arr[self.variables[j]][self.index(k)])
 
     def failed(self, k: int) -> bool:
-        return bool(self._arr["failed"][k])
+        return bool(self._arr["failed"][self.index(k)])
 
     # ------------------------------------------------------------------ read
     def read(self) -> dict[str, Any]:
-        msgs = np.asarray(self._arr["message"][:])
+        """Flat per-point arrays in point order (k = 0 .. n_points-1)."""
+        values = np.stack([self._flat(n).astype(float) for n in self.variables], axis=1) if self.variables \
+            else np.empty((self.spec.n_points, 0))
         return {
-            "values": np.asarray(self._arr["values"][:]),
-            "message": [bytes(m[m != 0]).decode("utf-8", errors="replace") for m in msgs],
-            "failed": np.asarray(self._arr["failed"][:]).astype(bool),
-            "wall_time": np.asarray(self._arr["wall_time"][:]),
+            "values": values,
+            "message": [str(m) for m in self._flat("reason")],
+            "failed": self._flat("failed").astype(bool),
+            "wall_time": self._flat("wall_time_s").astype(float),
             "done": self.done_mask(),
         }

@@ -1,0 +1,186 @@
+"""Sweep stores: nothing that is not provably ours is replaced, own damaged stores are not
+silently recomputed, and the store is an ordinary xarray Zarr dataset."""
+
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import flutterswim as fs
+from flutterswim.sweep import SweepStoreError, sweep
+from flutterswim.sweep.store import SweepStore
+
+CALLS = []
+
+
+def point(task):
+    CALLS.append(dict(task["values"]))
+    v = task["values"]
+    return {"a": math.sin(v["chi"]) + v.get("tau", 0.0), "b": v["chi"] ** 2}
+
+
+point.variables = ["a", "b"]
+
+
+def _user_files(d):
+    d.mkdir(exist_ok=True)
+    (d / "notes.txt").write_text("my notes")
+    (d / "data.csv").write_text("1,2,3\n")
+    (d / "sub").mkdir(exist_ok=True)
+    (d / "sub" / "run.nc").write_bytes(b"x" * 100)
+    return {p.relative_to(d): p.read_bytes() for p in d.rglob("*") if p.is_file()}
+
+
+def _same(d, before):
+    after = {p.relative_to(d): p.read_bytes() for p in d.rglob("*") if p.is_file()}
+    return after == before
+
+
+def test_overwrite_refuses_a_directory_of_user_files(tmp_path):
+    d = tmp_path / "mine"
+    before = _user_files(d)
+    with pytest.raises(fs.ParameterError, match="not a flutterswim store"):
+        sweep({"chi": [1.0, 2.0]}, out=str(d), overwrite=True, backend="serial", point_fn=point, progress=False)
+    with pytest.raises(fs.ParameterError, match="not a flutterswim store"):
+        sweep({"chi": [1.0, 2.0]}, out=str(d), backend="serial", point_fn=point, progress=False)
+    assert _same(d, before)
+
+
+def test_cli_overwrite_of_the_current_directory_keeps_every_file(tmp_path):
+    d = tmp_path / "work"
+    before = _user_files(d)
+    for out in (".", str(d), ".."):
+        r = subprocess.run([sys.executable, "-m", "flutterswim", "sweep", "chi=60,70", "--out", out, "--overwrite",
+                            "--backend", "serial", "--no-progress"], cwd=d, capture_output=True, text=True,
+                           timeout=120)
+        assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+        assert "current directory" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert _same(d, before)
+
+
+def test_a_file_is_refused(tmp_path):
+    f = tmp_path / "sweep.zarr"
+    f.write_text("not a store")
+    with pytest.raises(fs.ParameterError, match="existing file"):
+        sweep({"chi": [1.0]}, out=str(f), overwrite=True, backend="serial", point_fn=point, progress=False)
+    assert f.read_text() == "not a store"
+
+
+def test_zarr_store_of_another_tool_is_refused_not_replaced(tmp_path):
+    other = tmp_path / "other.zarr"
+    xr.Dataset({"temperature": ("x", np.arange(4.0))}).to_zarr(str(other))
+    before = {p.relative_to(other): p.read_bytes() for p in other.rglob("*") if p.is_file()}
+    for overwrite in (False, True):
+        with pytest.raises(fs.ParameterError, match="Zarr store written by another tool"):
+            sweep({"chi": [1.0]}, out=str(other), overwrite=overwrite, backend="serial", point_fn=point,
+                  progress=False)
+    assert _same(other, before)
+    np.testing.assert_array_equal(xr.open_zarr(str(other))["temperature"].values, np.arange(4.0))
+
+
+def test_own_incomplete_store_is_not_recomputed_silently(tmp_path):
+    out = tmp_path / "s.zarr"
+    sweep({"chi": [1.0, 2.0]}, out=str(out), backend="serial", point_fn=point, progress=False)
+    import zarr
+
+    g = zarr.open_group(str(out), mode="r+")
+    attrs = dict(g.attrs)
+    del attrs["fingerprint"]
+    g.attrs.clear()
+    g.attrs.update(attrs)
+    zarr.consolidate_metadata(str(out))
+    CALLS.clear()
+    with pytest.raises(SweepStoreError, match="incomplete.*fingerprint.*overwrite"):
+        sweep({"chi": [1.0, 2.0]}, out=str(out), backend="serial", point_fn=point, progress=False)
+    assert CALLS == []
+    # a missing variable
+    out2 = tmp_path / "t.zarr"
+    sweep({"chi": [1.0, 2.0]}, out=str(out2), backend="serial", point_fn=point, progress=False)
+    import shutil
+
+    shutil.rmtree(out2 / "b")
+    CALLS.clear()
+    with pytest.raises(SweepStoreError, match="variable"):
+        sweep({"chi": [1.0, 2.0]}, out=str(out2), backend="serial", point_fn=point, progress=False)
+    assert CALLS == []
+    # the user asks for it: replaced
+    ds = sweep({"chi": [1.0, 2.0]}, out=str(out2), overwrite=True, backend="serial", point_fn=point, progress=False)
+    assert ds["done"].all() and len(CALLS) == 2
+
+
+def test_overwrite_replaces_own_store_and_resume_recomputes_nothing(tmp_path):
+    out = tmp_path / "s.zarr"
+    sweep({"chi": [1.0, 2.0]}, out=str(out), backend="serial", point_fn=point, progress=False)
+    CALLS.clear()
+    sweep({"chi": [1.0, 2.0]}, out=str(out), backend="serial", point_fn=point, progress=False)
+    assert CALLS == []
+    sweep({"chi": [1.0, 2.0, 3.0]}, out=str(out), overwrite=True, backend="serial", point_fn=point, progress=False)
+    assert len(CALLS) == 3
+
+
+def test_xarray_reads_the_store_without_flutterswim(tmp_path):
+    out = tmp_path / "g.zarr"
+    chi, tau = [1.0, 2.0, 3.0], [0.1, 0.4]
+    sweep({"chi": chi, "tau": tau}, base=fs.PAPER, out=str(out), backend="serial", point_fn=point,
+          progress=False)
+    code = (
+        "import sys, xarray as xr, json\n"
+        "ds = xr.open_zarr(sys.argv[1])\n"
+        "print(json.dumps({'dims': dict(ds.sizes), 'chi': ds.chi.values.tolist(), 'tau': ds.tau.values.tolist(),"
+        " 'a': ds.a.values.tolist(), 'a_dims': list(ds.a.dims), 'reason': [str(r) for r in ds.reason.values.ravel()],"
+        " 'attrs': {k: ds[k].attrs for k in list(ds.variables)}, 'spec': ds.attrs['sweep_spec']}))\n"
+    )
+    # a fresh interpreter that never imports flutterswim
+    r = subprocess.run([sys.executable, "-c", code, str(out)], capture_output=True, text=True, timeout=120,
+                       env={"PATH": "/usr/bin:/bin"})
+    assert r.returncode == 0, r.stderr
+    got = json.loads(r.stdout)
+    assert got["a_dims"] == ["chi", "tau"] and got["dims"]["chi"] == 3 and got["dims"]["tau"] == 2
+    assert got["chi"] == chi and got["tau"] == tau
+    expect = [[math.sin(c) + t for t in tau] for c in chi]
+    np.testing.assert_allclose(got["a"], expect, rtol=0, atol=1e-15)
+    assert got["reason"] == [""] * 6
+    for name, attrs in got["attrs"].items():
+        assert "units" in attrs and "long_name" in attrs, name
+    assert got["attrs"]["tau"]["units"] == "s" and got["attrs"]["wall_time_s"]["units"] == "s"
+    assert json.loads(got["spec"])["axes"][0]["name"] == "chi"
+
+
+def test_real_sweep_variables_have_units_and_failure_reasons_are_strings(tmp_path):
+    out = tmp_path / "r.zarr"
+    sweep({"tau": [0.375, -1.0]}, base=fs.PAPER.replace(kappa_E=0.0), out=str(out), backend="serial",
+          progress=False, settings={"n_segments": 8, "t_cap": 2.0, "chunk": 1.0, "n_cycles": 1})
+    ds = xr.open_zarr(str(out))
+    assert list(ds["period_s"].dims) == ["tau"]
+    for name in ds.variables:
+        assert ds[name].attrs.get("units") is not None and ds[name].attrs.get("long_name"), name
+    assert ds["period_s"].attrs["units"] == "s" and ds["frequency_hz"].attrs["units"] == "Hz"
+    reasons = [str(r) for r in ds["reason"].values]
+    assert reasons[0] == "" and "tau=-1.0" in reasons[1]
+
+
+def test_continuation_store_has_a_branch_dimension(tmp_path):
+    out = tmp_path / "c.zarr"
+    sweep({"chi": [1.0, 2.0, 3.0]}, out=str(out), continuation=True, backend="serial", point_fn=point,
+          progress=False)
+    ds = xr.open_zarr(str(out))
+    assert list(ds["a"].dims) == ["branch", "chi"] and list(ds["branch"].values) == ["up", "down"]
+    np.testing.assert_allclose(ds["b"].values, [[1.0, 4.0, 9.0]] * 2)
+
+
+def test_done_is_written_last(tmp_path):
+    """A point whose ``done`` write did not happen counts as not computed (resume redoes it)."""
+    out = tmp_path / "d.zarr"
+    spec = fs.sweep.SweepSpec.build({"chi": [1.0, 2.0]})
+    st = SweepStore.open(out, spec, ["a", "b"], 3)
+    try:
+        st.write_point(0, {"a": 1.0, "b": 2.0}, failed=False, message="", wall_time=0.1, done=False)
+        assert not st.done_mask().any()
+        st.write_point(1, {"a": 1.0, "b": 2.0}, failed=False, message="", wall_time=0.1)
+        np.testing.assert_array_equal(st.done_mask(), [False, True])
+    finally:
+        st.close()
