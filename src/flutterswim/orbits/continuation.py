@@ -23,6 +23,7 @@ from .normal_form import normal_form
 from .parameter import Axis
 from .periodic import DEFAULT_SEGMENTS, DEFAULT_STEPS, OrbitNotFound, PeriodicOrbit, orbit_from_flow
 from .shooting import StepFailure, flow
+from ._threads import one_blas_thread
 from .system import ShapeSystem
 
 __all__ = ["Branch", "continue_orbits"]
@@ -115,25 +116,18 @@ class Branch:
 
     def save(self, path) -> None:
         """Write the branch to NetCDF atomically (temporary name, then rename)."""
-        import os
-        import tempfile
-        from pathlib import Path
+        from .._paths import atomic_path, check_output_file
 
-        path = Path(path)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
-        os.close(fd)
-        try:
+        path = check_output_file(path, (".nc",))
+        with atomic_path(path) as tmp:
             self.to_dataset().to_netcdf(tmp, engine="h5netcdf")
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
 
 
 def _systems(axis: Axis, value: float, n: int) -> ShapeSystem:
     return ShapeSystem.of(axis.at(value), n)
 
 
+@one_blas_thread
 def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
                     n_segments: int = DEFAULT_SEGMENTS, steps: int = DEFAULT_STEPS, tol: float = 1e-10,
                     max_newton: int = 8, progress: bool = False, max_points: int | None = None) -> Branch:
@@ -294,4 +288,5 @@ def _bar(enabled: bool, total: float):
         return None
     from tqdm.auto import tqdm
 
-    return tqdm(total=total, desc="branch", unit="", leave=False)
+    return tqdm(total=round(total, 6), desc="branch", unit=" (parameter)", leave=False,
+                bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}")

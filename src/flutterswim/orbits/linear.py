@@ -18,6 +18,7 @@ from scipy.optimize import brentq
 
 from .._validate import ParameterError
 from .parameter import Axis
+from ._threads import one_blas_thread
 from .system import ShapeSystem
 
 __all__ = ["discrete_spectrum", "leading_pair", "HopfPoint", "hopf_point"]
@@ -61,6 +62,7 @@ class HopfPoint:
         return self.axis.at(self.value)
 
 
+@one_blas_thread
 def hopf_point(params, parameter: str = "kappa_E_ratio", *, n_segments: int = 48,
                bracket: tuple[float, float] | None = None, xtol: float = 1e-13) -> HopfPoint:
     """The Hopf point of the straight state along ``parameter`` (see :class:`.parameter.Axis`),

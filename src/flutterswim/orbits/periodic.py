@@ -20,13 +20,14 @@ import numpy as np
 from .._validate import ParameterError, positive, positive_int
 from ..params import Groups, Parameters
 from .shooting import Flow, flow
+from ._threads import one_blas_thread
 from .system import ShapeSystem
 
 __all__ = ["PeriodicOrbit", "OrbitNotFound", "periodic_orbit", "solve_orbit", "DEFAULT_STEPS"]
 
 #: Rosenbrock steps per period. The period's time-discretisation error is below 1e-7 at the
 #: paper's parameters (measured by halving, see tests/test_orbits_periodic.py).
-DEFAULT_STEPS = 64
+DEFAULT_STEPS = 32
 DEFAULT_SEGMENTS = 48
 
 
@@ -223,6 +224,7 @@ def _p2p(q: np.ndarray) -> float:
     return float(fine.max() - fine.min())
 
 
+@one_blas_thread
 def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = None, *,
                    n_segments: int = DEFAULT_SEGMENTS, steps: int = DEFAULT_STEPS, tol: float = 1e-10,
                    max_newton: int = 12, phi: float = 0.0) -> PeriodicOrbit:

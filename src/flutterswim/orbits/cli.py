@@ -1,0 +1,107 @@
+"""CLI: ``flutterswim branch PARAM=FROM:TO --out branch.nc`` (continuation of the stroke from
+the Hopf point) and ``flutterswim plot-branch branch.nc``."""
+
+from __future__ import annotations
+
+__all__ = ["register"]
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "branch", help="stroke branch by continuation of periodic orbits from the Hopf point",
+        description="Continue the stroke as a periodic orbit from the Hopf point of the straight "
+                    "state to the far end of the range, and save it as NetCDF.")
+    p.add_argument("range", help="parameter range like kappa_E_ratio=0.6:2 (also chi, eta_perp, kappa_E, tau, ...)")
+    p.add_argument("--preset", default="paper")
+    p.add_argument("--out", default="branch.nc")
+    p.add_argument("--points", type=int, default=100, help="orbits along the branch (at least; default 100)")
+    p.add_argument("--segments", type=int, default=None, help="segments N (default: the package default)")
+    p.add_argument("--steps", type=int, default=None, help="Radau steps per period (default 32)")
+    p.add_argument("--plot", default=None, help="also draw the branch to this PNG")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_branch)
+
+    q = subparsers.add_parser("plot-branch", help="figure of a branch NetCDF (advance, period, lateral excursions)")
+    q.add_argument("branch")
+    q.add_argument("--out", default=None, help="PNG (default: next to the NetCDF)")
+    q.set_defaults(func=_cmd_plot)
+
+
+def _parse_range(text: str) -> tuple[str, float, float]:
+    from .._validate import ParameterError
+
+    name, sep, rng = text.partition("=")
+    parts = rng.split(":")
+    if not sep or len(parts) != 2:
+        raise ParameterError(f"range={text!r} must look like NAME=FROM:TO, e.g. kappa_E_ratio=0.6:2")
+    try:
+        lo, hi = float(parts[0]), float(parts[1])
+    except ValueError:
+        raise ParameterError(f"range={text!r}: FROM and TO must be numbers") from None
+    return name.strip(), lo, hi
+
+
+def _cmd_branch(args) -> int:
+    from .._paths import check_output_file
+    from ..params import preset
+    from .continuation import continue_orbits
+    from .linear import hopf_point
+    from .parameter import Axis
+    from .periodic import DEFAULT_SEGMENTS, DEFAULT_STEPS
+
+    name, lo, hi = _parse_range(args.range)
+    params = preset(args.preset)
+    Axis(params, name)  # validates the name before any work
+    out = check_output_file(args.out, (".nc",))
+    if args.plot:
+        check_output_file(args.plot, (".png", ".pdf", ".svg"), what="plot")
+    n = DEFAULT_SEGMENTS if args.segments is None else args.segments
+    steps = DEFAULT_STEPS if args.steps is None else args.steps
+    # continue towards the end of the range where the straight state is unstable
+    hp = hopf_point(params, name, n_segments=n, bracket=None)
+    from .normal_form import normal_form
+
+    nf = normal_form(hp)
+    side = nf.direction if nf.supercritical else -nf.direction
+    to = hi if side > 0 else lo
+    br = continue_orbits(params, name, to, n_points=args.points, n_segments=n, steps=steps,
+                         progress=not args.quiet)
+    ds = br.to_dataset()
+    ds.attrs["range_start" if side > 0 else "range_end"] = lo if side > 0 else hi
+    from .._paths import atomic_path
+
+    with atomic_path(out) as tmp:
+        ds.to_netcdf(tmp, engine="h5netcdf")
+    print(f"{out}: {len(br.values)} orbits from the Hopf point {name}={br.hopf_value:.6g} to {br.values[-1]:.6g} "
+          f"({ds.attrs['bifurcation']}, l1={br.lyapunov_coefficient:.3g}) in {br.wall_time:.1f} s; {br.message}")
+    if args.plot:
+        from .plot import plot_branch
+
+        plot_branch(ds, args.plot, x_range=(min(lo, hi), max(lo, hi)))
+        print(f"figure: {args.plot}")
+    return 0
+
+
+def _cmd_plot(args) -> int:
+    from pathlib import Path
+
+    from .._paths import check_output_file
+    from .._validate import ParameterError
+    from .plot import plot_branch
+
+    src = Path(args.branch)
+    if not src.is_file():
+        raise ParameterError(f"branch={str(src)!r} is not a file")
+    out = check_output_file(args.out or src.with_suffix(".png"), (".png", ".pdf", ".svg"))
+    import xarray as xr
+
+    try:
+        ds = xr.open_dataset(src, engine="h5netcdf")
+    except Exception as exc:  # noqa: BLE001 - any reader failure is a bad input file
+        raise ParameterError(f"branch={str(src)!r} is not a readable NetCDF file ({exc.__class__.__name__})") from None
+    if "parameter" not in ds.attrs or ds.attrs["parameter"] not in ds.coords:
+        raise ParameterError(f"branch={str(src)!r} is not a flutterswim branch (no 'parameter' attribute)")
+    lo = ds.attrs.get("range_start")
+    plot_branch(ds, out, x_range=(lo, float(ds[ds.attrs['parameter']].max())) if lo is not None else None)
+    print(f"figure: {out}")
+    return 0

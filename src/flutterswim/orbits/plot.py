@@ -1,0 +1,81 @@
+"""Figure of a stroke branch (the paper's Fig. 4b, done by continuation): advance per cycle,
+period and the lateral excursions of both ends against the parameter, with the straight
+state from linear theory below the Hopf point and self-intersecting strokes in red."""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["plot_branch"]
+
+
+def _segments(ax, x, y, red, **kw):
+    """Plot y(x) in black where ``red`` is false and in red where it is true."""
+    label = kw.pop("label", None)
+    ax.plot(x, np.where(red, np.nan, y), color=kw.pop("color", "k"), label=label, **kw)
+    if np.any(red):
+        # include the last black point so that the red run joins the black one
+        joined = red | np.r_[red[1:], False]
+        ax.plot(x, np.where(joined, y, np.nan), color="tab:red", lw=kw.get("lw", 1.8), ls=kw.get("ls", "-"))
+
+
+def plot_branch(ds, path=None, *, x_range: tuple[float, float] | None = None):
+    """Draw the branch Dataset of :meth:`flutterswim.orbits.Branch.to_dataset`. Returns the figure."""
+    import matplotlib
+
+    if path is not None:
+        matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+
+    name = ds.attrs["parameter"]
+    x = ds[name].values
+    hopf = float(ds.attrs[f"hopf_{name}"])
+    si = ds.period.attrs["units"] == "s"
+    lscale, lunit = (1e3, "mm") if si else (1.0, "l")
+    tunit = "s" if si else "tau"
+    red = ds.self_intersecting.values.astype(bool)
+    unstable = ~ds.stable.values.astype(bool)
+    lo = min(x_range[0], hopf) if x_range else hopf - 0.1 * (x.max() - hopf)
+    xs = np.r_[hopf, x]
+    fig, axes = plt.subplots(3, 1, figsize=(6.0, 8.0), sharex=True, constrained_layout=True)
+    ax = axes[0]
+    ax.plot([lo, hopf], [0, 0], color="0.5", lw=1.8, label="straight, stable (linear theory)")
+    _segments(ax, xs, np.r_[0.0, ds.advance.values * lscale], np.r_[False, red], lw=1.8,
+              label="stroke (periodic orbit)")
+    ax.set_ylabel(f"advance per cycle [{lunit}]")
+    ax2 = axes[1]
+    _segments(ax2, xs, np.r_[ds.attrs["hopf_period"], ds.period.values], np.r_[False, red], lw=1.8)
+    ax2.plot(hopf, ds.attrs["hopf_period"], "o", color="k", ms=4)
+    ax2.set_ylabel(f"period [{tunit}]")
+    ax3 = axes[2]
+    _segments(ax3, xs, np.r_[0.0, ds.lateral_leading.values * lscale], np.r_[False, red], lw=1.8,
+              label="leading end")
+    _segments(ax3, xs, np.r_[0.0, ds.lateral_trailing.values * lscale], np.r_[False, red], lw=1.8,
+              ls="--", label="trailing end")
+    ax3.set_ylabel(f"lateral peak-to-peak [{lunit}]")
+    ax3.set_xlabel(f"{name} [{ds[name].attrs.get('units', '1')}]")
+    for a in axes:
+        a.axvline(hopf, color="0.3", ls=":", lw=1)
+        if np.any(unstable):
+            a.plot(x[unstable], np.full(unstable.sum(), np.nan))
+        a.set_xlim(lo, x.max())
+    axes[0].text(hopf, 0.02, f" Hopf {hopf:.4g}", transform=axes[0].get_xaxis_transform(), fontsize=8)
+    handles = [Line2D([], [], color="0.5", lw=1.8, label="straight, stable (linear theory)"),
+               Line2D([], [], color="k", lw=1.8, label="stroke (periodic orbit)"),
+               Line2D([], [], color="tab:red", lw=1.8, label="self-intersecting stroke"),
+               Line2D([], [], color="0.3", ls=":", label="Hopf point (discrete linear stability)")]
+    axes[0].legend(handles=handles, fontsize=8, loc="lower center")
+    h3 = [Line2D([], [], color="k", lw=1.8, label="leading end"),
+          Line2D([], [], color="k", lw=1.8, ls="--", label="trailing end")]
+    ax3.legend(handles=h3, fontsize=8, loc="lower right")
+    l1 = ds.attrs.get("lyapunov_coefficient")
+    axes[0].set_title(f"Stroke branch: {ds.attrs.get('bifurcation', '')} Hopf bifurcation"
+                      + (f" (l1 = {l1:.3g})" if l1 is not None else ""), fontsize=10)
+    if path is not None:
+        from .._paths import atomic_path
+
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=150)
+        plt.close(fig)
+    return fig
