@@ -89,6 +89,7 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     fd, tmp = tempfile.mkstemp(prefix=f".{p.stem}.", suffix=f".part{p.suffix}", dir=p.parent)
     os.close(fd)
     tmp_p = Path(tmp)
+    os.chmod(tmp_p, 0o666 & ~_umask())  # mkstemp makes 0600; a saved file gets the usual mode
     try:
         yield tmp_p
         if tmp_p.is_dir():
@@ -98,6 +99,12 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         with contextlib.suppress(OSError):
             tmp_p.unlink()
         raise
+
+
+def _umask() -> int:
+    old = os.umask(0o022)
+    os.umask(old)
+    return old
 
 
 def atomic_write_text(path: str | os.PathLike, text: str) -> Path:

@@ -34,7 +34,7 @@ SWEEP_ADVANCE_ERROR = 2e-2
 #: Largest sweep grid accepted (points), checked before anything is allocated.
 MAX_SWEEP_POINTS = 100_000
 #: Largest stability-map grid accepted (eta_perp x chi values).
-MAX_MAP_POINTS = 50_000_000
+MAX_MAP_POINTS = 20_000_000
 #: Seconds to wait for a Dask scheduler before giving up.
 SCHEDULER_TIMEOUT_S = 10.0
 

@@ -11,9 +11,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
-from pathlib import Path
 
+from . import defaults
 from .limit_cycle import run_to_limit_cycle
 from .params import preset
 
@@ -21,31 +22,40 @@ from .params import preset
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m flutterswim.demo", description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="out", help="output folder (default: out)")
-    ap.add_argument("--cycles", type=int, default=15, help="settled cycles to simulate and average")
-    ap.add_argument("--segments", type=int, default=48, help="spatial resolution N")
+    ap.add_argument("--cycles", type=int, default=defaults.N_CYCLES,
+                    help=f"settled cycles to simulate and average (default {defaults.N_CYCLES})")
+    ap.add_argument("--segments", type=int, default=defaults.N_SEGMENTS,
+                    help=f"spatial resolution N (default {defaults.N_SEGMENTS})")
     args = ap.parse_args(argv)
+    from ._paths import atomic_write_text, check_output_dir
+    from ._validate import ParameterError
     from .analysis.descriptors import describe
     from .plotting.figures import plot_ghosts
 
-    out = Path(args.out)
+    try:
+        out = check_output_dir(args.out, what="--out")  # before computing
+    except ParameterError as exc:
+        print(f"python -m flutterswim.demo: {exc}", file=sys.stderr)
+        return 2
     out.mkdir(parents=True, exist_ok=True)
     params = preset("paper")
     g = params.groups
     print(f"paper preset: eta_par={g.eta_par:.2f}, eta_perp={g.eta_perp:.2f}, chi={g.chi:.2f}")
     t0 = time.perf_counter()
-    run = run_to_limit_cycle(params, n_cycles=args.cycles, n_segments=args.segments, rtol=1e-4,
-                             atol=1e-6, progress=True)
+    run = run_to_limit_cycle(params, n_cycles=args.cycles, n_segments=args.segments, rtol=defaults.RTOL,
+                             atol=defaults.ATOL, progress=True)
     wall = time.perf_counter() - t0
     d = describe(run, n_last=args.cycles)
     run.save(out / "paper_run.nc")
     plot_ghosts(run, out / "paper_swimmer.png")
-    (out / "paper_descriptors.json").write_text(json.dumps(d.to_dict(), indent=2))
+    atomic_write_text(out / "paper_descriptors.json", json.dumps(d.to_dict(), indent=2))
     print(f"simulated {run.t[-1]:.2f} s of swimming in {wall:.2f} s wall ({run.stats.n_steps} steps); "
           f"limit cycle from t = {d.limit_cycle_time_s:.2f} s")
     print(f"period                  {d.period_s:.4f} s  ({d.frequency_hz:.3f} Hz)")
     print(f"advancement per cycle   {d.advance_per_cycle_mm:.4f} mm  ({d.advance_per_cycle_bl:.4f} body lengths)")
     print(f"mean speed              {d.speed_mm_s:.4f} mm/s  ({d.speed_bl_s:.4f} body lengths/s)")
-    print(f"tip lateral p2p         {d.tip_lateral_p2p_mm:.4f} mm")
+    print(f"lateral p2p, leading    {d.leading_lateral_p2p_mm:.4f} mm ({d.leading_end} end leads)")
+    print(f"lateral p2p, trailing   {d.trailing_lateral_p2p_mm:.4f} mm")
     print(f"swimming direction      {d.direction_to_field_deg:.3f} deg from the field "
           f"({'towards' if d.towards_field else 'against'} E, i.e. towards the cathode)")
     print(f"wrote {out / 'paper_run.nc'}, {out / 'paper_swimmer.png'}, {out / 'paper_descriptors.json'}")

@@ -65,8 +65,10 @@ def finish(fig, path: str | Path | None, dpi: float | None = None) -> Any:
     p = Path(path)
     if p.suffix.lower() not in (".png", ".pdf", ".svg", ".jpg", ".jpeg"):
         raise ParameterError(f"path={str(path)!r} has an unsupported suffix; use .png, .pdf, .svg or .jpg")
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(p, dpi=dpi or fig.dpi)
+    from .._paths import atomic_path
+
+    with atomic_path(p) as tmp:
+        fig.savefig(tmp, dpi=dpi or fig.dpi, format=p.suffix.lower().lstrip(".").replace("jpg", "jpeg"))
     return p
 
 

@@ -46,6 +46,7 @@ def animate(
     trail: bool = True,
     quality: int = 7,
     tip: int | str = "end",
+    progress: bool = False,
 ) -> Path:
     """Write an animation of the swimmer to ``path`` (.mp4 or .gif) and return the path.
 
@@ -54,7 +55,8 @@ def animate(
     MP4. Shows the filament, the trajectory so far of the tip (``tip``: "end" = s=l or
     "start" = s=0; magenta), the centroid path
     (yellow), the field arrow (red, follows a rotating field) and a time stamp; the view
-    holds the whole trajectory.
+    holds the whole trajectory. ``progress``: a bar over the video frames. The file is
+    written under a temporary name in the same folder and renamed when complete.
     """
     tr = as_track(obj)
     p = Path(path)
@@ -70,7 +72,9 @@ def animate(
         raise ParameterError(f"size={size!r} must be at least (64, 64) pixels")
     if fmt == ".mp4":
         w, h = w + (w % 2), h + (h % 2)
-    p.parent.mkdir(parents=True, exist_ok=True)
+    from .._paths import atomic_path, check_output_file
+
+    check_output_file(p, (".mp4", ".gif"), what="path")
 
     f = mm_factor(tr)
     it = tip_index(tr, tip)
@@ -105,6 +109,10 @@ def animate(
     stamp = ax.text(0.98, 0.92, "", transform=ax.transAxes, ha="right", fontsize=9, animated=True)
     arrow = field_arrow(ax, float(tr.field_angle[0]))
     arrow.set_animated(True)
+    if trail:  # legend from static proxies (the animated lines are drawn by hand)
+        ax.plot([], [], color=TIP_COLOR, lw=0.8, label=f"tip ({'s = l' if it == tr.n_points - 1 else 's = 0'})")
+        ax.plot([], [], color=SWIM_COLOR, lw=1.0, label="centroid")
+        ax.legend(fontsize=7, loc="lower right", frameon=False)
     canvas = fig.canvas
     canvas.draw()
     bg = canvas.copy_from_bbox(fig.bbox)
@@ -125,24 +133,42 @@ def animate(
         buf = np.asarray(canvas.buffer_rgba())
         return np.ascontiguousarray(buf[:h, :w, :3])
 
-    if fmt == ".mp4":
-        import imageio_ffmpeg
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
 
-        first = render(int(idx[0]))
-        hh, ww = first.shape[:2]
-        wr = imageio_ffmpeg.write_frames(str(p), (ww, hh), fps=fps, quality=quality, macro_block_size=1,
-                                         codec="libx264", pix_fmt_out="yuv420p", ffmpeg_log_level="error")
-        wr.send(None)
-        try:
-            wr.send(first)
-            for i in idx[1:]:
-                wr.send(render(int(i)))
-        finally:
-            wr.close()
-    else:
-        import imageio.v2 as iio
+        bar = tqdm(total=int(idx.size), desc="animate", unit="frame", leave=False)
 
-        with iio.get_writer(str(p), mode="I", duration=1000.0 / fps, loop=0) as wr:
-            for i in idx:
-                wr.append_data(render(int(i)))
+    def frames():
+        for i in idx:
+            yield render(int(i))
+            if bar is not None:
+                bar.update(1)
+
+    try:
+        with atomic_path(p) as tmp:
+            if fmt == ".mp4":
+                import imageio_ffmpeg
+
+                it_frames = frames()
+                first = next(it_frames)
+                hh, ww = first.shape[:2]
+                wr = imageio_ffmpeg.write_frames(str(tmp), (ww, hh), fps=fps, quality=quality, macro_block_size=1,
+                                                 codec="libx264", pix_fmt_out="yuv420p", ffmpeg_log_level="error")
+                wr.send(None)
+                try:
+                    wr.send(first)
+                    for fr in it_frames:
+                        wr.send(fr)
+                finally:
+                    wr.close()
+            else:
+                import imageio.v2 as iio
+
+                with iio.get_writer(str(tmp), mode="I", format="GIF", duration=1000.0 / fps, loop=0) as wr:
+                    for fr in frames():
+                        wr.append_data(fr)
+    finally:
+        if bar is not None:
+            bar.close()
     return p

@@ -23,7 +23,7 @@ from ._common import (
 )
 
 __all__ = ["plot_ghosts", "plot_swimmer", "plot_descriptors", "plot_kymographs", "plot_summary", "draw_ghosts",
-           "draw_kymographs"]
+           "draw_kymographs", "path_sections"]
 
 
 def _cycle_window(tr, cycles: Cycles | None, cycle: int | None, window):
@@ -55,7 +55,10 @@ def draw_ghosts(ax, obj: Any, window: tuple[float, float], *, n_ghosts: int = 8,
         ax.plot(tr.x[i] * f, tr.y[i] * f, color=c, lw=1.6, solid_capstyle="round")
     tidx = window_indices(tr.t, window if tip_trail is None else tip_trail)
     it = tip_index(tr, tip)
-    ax.plot(tr.x[tidx, it] * f, tr.y[tidx, it] * f, color=TIP_COLOR, lw=1.0, label="tip trajectory")
+    ax.plot(tr.x[tidx, it] * f, tr.y[tidx, it] * f, color=TIP_COLOR, lw=1.0,
+            label=f"tip ({'s = l' if it == tr.n_points - 1 else 's = 0'}) trajectory")
+    ax.plot([], [], color=cmap(0.7), lw=1.6, label="filament, light to dark in time")
+    ax.legend(fontsize=6, loc="best", frameon=False)
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
@@ -88,9 +91,10 @@ def plot_swimmer(obj: Any, path: str | Path | None = None, *, time: float | None
     fig = new_figure(figsize, dpi)
     ax = fig.add_subplot()
     if trail:
-        ax.plot(tr.x[: i + 1, it] * f, tr.y[: i + 1, it] * f, color=TIP_COLOR, lw=0.8, label="tip")
+        ax.plot(tr.x[: i + 1, it] * f, tr.y[: i + 1, it] * f, color=TIP_COLOR, lw=0.8,
+                label=f"tip ({'s = l' if it == tr.n_points - 1 else 's = 0'}) trajectory")
         xc, yc = tr.centroid()
-        ax.plot(xc[: i + 1] * f, yc[: i + 1] * f, color=SWIM_COLOR, lw=1.2, label="centroid")
+        ax.plot(xc[: i + 1] * f, yc[: i + 1] * f, color=SWIM_COLOR, lw=1.2, label="centroid trajectory")
     ax.plot(tr.x[i] * f, tr.y[i] * f, color="#1a7f37", lw=2.5, solid_capstyle="round")
     ax.plot(tr.x[i, it] * f, tr.y[i, it] * f, "o", color=TIP_COLOR, ms=3)
     field_arrow(ax, float(tr.field_angle[i]))
@@ -152,24 +156,64 @@ def plot_descriptors(obj: Any, path: str | Path | None = None, *, cycles: Cycles
     return finish(fig, path)
 
 
+def path_sections(obj: Any):
+    """Kymographs of two sections placed where the swimmer is: the line through its mean path
+    (the straight fit to the centroid path; positions along it) and the section across the
+    path that moves with the centroid (positions across the path). Returns
+    (along, across, path angle [rad]) as :class:`LineKymograph` in path coordinates."""
+    from ..analysis.track import Track
+
+    tr = as_track(obj)
+    xc, yc = tr.centroid()
+    # mean path: least-squares line through the centroid positions (direction of largest spread,
+    # or the net displacement when the swimmer hardly moves)
+    X = np.c_[xc - xc.mean(), yc - yc.mean()]
+    if np.ptp(xc) + np.ptp(yc) > 0:
+        _, _, vt = np.linalg.svd(X, full_matrices=False)
+        e = vt[0]
+        if e @ np.r_[xc[-1] - xc[0], yc[-1] - yc[0]] < 0:
+            e = -e
+    else:
+        e = np.r_[1.0, 0.0]
+    ang = math.atan2(e[1], e[0])
+    c, s_ = math.cos(ang), math.sin(ang)
+    u = (tr.x - xc.mean()) * c + (tr.y - yc.mean()) * s_  # along the path
+    w = -(tr.x - xc.mean()) * s_ + (tr.y - yc.mean()) * c  # across it
+    uc = (xc - xc.mean()) * c + (yc - yc.mean()) * s_
+    path = Track(t=tr.t, x=u, y=w, s=tr.s, length=tr.length, units=tr.units)
+    along = line_kymograph(path, "horizontal", 0.0)  # the mean path itself: w = 0
+    moving = Track(t=tr.t, x=u - uc[:, None], y=w, s=tr.s, length=tr.length, units=tr.units)
+    across = line_kymograph(moving, "vertical", 0.0)  # the section through the centroid
+    return along, across, ang
+
+
 def draw_kymographs(axs, obj: Any, window: tuple[float, float] | None = None, *, h_level=None, v_level=None) -> None:
-    """Fill four axes with: crossings of a horizontal line (x against t), of a vertical line
-    (y against t), body-frame curvature kappa(s, t) and tangent angle theta(s, t)."""
+    """Fill four axes with: crossings of the swimmer's mean path (positions along it against t),
+    of the section across the path moving with the centroid (positions across the path), the
+    body-frame curvature kappa(s, t) and tangent angle theta(s, t). With ``h_level`` /
+    ``v_level`` the sections are the fixed lab lines y = h_level and x = v_level instead."""
     tr = as_track(obj)
     if window is not None:
         tr = tr.window(*window)
     f = mm_factor(tr)
-    hk = line_kymograph(tr, "horizontal", h_level)
-    vk = line_kymograph(tr, "vertical", v_level)
-    for ax, k, lab in ((axs[0], hk, "x"), (axs[1], vk, "y")):
+    along, across, ang = path_sections(tr)
+    panels = [(along, "position along the path (mm)",
+               f"crossings of the mean path ({math.degrees(ang):.0f}° to x)"),
+              (across, "position across the path (mm)", "crossings of the section moving with the centroid")]
+    if h_level is not None:
+        k = line_kymograph(tr, "horizontal", h_level)
+        panels[0] = (k, "x (mm)", f"crossings of y = {k.level * f:.3g} mm")
+    if v_level is not None:
+        k = line_kymograph(tr, "vertical", v_level)
+        panels[1] = (k, "y (mm)", f"crossings of x = {k.level * f:.3g} mm")
+    for ax, (k, ylab, title) in zip(axs[:2], panels):
         tt = np.broadcast_to(k.t[:, None], k.positions.shape)
         ok = np.isfinite(k.positions)
         sc = ax.scatter(tt[ok], k.positions[ok] * f, c=k.s[ok] / tr.length, s=2, cmap="viridis", vmin=0, vmax=1,
                         linewidths=0)
-        line = "y" if k.orientation == "horizontal" else "x"
-        ax.set_title(f"crossings of {line} = {k.level * f:.3g} mm", fontsize=8)
+        ax.set_title(title, fontsize=8)
         ax.set_xlabel("t (s)")
-        ax.set_ylabel(f"{lab} (mm)")
+        ax.set_ylabel(ylab)
         ax.set_xlim(tr.t[0], tr.t[-1])
     axs[1].figure.colorbar(sc, ax=axs[1], label="s / l")
     bk = body_kymograph(tr)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validate import positive
+from .._validate import ParameterError, positive
 from ..params import PAPER, Parameters
 from .modes import animate_mode, bifurcation, eigenmodes
 from .neutral import neutral_curve
@@ -29,14 +29,20 @@ class StabilityFigures:
 
 
 def stability_figures(out_dir, *, params: Parameters = PAPER, step: float = 0.1,
-                      netcdf: bool = True) -> StabilityFigures:
-    """Map over [0,350]x[-130,130] at ``step`` with the neutral curve, bifurcation plots and
-    the first two eigenmodes at ``params`` (default: the paper's), plus a GIF of mode 1."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+                      netcdf: bool = True, progress: bool = False, dtype: str = "float64") -> StabilityFigures:
+    """Map over [0,350]x[-130,130] at ``step`` with the neutral curve and the operating point of
+    ``params`` (default: the paper's), bifurcation plots and the first two eigenmodes there,
+    plus a GIF of mode 1. The map NetCDF is compressed (``dtype="float32"`` halves it); every
+    file is written atomically. The output folder and the grid size are checked first."""
+    from .._paths import atomic_path, check_output_dir
+
     step = positive("step", step)
+    if dtype not in ("float64", "float32"):
+        raise ParameterError(f"dtype={dtype!r} is not allowed; use 'float64' or 'float32'")
+    out = check_output_dir(out_dir, what="out_dir")
+    out.mkdir(parents=True, exist_ok=True)
     g = params.groups
-    smap = stability_map(step=step)
+    smap = stability_map(step=step, progress=progress)
     nc = neutral_curve(step=step)
     nc_path = None
     if netcdf:
@@ -46,13 +52,15 @@ def stability_figures(out_dir, *, params: Parameters = PAPER, step: float = 0.1,
             nc_path = None
         else:
             nc_path = out / "stability_map.nc"
-            smap.save(nc_path)
-    plot_map(smap, neutral=nc, path=out / "stability_map.png")
+            smap.save(nc_path, dtype=dtype)
+    plot_map(smap, neutral=nc, path=out / "stability_map.png", operating_point=(g.eta_perp, g.chi),
+             operating_label="operating point" if params != PAPER else "paper's operating point")
     b1 = bifurcation(parameter="chi", values=np.arange(step, 130.0 + step / 2, step), fixed=g.eta_perp)
     b2 = bifurcation(parameter="eta_perp", values=np.arange(step, 350.0 + step / 2, step), fixed=g.chi)
     plot_bifurcation([b1, b2], path=out / "bifurcation.png")
     modes = eigenmodes(g.chi, g.eta_perp)
     plot_modes(modes, path=out / "eigenmodes.png")
-    animate_mode(modes[0], out / "mode1.gif")
+    with atomic_path(out / "mode1.gif") as tmp:
+        animate_mode(modes[0], tmp)
     return StabilityFigures(nc_path, out / "stability_map.png", out / "bifurcation.png",
                             out / "eigenmodes.png", out / "mode1.gif")

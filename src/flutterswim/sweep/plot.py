@@ -77,19 +77,27 @@ def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str
         for ax in axs:
             ax.axvline(rc, color="tab:blue", ls="--", lw=1)
         axs[0].text(rc, axs[0].get_ylim()[1], f" linear onset {rc:.3f}", color="tab:blue", va="top", fontsize=8)
+    # legend: what the colours mean (proxies, so each entry appears once)
+    axs[0].plot([], [], "o-", color="k", ms=3, lw=1.8, label="swimming stroke")
+    if np.any(np.asarray(red, bool) & np.isfinite(adv)):
+        axs[0].plot([], [], "o-", color="tab:red", ms=3, lw=1.8, label="self-intersecting stroke")
     failed = ds["failed"].values
     if failed.any():
         axs[0].plot(xv[failed], np.zeros(failed.sum()), "x", color="0.5", label="failed")
-        axs[0].legend(fontsize=8)
     growing = ds["unstable"].values & ~swim & ~failed if "unstable" in ds else np.zeros_like(failed)
     if growing.any():
         axs[0].plot(xv[growing], np.zeros(growing.sum()), "^", mfc="none", color="tab:orange", ms=5,
                     label="unstable, still growing at t_cap")
-        axs[0].legend(fontsize=8, loc="lower right")
+    axs[0].legend(fontsize=7, loc="best", frameon=False)
     capped = (~ds["limit_cycle_reached"].values) & swim
     if capped.any():
         axs[1].plot(xv[capped], per[capped], "o", mfc="none", color="0.4", ms=6, label="no limit cycle by t_cap")
         axs[1].legend(fontsize=8)
     if path is not None:
-        fig.savefig(path, dpi=150)
+        from pathlib import Path
+
+        from .._paths import atomic_path
+
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=150, format=Path(path).suffix.lstrip(".") or "png")
     return fig
