@@ -34,13 +34,22 @@ def stability_figures(out_dir, *, params: Parameters = PAPER, step: float = 0.1,
     ``params`` (default: the paper's), bifurcation plots and the first two eigenmodes there,
     plus a GIF of mode 1. The map NetCDF is compressed (``dtype="float32"`` halves it); every
     file is written atomically. The output folder and the grid size are checked first."""
-    from .._paths import atomic_path, check_output_dir
+    from .._paths import check_output_dir
 
     step = positive("step", step)
     if dtype not in ("float64", "float32"):
         raise ParameterError(f"dtype={dtype!r} is not allowed; use 'float64' or 'float32'")
     out = check_output_dir(out_dir, what="out_dir")
     out.mkdir(parents=True, exist_ok=True)
+    from ..simulate import single_blas_thread
+
+    with single_blas_thread():  # small dense eigenproblems: BLAS threads only add overhead
+        return _figures(out, params, step, netcdf, progress, dtype)
+
+
+def _figures(out: Path, params: Parameters, step: float, netcdf: bool, progress: bool, dtype: str):
+    from .._paths import atomic_path
+
     g = params.groups
     smap = stability_map(step=step, progress=progress)
     nc = neutral_curve(step=step)

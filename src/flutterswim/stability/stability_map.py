@@ -177,6 +177,15 @@ def stability_map(*, eta_perp=None, chi=None, eta_range: tuple[float, float] = (
     ``progress``: a bar over the eta_perp rows. Grids above ``defaults.MAX_MAP_POINTS`` points
     are refused before anything is allocated.
     """
+    from ..simulate import single_blas_thread
+
+    with single_blas_thread():  # the seed and check eigen-solves are small dense problems
+        return _stability_map(eta_perp, chi, eta_range, chi_range, step, max_step, tol, maxit, check_stride,
+                              backend, executor, workers, scheduler, progress)
+
+
+def _stability_map(eta_perp, chi, eta_range, chi_range, step, max_step, tol, maxit, check_stride, backend,
+                   executor, workers, scheduler, progress) -> StabilityMap:
     backend = resolve_backend(backend)
     eta = _grid(eta_perp, eta_range, step, "eta_perp")
     chis = _grid(chi, chi_range, step, "chi")
