@@ -52,6 +52,21 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+def check_backend(name: str, *, workers: int | None = None, scheduler: str | None = None) -> None:
+    """Check the backend arguments without starting anything (ParameterError if bad)."""
+    if scheduler is not None and name in ("processes", "serial"):
+        name = "dask"
+    if name not in BACKENDS:
+        raise ParameterError(f"backend={name!r} is unknown; choose one of {available_backends()}")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, (int, float))
+                                or int(workers) != workers or workers < 1):
+        raise ParameterError(f"workers={workers!r} must be an integer >= 1")
+    if name == "dask" and scheduler is None:
+        raise ParameterError("backend='dask' needs scheduler='tcp://host:port' (or use backend='dask-local')")
+    if scheduler is not None and not isinstance(scheduler, str):
+        raise ParameterError(f"scheduler={scheduler!r} must be an address such as 'tcp://host:8786'")
+
+
 def get_backend(name: str, *, workers: int | None = None, scheduler: str | None = None):
     """A context manager yielding the executor of backend ``name``."""
     if scheduler is not None and name in ("processes", "serial"):
@@ -241,6 +256,8 @@ class PoolExecutor:
         env = dict(os.environ)
         for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
             env[k] = "1"
+        # the workers import the same flutterswim (and point functions) as this process
+        env["PYTHONPATH"] = os.pathsep.join([p for p in sys.path if p] + [env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
         self._env = env
         self._pool: list[_Worker] = []
 
@@ -257,6 +274,7 @@ class PoolExecutor:
         idle: list[_Worker] = list(self._pool)
         busy: dict[Any, _Worker] = {}  # recv_conn -> worker
         exhausted = False
+        lost_in_a_row = 0
         while True:
             while not exhausted and (idle or len(self._pool) < self.workers):
                 try:
@@ -278,8 +296,14 @@ class PoolExecutor:
                     why = w.death()
                     w.stop(kill=True)
                     self._pool.remove(w)
+                    lost_in_a_row += 1
+                    if lost_in_a_row > 2 * self.workers + 2:
+                        raise RuntimeError(f"{lost_in_a_row} worker processes in a row died before finishing a "
+                                           f"point (last: {why}); the workers cannot run here (memory? a point "
+                                           "function that kills its process?)") from None
                     yield key, WorkerLost(f"the worker process computing this point died ({why})")
                     continue
+                lost_in_a_row = 0
                 idle.append(w)
                 if status == "error":
                     raise RuntimeError(f"worker: {value}")

@@ -4,7 +4,6 @@
 
 from __future__ import annotations
 
-import argparse
 import sys
 
 from ..defaults import N_SEGMENTS, SWEEP_ADVANCE_ERROR, SWEEP_PERIOD_ERROR
@@ -81,12 +80,11 @@ def _cmd_plot(args) -> int:
 
 
 def main(argv=None) -> int:
-    """Standalone entry (``python -m flutterswim.sweep.cli sweep ...``)."""
-    ap = argparse.ArgumentParser(prog="flutterswim")
-    sub = ap.add_subparsers(dest="command", required=True)
-    register(sub)
-    args = ap.parse_args(argv)
-    return args.func(args)  # (flutterswim.cli.main adds one-line errors and exit codes)
+    """Standalone entry (``python -m flutterswim.sweep.cli sweep ...``): the full command line,
+    with its one-line errors and exit codes."""
+    from ..cli import main as cli_main
+
+    return cli_main(argv)
 
 
 if __name__ == "__main__":

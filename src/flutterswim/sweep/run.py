@@ -13,7 +13,7 @@ import numpy as np
 
 from ..params import Groups, Parameters
 from .._validate import ParameterError
-from .backends import WorkerLost, get_backend
+from .backends import WorkerLost, check_backend, get_backend
 from .point import CORE_VARIABLES, FLAG_VARIABLES, VARIABLES, run_point, timed
 from .spec import PointSettings, SweepSpec
 from .store import SweepStore
@@ -127,6 +127,7 @@ def sweep(
             f"point_fn={getattr(fn, '__name__', fn)!r} is defined in the main script; the worker processes "
             "never run your script (so that scripts without an if __name__ == '__main__' guard work), so "
             "they cannot import it. Move it into a module, or use backend='serial' or 'dask-local'")
+    check_backend(backend, workers=workers, scheduler=scheduler)  # before the store is touched
     if max_points is not None:
         from .._validate import positive_int
 
