@@ -22,8 +22,8 @@ def serial_result():
 def test_serial_result_is_meaningful(serial_result):
     ds = serial_result
     assert not ds["failed"].any() and ds["done"].all()
-    assert bool(ds["straight"].sel(kappa_E_ratio=0.4)) and not bool(ds["swimming"].sel(kappa_E_ratio=0.4))
-    assert bool(ds["swimming"].sel(kappa_E_ratio=1.0)) and bool(ds["swimming"].sel(kappa_E_ratio=1.6))
+    assert bool(ds["straight"].sel(kappa_E_ratio=0.4)) and not bool(ds["limit_cycle"].sel(kappa_E_ratio=0.4))
+    assert bool(ds["limit_cycle"].sel(kappa_E_ratio=1.0)) and bool(ds["limit_cycle"].sel(kappa_E_ratio=1.6))
     assert np.isfinite(ds["period_s"].sel(kappa_E_ratio=1.0))
     assert np.isnan(ds["period_s"].sel(kappa_E_ratio=0.4))
 

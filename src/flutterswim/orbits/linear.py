@@ -21,7 +21,7 @@ from .parameter import Axis
 from ._threads import one_blas_thread
 from .system import ShapeSystem
 
-__all__ = ["discrete_spectrum", "leading_pair", "HopfPoint", "hopf_point"]
+__all__ = ["discrete_spectrum", "leading_pair", "leading_mode", "HopfPoint", "hopf_point"]
 
 
 def discrete_spectrum(params, n_segments: int) -> np.ndarray:
@@ -39,6 +39,15 @@ def leading_pair(params, n_segments: int) -> complex:
     if cplx.size == 0:
         raise ParameterError("the straight state has no oscillatory mode here (no complex eigenvalue)")
     return complex(cplx[np.argmax(cplx.real)])
+
+
+def leading_mode(params, n_segments: int) -> complex:
+    """The eigenvalue of largest real part [1/tau] (Im >= 0), leaving out the zero mode of the
+    bent-equilibrium family: the growth rate and angular frequency of the straight state."""
+    lam = discrete_spectrum(params, n_segments)
+    lam = lam[np.abs(lam) > 1e-9 * max(1.0, np.abs(lam).max())]
+    top = lam[np.argmax(lam.real)]
+    return complex(top.real, abs(top.imag))
 
 
 @dataclass(frozen=True)

@@ -25,8 +25,8 @@ from .system import ShapeSystem
 
 __all__ = ["PeriodicOrbit", "OrbitNotFound", "periodic_orbit", "solve_orbit", "DEFAULT_STEPS"]
 
-#: Rosenbrock steps per period. The period's time-discretisation error is below 1e-7 at the
-#: paper's parameters (measured by halving, see tests/test_orbits_periodic.py).
+#: Radau IIA steps per period (order 5): at the paper's parameters the period's time error is
+#: about 4e-8 and the advance's 2e-6, relative (measured by halving, 32 -> 64 -> 128 steps).
 DEFAULT_STEPS = 32
 DEFAULT_SEGMENTS = 48
 

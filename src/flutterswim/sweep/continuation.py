@@ -37,7 +37,7 @@ def transition(x: np.ndarray, unstable: np.ndarray) -> tuple[float, float]:
     return float(x[k - 1]), float(x[k])
 
 
-def hysteresis(ds, dim: str | None = None, flag: str = "unstable") -> dict[str, Any]:
+def hysteresis(ds, dim: str | None = None, flag: str = "limit_cycle") -> dict[str, Any]:
     """Onset brackets on the up and down branches of a continuation sweep and whether they differ.
 
     Returns {"up": (lo, hi), "down": (lo, hi), "hysteresis": bool, "width": float} where the

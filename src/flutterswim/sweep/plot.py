@@ -60,7 +60,8 @@ def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str
         raise ParameterError(f"plot_sweep needs a 1-d sweep; {advance} has dims {dims}")
     x = x or dims[0]
     xv = ds[x].values
-    swim = ds["swimming"].values & ~ds["failed"].values
+    # settle-engine sweeps flag "limit_cycle" (descriptors from the periodic orbit)
+    swim = ds["limit_cycle" if "limit_cycle" in ds else "swimming"].values.astype(bool) & ~ds["failed"].values
     straight = ds["straight"].values
     adv = np.where(swim, ds[advance].values, np.where(straight, 0.0, np.nan))
     per = np.where(swim, ds[period].values, np.nan)
@@ -89,9 +90,11 @@ def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str
         axs[0].plot(xv[growing], np.zeros(growing.sum()), "^", mfc="none", color="tab:orange", ms=5,
                     label="unstable, still growing at t_cap")
     axs[0].legend(fontsize=7, loc="best", frameon=False)
-    capped = (~ds["limit_cycle_reached"].values) & swim
+    reached = ds["reached_limit_cycle" if "reached_limit_cycle" in ds else "limit_cycle_reached"].values.astype(bool)
+    capped = (~reached) & swim
     if capped.any():
-        axs[1].plot(xv[capped], per[capped], "o", mfc="none", color="0.4", ms=6, label="no limit cycle by t_cap")
+        axs[1].plot(xv[capped], per[capped], "o", mfc="none", color="0.4", ms=6,
+                    label="orbit by continuation (run not settled by t_cap)")
         axs[1].legend(fontsize=8)
     if path is not None:
         from pathlib import Path

@@ -44,6 +44,7 @@ FORMAT = "flutterswim-sweep/2"
 #: Per-point bookkeeping variables (besides the point function's own).
 BOOKKEEPING = ("done", "failed", "reason", "wall_time_s", "state")
 FLAGS = ("straight", "unstable", "swimming", "limit_cycle_reached", "saturated", "capped", "limit_cycle",
+         "bent_equilibrium", "not_periodic", "reached_limit_cycle", "stable",
          "self_intersecting", "towards_field", "reciprocal")
 AXIS_UNITS = {"l": "m", "a": "m", "b": "m", "B": "N m2", "tau": "s", "kappa_E": "1/m", "mu": "Pa s",
               "eta_par": "1", "eta_perp": "1", "chi": "1", "kappa_E_ratio": "1"}
@@ -75,6 +76,17 @@ def variable_attrs(name: str, time_unit: str) -> dict[str, str]:
         return {"units": "1", "long_name": f"{words} (1 yes, 0 no)"}
     table = {
         "t_simulated": ("tau", "simulated time"),
+        "time_to_limit_cycle_s": (tu, "time to the limit cycle: first time every later cycle's period and "
+                                      "end-angle peak-to-peak are within 1% of the periodic orbit's"),
+        "growth_rate_linear_per_s": ("1/s" if phys else "1/tau", "growth rate of the straight state, linear "
+                                     "theory of the discrete model"),
+        "angular_frequency_linear_per_s": ("rad/s" if phys else "rad/tau", "angular frequency of the leading "
+                                           "mode of the straight state, linear theory"),
+        "growth_rate_measured_per_s": ("1/s" if phys else "1/tau", "growth rate of the oscillation envelope "
+                                       "measured from the run (small-amplitude part)"),
+        "lateral_leading_mm": ("mm" if phys else "1e-3 l", "lateral peak-to-peak excursion of the leading end"),
+        "lateral_trailing_mm": ("mm" if phys else "1e-3 l", "lateral peak-to-peak excursion of the trailing end"),
+        "max_multiplier": ("1", "largest modulus of the non-trivial Floquet multipliers"),
         "oscillation_amplitude": ("rad", "half-range of the body-frame tangent angle over the last chunk"),
         "amplitude_growth_rate": ("1/tau", "growth rate of the oscillation amplitude over the last chunk"),
         "n_chunks": ("1", "number of simulated chunks"),

@@ -1,0 +1,357 @@
+"""The settle engine: from an initial state to what the filament settles into.
+
+One engine for :func:`flutterswim.run_to_limit_cycle` and the sweep points: simulate in
+chunks, watch the end segment's angle (extrema and upward crossings, found chunk by chunk,
+so the cost is linear in the run's length), and as soon as the oscillation is steady refine
+it with the periodic-orbit solver (:mod:`flutterswim.orbits`). The stroke's descriptors then
+come from the orbit: exact to the solver's tolerance and smooth in the parameters.
+
+Outcomes, each with its reason:
+- ``straight``: the oscillation decays and the filament stays (nearly) straight;
+- ``bent_equilibrium``: it stops in one of the bent equilibria theta_s = kappa = -chi sin(theta);
+- ``limit_cycle``: a stable periodic orbit; ``reached`` says whether the run came within 1 % of
+  it (period and end-angle peak-to-peak of every later cycle) before ``t_max``; if not (near
+  the Hopf point the approach is slow), the orbit comes from continuation from the Hopf point;
+- ``not_periodic``: a steady oscillation that is not a (stable) periodic orbit;
+- ``capped``: nothing decided by ``t_max``;
+- ``failed``: the solver failed (the reason says why).
+
+Time to the limit cycle: the start of the first cycle from which every cycle's period and
+end-angle peak-to-peak stay within 1 % of the orbit's.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from . import defaults
+from ._validate import positive, positive_int
+from .params import Groups, Parameters
+
+__all__ = ["Settled", "settle", "OUTCOMES", "SETTLE_TOLERANCE"]
+
+OUTCOMES = ("straight", "bent_equilibrium", "limit_cycle", "not_periodic", "capped", "failed")
+#: Relative closeness to the orbit (period and peak-to-peak) that counts as on the limit cycle.
+SETTLE_TOLERANCE = 1e-2
+#: End-angle half-range [rad] below which an oscillation counts as gone, and above which a
+#: steady one is refined as a stroke.
+DAMPED_AMPLITUDE = 1e-5
+SWIM_AMPLITUDE = 1e-2
+#: Largest deviation of the tangent angle from the field [rad] of a filament called straight.
+STRAIGHT_ANGLE = 0.1
+
+
+@dataclass(frozen=True)
+class Settled:
+    """What the filament settled into. Times in s and lengths in m for physical parameters
+    (in tau and l for :class:`Groups`). ``run``: the simulated run; ``orbit``: the stroke as a
+    :class:`flutterswim.orbits.PeriodicOrbit` or None."""
+
+    outcome: str
+    reason: str
+    run: Any
+    orbit: Any
+    reached: bool
+    time_to_limit_cycle: float
+    growth_rate_linear: float
+    angular_frequency_linear: float
+    growth_rate_measured: float
+    t_simulated: float
+    units: str = "SI"
+    extra: dict = field(default_factory=dict)
+
+    def values(self) -> dict[str, float]:
+        """Flat numeric record (flags 0/1, NaN where unknown), named by the sweep conventions:
+        *_s times, *_mm lengths in mm (1e-3 l for groups), *_per_s rates."""
+        si = self.units == "SI"
+        mm = 1e3 if si else 1e3  # m -> mm, or l -> 1e-3 l
+        length = self.orbit.params.l if (self.orbit is not None and si) else (self.extra.get("length", 1.0))
+        out = {k: float(self.outcome == k) for k in OUTCOMES if k != "failed"}
+        out.update(reached_limit_cycle=float(self.reached), t_simulated=self.t_simulated,
+                   time_to_limit_cycle_s=self.time_to_limit_cycle,
+                   growth_rate_linear_per_s=self.growth_rate_linear,
+                   angular_frequency_linear_per_s=self.angular_frequency_linear,
+                   growth_rate_measured_per_s=self.growth_rate_measured)
+        keys = ("period_s", "frequency_hz", "advance_per_cycle_mm", "advance_per_cycle_bl", "speed_mm_s",
+                "speed_bl_s", "lateral_leading_mm", "lateral_trailing_mm", "nonreciprocity",
+                "self_intersecting", "stable", "max_multiplier", "swim_direction_deg")
+        out.update({k: math.nan for k in keys})
+        o = self.orbit
+        if o is not None:
+            out.update(period_s=o.period, frequency_hz=1.0 / o.period, advance_per_cycle_mm=o.advance * mm,
+                       advance_per_cycle_bl=o.advance / length, speed_mm_s=o.speed * mm,
+                       speed_bl_s=o.speed / length, lateral_leading_mm=o.lateral_leading * mm,
+                       lateral_trailing_mm=o.lateral_trailing * mm, nonreciprocity=o.nonreciprocity,
+                       self_intersecting=float(o.self_intersecting), stable=float(o.stable),
+                       max_multiplier=o.max_multiplier, swim_direction_deg=math.degrees(o.swim_direction))
+        return out
+
+
+class _Watch:
+    """Extrema and upward crossings of the end angle q(t), chunk by chunk (linear time)."""
+
+    def __init__(self) -> None:
+        self.ext_t: list[float] = []
+        self.ext_v: list[float] = []
+        self.up_t: list[float] = []
+        self.up_i: list[tuple[int, int, float]] = []  # (chunk, frame, fraction)
+        self.amps: list[float] = []
+        self._prev: tuple[float, float, float] | None = None  # last two (t, q) of the previous chunk
+
+    def add(self, k: int, t: np.ndarray, q: np.ndarray) -> float:
+        """Add chunk k (frames t, q); return the half-range of q over its second half."""
+        if self._prev is not None:
+            t = np.r_[self._prev[0], t]
+            q = np.r_[self._prev[1], q]
+            off = 1
+        else:
+            off = 0
+        if q.size >= 3:
+            i = np.nonzero(((q[1:-1] - q[:-2]) * (q[2:] - q[1:-1]) < 0))[0] + 1
+            for j in i:  # parabola through three frames: sub-frame extremum
+                y0, y1, y2 = q[j - 1], q[j], q[j + 1]
+                den = y0 - 2 * y1 + y2
+                d = 0.5 * (y0 - y2) / den if den != 0 else 0.0
+                self.ext_t.append(float(t[j] + d * (t[j + 1] - t[j])))
+                self.ext_v.append(float(y1 - 0.25 * (y0 - y2) * d))
+        half = q[q.size // 2:]
+        mid = 0.5 * (half.max() + half.min())
+        c = np.nonzero((q[:-1] < mid) & (q[1:] >= mid))[0]
+        for j in c:
+            f = (mid - q[j]) / (q[j + 1] - q[j])
+            self.up_t.append(float(t[j] + f * (t[j + 1] - t[j])))
+            self.up_i.append((k, j - off, float(f)))
+        self._prev = (float(t[-1]), float(q[-1]), 0.0)
+        amp = float(0.5 * (half.max() - half.min()))
+        self.amps.append(amp)
+        return amp
+
+    def cycles(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Per cycle between upward crossings: start time, period and peak-to-peak of q."""
+        up = np.array(self.up_t)
+        et, ev = np.array(self.ext_t), np.array(self.ext_v)
+        starts, periods, p2p = [], [], []
+        for a, b in zip(up[:-1], up[1:]):
+            m = (et >= a) & (et < b)
+            if np.count_nonzero(m) >= 2:
+                starts.append(a)
+                periods.append(b - a)
+                p2p.append(ev[m].max() - ev[m].min())
+        return np.array(starts), np.array(periods), np.array(p2p)
+
+    def growth_rate(self) -> float:
+        """Exponential rate of the envelope of q over the early, small-amplitude part
+        (half-range below 10 % of the largest, past the first two cycles), from consecutive
+        extrema; NaN if too few."""
+        et, ev = np.array(self.ext_t), np.array(self.ext_v)
+        if ev.size < 6:
+            return math.nan
+        h = 0.5 * np.abs(np.diff(ev))
+        th = 0.5 * (et[1:] + et[:-1])
+        top = h.max()
+        idx = np.arange(h.size)
+        if h[-1] < 0.5 * top:  # decaying: the whole envelope above rounding
+            use = (h > 1e-14) & (idx >= 2)
+        else:
+            use = (h < 0.1 * top) & (h > 1e-14) & (idx >= 4)
+        if np.count_nonzero(use) < 3:
+            return math.nan
+        return float(np.polyfit(th[use], np.log(h[use]), 1)[0])
+
+
+def settle(params: Parameters | Groups, *, initial=None, n_cycles: int = defaults.N_CYCLES,
+           t_max: float | None = None, chunk: float | None = None, n_segments: int = defaults.N_SEGMENTS,
+           rtol: float = defaults.RTOL, atol: float = defaults.ATOL,
+           frames_per_tau: int = defaults.FRAMES_PER_TAU, refine: bool = True, progress: bool = False,
+           steps: int | None = None) -> Settled:
+    """Simulate from ``initial`` (default: straight, tilted 0.01 degree) until the outcome is
+    decided (see the module docstring). Times in s for :class:`Parameters`, tau for Groups;
+    defaults: ``chunk`` 10 tau, ``t_max`` 200 tau."""
+    from .initial import InitialState
+    from .orbits.linear import leading_mode
+    from .result import concatenate
+    from .simulate import simulate
+
+    si = isinstance(params, Parameters)
+    tau = params.tau if si else 1.0
+    groups = params.groups if si else params
+    n_cycles = positive_int("n_cycles", n_cycles)
+    n_segments = positive_int("n_segments", n_segments, minimum=4)
+    chunk = positive("chunk", 10.0 * tau if chunk is None else chunk)
+    t_max = positive("t_max", 200.0 * tau if t_max is None else t_max)
+    frames_per_tau = positive_int("frames_per_tau", frames_per_tau, minimum=4)
+    state = InitialState.straight() if initial is None else initial
+    lam = leading_mode(groups, n_segments)
+    watch = _Watch()
+    parts = []
+    t0 = 0.0
+    orbit = None
+    outcome, reason = None, ""
+    after = 0
+    t_lc = math.nan
+    bar = _bar(progress, t_max / tau)
+    k = 0
+    next_len = chunk
+    while outcome is None:
+        t1 = min(t0 + next_len, t_max)
+        part = simulate(params, t1, t_start=t0, initial=state, n_segments=n_segments, rtol=rtol, atol=atol,
+                        frame_dt=tau / frames_per_tau)
+        parts.append(part)
+        if bar is not None:
+            bar.update(round((t1 - t0) / tau, 3))
+        if not part.ok:
+            outcome, reason = "failed", f"the solver failed at t={part.t_final:.6g}: {part.message}"
+            break
+        sl = slice(1, None) if k else slice(None)
+        amp = watch.add(k, part.t[sl] / tau, part.theta[sl, 0])
+        k += 1
+        state, t0 = part.final_state(), t1
+        amps = watch.amps
+        if len(amps) >= 2 and amps[-1] < DAMPED_AMPLITUDE and amps[-1] <= max(amps[-2], 1e-12):
+            dev = float(np.max(np.abs(part.theta[-1] - part.field_angle[-1])))
+            if dev > STRAIGHT_ANGLE:
+                outcome = "bent_equilibrium"
+                reason = (f"settled into a bent equilibrium (the tangent angle departs by up to "
+                          f"{math.degrees(dev):.1f} degrees from the field; oscillation {amps[-1]:.2g} rad)")
+            else:
+                outcome = "straight"
+                reason = f"the oscillation decayed to {amps[-1]:.2g} rad; the filament is straight"
+            break
+        if orbit is None and refine and amp > SWIM_AMPLITUDE and len(amps) >= 2 \
+                and abs(math.log(amps[-1] / max(amps[-2], 1e-300))) < 0.05 and len(watch.up_t) >= 3:
+            orbit = _refine(params, parts, watch, n_segments, steps)
+        if orbit is not None:
+            starts, periods, p2p = watch.cycles()
+            T_ref = orbit.period / tau
+            ref = _orbit_p2p(orbit)
+            ok = (np.abs(periods / T_ref - 1) < SETTLE_TOLERANCE) & (np.abs(p2p / ref - 1) < SETTLE_TOLERANCE)
+            bad = np.nonzero(~ok)[0]
+            first = 0 if bad.size == 0 else int(bad[-1]) + 1
+            after = len(ok) - first
+            if after > 0:
+                t_lc = float(starts[first]) * tau
+            if after >= n_cycles:
+                outcome = "limit_cycle"
+                reason = (f"stable periodic orbit (max non-trivial multiplier {orbit.max_multiplier:.4f}); "
+                          f"within {SETTLE_TOLERANCE:.0%} of it from t={t_lc:.4g}")
+                break
+            next_len = max((n_cycles - after + 0.5) * T_ref * tau, 0.05 * tau)
+        if t0 >= t_max * (1 - 1e-12):
+            break
+    if bar is not None:
+        bar.close()
+    if outcome is None:
+        dev = float(np.max(np.abs(parts[-1].theta[-1] - parts[-1].field_angle[-1])))
+        outcome, reason, orbit = _at_cap(params, groups, orbit, watch, lam, n_segments, steps, t_max / tau, dev)
+    run = concatenate(parts) if parts else None
+    reached = outcome == "limit_cycle" and after >= n_cycles
+    if outcome == "limit_cycle" and not reached:
+        t_lc = math.nan
+    if outcome != "limit_cycle":
+        orbit = None if outcome != "not_periodic" else orbit
+    rate = watch.growth_rate()
+    a = [x for x in watch.amps if x > 1e-14]
+    if not math.isfinite(rate) and len(a) >= 2 and len(parts) >= 2:
+        # no oscillation to follow (an overdamped mode): the chunk-to-chunk change of the range
+        dt = (parts[-1].t[-1] - parts[-2].t[-1]) / tau
+        rate = math.log(a[-1] / a[-2]) / dt
+    settled = Settled(outcome, reason, run, orbit if outcome == "limit_cycle" else None, reached, t_lc,
+                      lam.real / tau, lam.imag / tau, rate / tau, t0 / tau,
+                      units="SI" if si else "dimensionless",
+                      extra={"length": params.l if si else 1.0})
+    return settled
+
+
+def _orbit_p2p(orbit) -> float:
+    from .orbits.periodic import _p2p
+
+    return _p2p(orbit.theta[:, 0])
+
+
+def _refine(params, parts, watch: _Watch, n_segments: int, steps: int | None):
+    """Newton shooting from the state at the last upward crossing; None if it fails or
+    finds an unstable or trivial orbit."""
+    from .orbits.periodic import DEFAULT_STEPS, OrbitNotFound, orbit_from_flow, solve_orbit
+    from .orbits.system import ShapeSystem
+    from .orbits.shooting import StepFailure
+
+    k, j, f = watch.up_i[-1]
+    part = parts[k]
+    n = n_segments
+    if j + 1 >= part.t.size or j < 0:
+        k, j, f = watch.up_i[-2]
+        part = parts[k]
+    ua = np.concatenate((part.dimensionless().theta[j], part.dimensionless().kappa[j]))
+    ub = np.concatenate((part.dimensionless().theta[j + 1], part.dimensionless().kappa[j + 1]))
+    u0 = ua + f * (ub - ua)
+    T0 = float(np.median(np.diff(watch.up_t[-3:])))
+    sysm = ShapeSystem.of(params, n)
+    steps = DEFAULT_STEPS if steps is None else steps
+    try:
+        u, T, fl, res, it = solve_orbit(sysm, u0, T0, steps=steps, max_newton=10)
+    except (OrbitNotFound, StepFailure, np.linalg.LinAlgError):
+        return None
+    orb = orbit_from_flow(params, sysm, fl, res, it, steps)
+    if orb.amplitude < 1e-6 or not orb.stable:
+        return None
+    return orb
+
+
+def _at_cap(params, groups, orbit, watch: _Watch, lam: complex, n_segments: int, steps, t_cap_tau: float,
+            dev: float):
+    """Decide at the time cap."""
+    amps = watch.amps
+    if lam.real < 0 and len(amps) >= 2 and amps[-1] < amps[-2] and amps[-1] < SWIM_AMPLITUDE:
+        rate = watch.growth_rate()
+        what = ("bent_equilibrium", "towards a bent equilibrium") if dev > STRAIGHT_ANGLE else ("straight", "")
+        return (what[0], f"still decaying {what[1]} at t_max={t_cap_tau:g} tau (measured rate {rate:.3g}/tau, "
+                f"linear theory {lam.real:.3g}/tau): the straight state is stable".replace("  ", " "), None)
+    if orbit is not None:
+        return ("limit_cycle", f"stable periodic orbit found, but the run had not come within "
+                f"{SETTLE_TOLERANCE:.0%} of it for enough cycles by t_max={t_cap_tau:g} tau", orbit)
+    growing = len(amps) >= 2 and amps[-1] > amps[-2] * 1.001
+    if lam.real > 0 and growing:
+        # slow onset near the Hopf point: the orbit by continuation from the Hopf point
+        from .orbits.continuation import continue_orbits
+        from .orbits.periodic import DEFAULT_STEPS
+
+        try:
+            br = continue_orbits(groups, "chi", groups.chi, n_points=6, n_segments=n_segments,
+                                 steps=DEFAULT_STEPS if steps is None else steps)
+            orb = br.orbits[-1]
+            if isinstance(params, Parameters):
+                from .orbits.periodic import PeriodicOrbit  # noqa: F401
+
+                orb = _to_physical(orb, params)
+            if orb.stable:
+                return ("limit_cycle", f"the onset is slow (growth rate {lam.real:.3g}/tau): the run was still "
+                        f"growing at t_max={t_cap_tau:g} tau; the stable orbit comes from continuation "
+                        "from the Hopf point", orb)
+        except Exception as exc:  # noqa: BLE001 - the cap outcome below says what happened
+            return ("capped", f"still growing at t_max={t_cap_tau:g} tau and continuation from the Hopf "
+                    f"point failed ({exc})", None)
+    if amps and amps[-1] > SWIM_AMPLITUDE:
+        return ("not_periodic", f"a steady oscillation (half-range {amps[-1]:.3g} rad) that is not a stable "
+                "periodic orbit (Newton shooting did not converge on it)", None)
+    return ("capped", f"undecided at t_max={t_cap_tau:g} tau (oscillation half-range "
+            f"{amps[-1] if amps else math.nan:.3g} rad)", None)
+
+
+def _to_physical(orb, params: Parameters):
+    """A dimensionless orbit in the units of ``params``."""
+    tau, l = params.tau, params.l
+    return replace(orb, params=params, period=orb.period * tau, advance=orb.advance * l,
+                   speed=orb.speed * l / tau, lateral_leading=orb.lateral_leading * l,
+                   lateral_trailing=orb.lateral_trailing * l, units="SI")
+
+
+def _bar(enabled: bool, total: float):
+    if not enabled:
+        return None
+    from tqdm.auto import tqdm
+
+    return tqdm(total=round(total, 3), unit="tau", desc="settle", leave=False)
