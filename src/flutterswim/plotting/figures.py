@@ -198,7 +198,7 @@ def draw_kymographs(axs, obj: Any, window: tuple[float, float] | None = None, *,
     f = mm_factor(tr)
     along, across, ang = path_sections(tr)
     panels = [(along, "position along the path (mm)",
-               f"crossings of the mean path ({math.degrees(ang):.0f}° to x)"),
+               f"crossings of the mean path ({int(round(math.degrees(ang))) + 0}° to x)"),
               (across, "position across the path (mm)", "crossings of the section moving with the centroid")]
     if h_level is not None:
         k = line_kymograph(tr, "horizontal", h_level)
