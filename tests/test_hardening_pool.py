@@ -86,6 +86,12 @@ def test_parent_killed_leaves_no_worker_and_rerun_resumes(tmp_path, sig):
             time.sleep(0.05)
         workers = _workers_of(proc.pid)
         assert workers, "no worker process found while the sweep was running"
+        # the lock is held by the parent only: no worker has the lock file open
+        lock = str(tmp_path / ".s.zarr.lock")
+        assert any(os.path.realpath(f"/proc/{proc.pid}/fd/{fd}") == lock for fd in os.listdir(f"/proc/{proc.pid}/fd"))
+        for w in workers:
+            fds = os.listdir(f"/proc/{w}/fd")
+            assert all(os.path.realpath(f"/proc/{w}/fd/{fd}") != lock for fd in fds)
         os.kill(proc.pid, sig)
         proc.wait(timeout=30)
         t_kill = time.time()
