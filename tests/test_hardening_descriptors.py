@@ -52,7 +52,7 @@ def test_sampled_extremes_would_miss_the_peak():
     """Guard: at 25 frames per period the raw samples of this signal fall short of 0.2% at some
     phase offset, so the descriptor must interpolate between frames."""
     worst = 1.0
-    for off in np.linspace(0, 1, 11):
+    for off in (0.0, 0.25, 0.5, 0.75):
         tr = _track(0.05, offset=off)
         yl = tr.y[:, -1]
         worst = min(worst, (yl.max() - yl.min()) / (0.1 * _true_range()))

@@ -136,7 +136,7 @@ def store_dims(spec: SweepSpec) -> tuple[list[str], tuple[int, ...], dict[str, A
     if spec.continuation:
         dims = ["branch"] + dims
         shape = (2,) + tuple(shape)
-        coords["branch"] = ("branch", np.array(["up", "down"]),
+        coords["branch"] = ("branch", np.array(["up", "down"], dtype=object),  # variable-length strings
                             {"units": "1", "long_name": "continuation branch (up: increasing, down: decreasing)"})
     return dims, tuple(shape), coords
 
