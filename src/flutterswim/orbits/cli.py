@@ -15,7 +15,7 @@ def register(subparsers) -> None:
     p.add_argument("--preset", default="paper")
     p.add_argument("--out", default="branch.nc")
     p.add_argument("--points", type=int, default=100, help="orbits along the branch (at least; default 100)")
-    p.add_argument("--segments", type=int, default=None, help="segments N (default: the package default)")
+    p.add_argument("--segments", type=int, default=None, help="segments N (default: the sweeps' resolution, 24)")
     p.add_argument("--steps", type=int, default=None, help="Radau steps per period (default 32)")
     p.add_argument("--plot", default=None, help="also draw the branch to this PNG")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -47,7 +47,8 @@ def _cmd_branch(args) -> int:
     from .continuation import continue_orbits
     from .linear import hopf_point
     from .parameter import Axis
-    from .periodic import DEFAULT_SEGMENTS, DEFAULT_STEPS
+    from .. import defaults
+    from .periodic import DEFAULT_STEPS
 
     name, lo, hi = _parse_range(args.range)
     params = preset(args.preset)
@@ -55,7 +56,7 @@ def _cmd_branch(args) -> int:
     out = check_output_file(args.out, (".nc",))
     if args.plot:
         check_output_file(args.plot, (".png", ".pdf", ".svg"), what="plot")
-    n = DEFAULT_SEGMENTS if args.segments is None else args.segments
+    n = defaults.SWEEP_N_SEGMENTS if args.segments is None else args.segments
     steps = DEFAULT_STEPS if args.steps is None else args.steps
     # continue towards the end of the range where the straight state is unstable
     hp = hopf_point(params, name, n_segments=n, bracket=None)

@@ -17,11 +17,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import defaults
 from .._validate import ParameterError, finite, positive, positive_int
 from .linear import hopf_point
 from .normal_form import normal_form
 from .parameter import Axis
-from .periodic import DEFAULT_SEGMENTS, DEFAULT_STEPS, OrbitNotFound, PeriodicOrbit, orbit_from_flow
+from .periodic import DEFAULT_STEPS, OrbitNotFound, PeriodicOrbit, orbit_from_flow
 from .shooting import StepFailure, flow
 from ._threads import one_blas_thread
 from .system import ShapeSystem
@@ -129,10 +130,11 @@ def _systems(axis: Axis, value: float, n: int) -> ShapeSystem:
 
 @one_blas_thread
 def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
-                    n_segments: int = DEFAULT_SEGMENTS, steps: int = DEFAULT_STEPS, tol: float = 1e-10,
+                    n_segments: int = defaults.SWEEP_N_SEGMENTS, steps: int = DEFAULT_STEPS, tol: float = 1e-10,
                     max_newton: int = 8, progress: bool = False, max_points: int | None = None) -> Branch:
-    """Continue the stroke from the Hopf point along ``parameter`` up to ``to``, with about
-    ``n_points`` orbits (at least that many; more where the branch bends)."""
+    """Continue the stroke from the Hopf point along ``parameter`` up to ``to``, with at least
+    ``n_points`` orbits (more where the branch bends). The default resolution is the sweeps'
+    (``flutterswim.defaults.SWEEP_N_SEGMENTS``, with its stated accuracy)."""
     t_start = time.perf_counter()
     axis = Axis(params, parameter)
     to = finite("to", to)
@@ -140,7 +142,7 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     n_segments = positive_int("n_segments", n_segments, minimum=4)
     steps = positive_int("steps", steps, minimum=8)
     tol = positive("tol", tol)
-    max_points = 4 * n_points if max_points is None else positive_int("max_points", max_points)
+    max_points = 10 * n_points + 50 if max_points is None else positive_int("max_points", max_points)
     base = axis.value()
     lo, hi = sorted((base, to))
     span = hi - lo
@@ -152,7 +154,8 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
         raise ParameterError(f"to={to:g}: the stroke branch exists for {parameter} "
                              f"{'above' if side > 0 else 'below'} the Hopf point {hopf.value:.6g}")
     length_p = abs(to - hopf.value)
-    length_u = math.sqrt(nf.amplitude2_slope * length_p) / 2 * math.sqrt(2)
+    # the shape moves along the orbit as well as in amplitude: a few times the amplitude range
+    length_u = 3.0 * math.sqrt(nf.amplitude2_slope * length_p)
     # first orbit from the normal form, a small distance into the branch
     d1 = side * min(0.01 * length_p, 0.002 * max(1.0, abs(hopf.value)))
     amp = math.sqrt(nf.amplitude2_slope * abs(d1))
@@ -169,8 +172,8 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     X = [np.concatenate((u, [T, values[-1]]))]
     fls = [fl]
     w = _weights(u.size, length_u, length_p)
-    ds = 1.0 / n_points
-    ds_max = 1.5 / n_points
+    ds = 0.7 / n_points
+    ds_max = 3.0 / n_points
     bar = _bar(progress, length_p)
     message = f"reached {parameter}={to:g}"
     while True:
@@ -185,7 +188,8 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
         else:
             tangent = X[-1] - X[-2]
         tangent = tangent / math.sqrt(np.sum((tangent * w) ** 2))
-        step_ds = ds
+        # at most 1/n_points of the parameter range per step, so that there are n_points or more
+        step_ds = min(ds, length_p / (n_points * max(abs(tangent[-1]), 1e-300)))
         finishing = (xk[-1] + step_ds * tangent[-1] - to) * side >= 0 and tangent[-1] * side > 0
         try:
             if finishing:
@@ -209,7 +213,7 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
             bar.update(abs(values[-1] - values[-2]))
         if finishing:
             break
-        ds = min(ds_max, ds * (1.3 if it <= 3 else 0.7 if it >= 6 else 1.0))
+        ds = min(ds_max, max(ds, step_ds) * (1.5 if it <= 4 else 0.7 if it >= 7 else 1.0))
     if bar is not None:
         bar.close()
     return Branch(axis, np.array(values), orbits, hopf.value, hopf.omega, nf.lyapunov_coefficient,
@@ -237,33 +241,40 @@ def _weights(m: int, length_u: float, length_p: float) -> np.ndarray:
     return w
 
 
-def _closing(axis, n, steps, u, T, p, warm, variational):
+def _closing(axis, n, steps, u, T, p, warm, variational, derivative_tol=1e-10):
     sysm = _systems(axis, p, n)
-    fl = flow(sysm, u, T, steps, variational=variational, warm=warm)
+    fl = flow(sysm, u, T, steps, variational=variational, warm=warm, derivative_tol=derivative_tol)
     return sysm, fl
 
 
 def _newton_arclength(axis, n, steps, xk, warm, tangent, w, ds, tol, max_newton):
+    """Newton on (u, T, p) with the arclength condition; dPhi/dp by a difference of flows,
+    formed at the first iteration and kept (it changes little over a corrector)."""
     m = xk.size - 2
     x = xk + ds * tangent
     sys_k = _systems(axis, xk[-1], n)
     normal = sys_k.f(xk[:m])
     normal /= np.linalg.norm(normal)
     fl = warm
+    dphi_dp = None
+    res = math.inf
     for it in range(1, max_newton + 1):
         u, T, p = x[:m], x[m], x[-1]
-        sysm, fl = _closing(axis, n, steps, u, T, p, fl, True)
+        sysm, fl = _closing(axis, n, steps, u, T, p, fl, True, derivative_tol=1e-6)
         r = fl.y[-1, 2:] - u
         res = float(np.max(np.abs(r)))
         arc = float(np.sum(w * w * tangent * (x - xk))) - ds
         if res < tol and abs(arc) < 1e-8:
-            return x, fl, res, it
-        dp = 1e-6 * max(1.0, abs(p))
-        _, fl_p = _closing(axis, n, steps, u, T, p + dp, fl, False)
+            _, final = _closing(axis, n, steps, u, T, p, fl, True)
+            return x, final, float(np.max(np.abs(final.y[-1, 2:] - u))), it
+        if dphi_dp is None:
+            dp = 1e-6 * max(1.0, abs(p))
+            _, fl_p = _closing(axis, n, steps, u, T, p + dp, fl, False)
+            dphi_dp = (fl_p.y[-1, 2:] - fl.y[-1, 2:]) / dp
         a = np.zeros((m + 2, m + 2))
         a[:m, :m] = fl.monodromy - np.eye(m)
         a[:m, m] = fl.f[-1, 2:]
-        a[:m, m + 1] = (fl_p.y[-1, 2:] - fl.y[-1, 2:]) / dp
+        a[:m, m + 1] = dphi_dp
         a[m, :m] = normal
         a[m + 1] = w * w * tangent
         rhs = -np.concatenate((r, [normal @ (u - xk[:m]), arc]))

@@ -129,9 +129,14 @@ def _check_params(params) -> None:
 
 
 def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: int = DEFAULT_STEPS,
-                tol: float = 1e-10, max_newton: int = 12, u_ref: np.ndarray | None = None
-                ) -> tuple[np.ndarray, float, Flow, float, int]:
-    """Newton shooting from the guess (u0, period). Returns (u0, T, flow, residual, steps)."""
+                tol: float = 1e-10, max_newton: int = 12, u_ref: np.ndarray | None = None,
+                warm: Flow | None = None) -> tuple[np.ndarray, float, Flow, float, int]:
+    """Newton shooting from the guess (u0, period). Returns (u0, T, flow, residual, steps).
+
+    Each Newton step integrates the variational equation with the step matrices formed at
+    the warm-started stages (exact to the size of the last correction, which is all Newton
+    needs); once the orbit closes, a final pass from the converged stages gives the exact
+    monodromy, so the Floquet multipliers are those of the orbit itself."""
     u = np.array(u0, float)
     T = float(period)
     u_ref = u.copy() if u_ref is None else np.asarray(u_ref, float)
@@ -139,13 +144,14 @@ def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: in
     normal /= np.linalg.norm(normal)
     m = u.size
     res = math.inf
-    fl = None
+    fl = warm
     for it in range(1, max_newton + 1):
-        fl = flow(system, u, T, steps, variational=True, warm=fl)
+        fl = flow(system, u, T, steps, variational=True, warm=fl, derivative_tol=1e-6)
         r = fl.y[-1, 2:] - u
         res = float(np.max(np.abs(r)))
         if res < tol:
-            return u, T, fl, res, it
+            final = flow(system, u, T, steps, variational=True, warm=fl)
+            return u, T, final, float(np.max(np.abs(final.y[-1, 2:] - u))), it
         a = np.zeros((m + 1, m + 1))
         a[:m, :m] = fl.monodromy - np.eye(m)
         a[:m, m] = fl.f[-1, 2:]
@@ -158,10 +164,6 @@ def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: in
         T = T + lam * dx[m]
         if not (np.all(np.isfinite(u)) and T > 0):
             raise OrbitNotFound(f"Newton left the admissible region at iteration {it} (T={T:.4g})")
-    fl = flow(system, u, T, steps, variational=True, warm=fl)
-    res = float(np.max(np.abs(fl.y[-1, 2:] - u)))
-    if res < tol:
-        return u, T, fl, res, max_newton
     raise OrbitNotFound(f"Newton shooting did not converge in {max_newton} iterations "
                         f"(residual {res:.3g}, tolerance {tol:.3g})")
 

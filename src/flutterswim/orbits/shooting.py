@@ -58,8 +58,14 @@ class StepFailure(FloatingPointError):
 
 def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
          variational: bool = False, warm: Flow | None = None, r0=(0.0, 0.0),
-         stage_tol: float = 1e-13, max_iter: int = 12) -> Flow:
-    """Integrate the shape from u0 over ``period`` in ``steps`` equal Radau IIA steps."""
+         stage_tol: float = 1e-13, max_iter: int = 12, derivative_tol: float = 1e-10) -> Flow:
+    """Integrate the shape from u0 over ``period`` in ``steps`` equal Radau IIA steps.
+
+    Stage equations by Newton's method with the step matrix P formed once per step, at the
+    warm start (or the explicit predictor), and refreshed if the iteration stalls. With
+    ``variational``, the step's derivative needs P at the converged stages: P is formed
+    again there unless the stages moved by less than ``derivative_tol`` from where it was
+    formed (then the derivative is exact to that size)."""
     a = RADAU_A
     h = period / steps
     u = np.array(u0, float)
@@ -72,33 +78,44 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
     fs[0] = system.rhs_full(ys[0])
     smat = np.eye(m) if variational else None
     eye3 = np.eye(3 * m)
+
+    def step_matrix(z):
+        jac = [system.jac_full(system.full(u + z[i]))[2:, 2:] for i in range(3)]
+        p = eye3.copy()
+        for i in range(3):
+            for j in range(3):
+                p[i * m:(i + 1) * m, j * m:(j + 1) * m] -= (h * a[i, j]) * jac[j]
+        return jac, sla.lu_factor(p, check_finite=False)
+
     for step in range(steps):
         if warm is not None and warm.stages.shape == zs.shape:
             z = warm.stages[step].copy()
         else:
             z = np.outer(RADAU_C * h, fs[step, 2:])  # explicit predictor
         scale = 1.0 + np.max(np.abs(u))
-        for _it in range(max_iter + 1):
-            full = [system.full(u + z[i]) for i in range(3)]
-            fz = np.array([system.rhs_full(y) for y in full])
-            jac = [system.jac_full(y)[2:, 2:] for y in full]
-            p = eye3.copy()
-            for i in range(3):
-                for j in range(3):
-                    p[i * m:(i + 1) * m, j * m:(j + 1) * m] -= (h * a[i, j]) * jac[j]
-            lu = sla.lu_factor(p, check_finite=False)
+        z_lu = z.copy()
+        jac, lu = step_matrix(z)
+        last = np.inf
+        for it in range(max_iter + 1):
+            fz = np.array([system.rhs_full(system.full(u + z[i])) for i in range(3)])
             res = (z - h * (a @ fz[:, 2:])).ravel()
             dz = sla.lu_solve(lu, -res, check_finite=False).reshape(3, m)
             z += dz
+            size = np.max(np.abs(dz))
             if not np.all(np.isfinite(z)):
                 raise StepFailure(f"non-finite stage values at step {step} of {steps}")
-            if np.max(np.abs(dz)) < stage_tol * scale:
+            if size < stage_tol * scale:
                 break
+            if size > 0.1 * last and it >= 1:  # slow: a fresh matrix at the current iterate
+                z_lu = z.copy()
+                jac, lu = step_matrix(z)
+            last = size
         else:
             raise StepFailure(f"stage equations did not converge at step {step} of {steps} (h={h:.3g})")
         if variational:
-            # P dZ/du = h [sum_j A_ij J_j]_i; p and jac are at the last-but-one iterate,
-            # within stage_tol of the solution
+            if np.max(np.abs(z - z_lu)) > derivative_tol * scale:
+                jac, lu = step_matrix(z)
+            # P dZ/du = h [sum_j A_ij J_j]_i at the converged stages
             rhs = np.concatenate([h * sum(a[i, j] * jac[j] for j in range(3)) for i in range(3)])
             dzdu = sla.lu_solve(lu, rhs, check_finite=False)[2 * m:]
             smat = smat + dzdu @ smat
