@@ -38,13 +38,25 @@ def files(tmp_path_factory):
     return d
 
 
-@pytest.mark.parametrize("name, words", [("missing.nc", "does not exist"), ("random.nc", "not a NetCDF"),
-                                         ("other.nc", "not a flutterswim run"), ("empty.nc", "is empty"),
-                                         ("truncated.nc", "cannot be read")])
+BAD_FILES = [("missing.nc", "does not exist"), ("random.nc", "not a NetCDF"),
+             ("other.nc", "not a flutterswim run"), ("empty.nc", "is empty"), ("truncated.nc", "cannot be read")]
+
+
+@pytest.mark.parametrize("name, words", BAD_FILES)
 @pytest.mark.parametrize("command", ["describe", "plot"])
-def test_bad_run_files_give_one_line_and_status_2(files, name, words, command):
-    line = _one_line_error(_cli(command, files / name, cwd=files))
-    assert name in line and words in line
+def test_bad_run_files_give_one_line_and_status_2(files, name, words, command, capsys):
+    from flutterswim.cli import main
+
+    status = main([command, str(files / name)])  # in process: main must not raise
+    err = capsys.readouterr().err
+    assert status == 2 and "Traceback" not in err
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1 and name in lines[0] and words in lines[0]
+
+
+def test_bad_run_file_in_a_real_process(files):
+    line = _one_line_error(_cli("describe", files / "random.nc", cwd=files))
+    assert "random.nc" in line and "not a NetCDF" in line
 
 
 def test_directory_as_run_and_as_out(files):

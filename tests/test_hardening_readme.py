@@ -51,7 +51,7 @@ def _check_outputs(d: Path, stdout: str) -> None:
     assert ds["done"].values.all()
 
 
-@pytest.mark.parametrize("how", ["file", "stdin"])
+@pytest.mark.parametrize("how", ["file", pytest.param("stdin", marks=pytest.mark.slow)])
 def test_readme_python_block_runs(tmp_path, how):
     code = _block()
     if how == "file":
