@@ -60,12 +60,12 @@ def plot_branch(ds, path=None, *, x_range: tuple[float, float] | None = None):
         if np.any(unstable):
             a.plot(x[unstable], np.full(unstable.sum(), np.nan))
         a.set_xlim(lo, x.max())
-    axes[0].text(hopf, 0.02, f" Hopf {hopf:.4g}", transform=axes[0].get_xaxis_transform(), fontsize=8)
+    axes[0].text(hopf, 0.97, f" Hopf {hopf:.4g}", transform=axes[0].get_xaxis_transform(), fontsize=8, va="top")
     handles = [Line2D([], [], color="0.5", lw=1.8, label="straight, stable (linear theory)"),
                Line2D([], [], color="k", lw=1.8, label="stroke (periodic orbit)"),
                Line2D([], [], color="tab:red", lw=1.8, label="self-intersecting stroke"),
                Line2D([], [], color="0.3", ls=":", label="Hopf point (discrete linear stability)")]
-    axes[0].legend(handles=handles, fontsize=8, loc="lower center")
+    axes[0].legend(handles=handles, fontsize=8, loc="best")
     h3 = [Line2D([], [], color="k", lw=1.8, label="leading end"),
           Line2D([], [], color="k", lw=1.8, ls="--", label="trailing end")]
     ax3.legend(handles=h3, fontsize=8, loc="lower right")
