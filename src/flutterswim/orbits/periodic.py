@@ -91,9 +91,11 @@ class PeriodicOrbit:
         return {k: (bool(v) if isinstance(v, (bool, np.bool_)) else v if isinstance(v, str) else
                     int(v) if isinstance(v, (int, np.integer)) else float(v)) for k, v in out.items()}
 
-    def to_result(self, n_cycles: int = 1):
-        """The orbit as a :class:`flutterswim.SimulationResult` over ``n_cycles`` periods (one
-        frame per step), positions rebuilt by the quadrature: for describe, plots, kymographs."""
+    def to_result(self, n_cycles: int = 1, frames_per_cycle: int | None = None):
+        """The orbit as a :class:`flutterswim.SimulationResult` over ``n_cycles`` periods,
+        positions rebuilt by the quadrature: for describe, plots, kymographs. Frames: one per
+        solver step, or ``frames_per_cycle`` by trigonometric interpolation of the periodic
+        shape and of r(0) less its mean drift (spectrally accurate for the smooth stroke)."""
         from ..field import Field
         from ..filament import Filament
         from ..integrators import SolverStats, Solution
@@ -105,16 +107,33 @@ class PeriodicOrbit:
         m = self.phase.size
         T = self.period_dimensionless
         d = (self.advance / length) * np.array([math.cos(self.swim_direction), math.sin(self.swim_direction)])
-        reps = [np.concatenate((self.r0 + c * d, self.theta, self.kappa), axis=1) for c in range(n_cycles)]
-        last = np.concatenate((self.r0[:1] + n_cycles * d, self.theta[:1], self.kappa[:1]), axis=1)
+        theta, kappa = self.theta, self.kappa
+        r0 = self.r0 - np.outer(self.phase, d)  # periodic part of r(0)
+        if frames_per_cycle is not None:
+            k = positive_int("frames_per_cycle", frames_per_cycle, minimum=4)
+            theta, kappa, r0 = (_resample(a, k) for a in (theta, kappa, r0))
+            m = k
+        phase = np.arange(m) / m
+        r0 = r0 + np.outer(phase, d)
+        reps = [np.concatenate((r0 + c * d, theta, kappa), axis=1) for c in range(n_cycles)]
+        last = np.concatenate((r0[:1] + n_cycles * d, theta[:1], kappa[:1]), axis=1)
         y = np.concatenate(reps + [last])
         t = np.arange(n_cycles * m + 1) * (T / m)
-        stats = SolverStats("periodic_orbit", 3, self.steps, 0, 0, 0, 0, 0.0)
+        stats = SolverStats("periodic_orbit", 5, self.steps, 0, 0, 0, 0, 0.0)
         sol = Solution(t, y, "completed", "periodic orbit", float(t[-1]), y[-1], stats)
         fil = Filament(self.n_segments, g.eta_par, g.eta_perp, g.chi)
         return _package(sol, fil, Field().scaled(tau), g, self.params, tau, False,
                         {"n_segments": self.n_segments, "source": "periodic_orbit",
                          "limit_cycle": True, "limit_cycle_time": 0.0})
+
+
+def _resample(a: np.ndarray, k: int) -> np.ndarray:
+    """Periodic samples (M, ...) along axis 0 to k samples, by zero-padding the spectrum."""
+    m = a.shape[0]
+    c = np.fft.rfft(a, axis=0)
+    if m % 2 == 0:
+        c[-1] *= 0.5  # split the Nyquist term between +-m/2
+    return np.fft.irfft(c, k, axis=0) * (k / m)
 
 
 def _scales(params) -> tuple[float, float]:

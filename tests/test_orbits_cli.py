@@ -1,0 +1,37 @@
+"""``flutterswim branch`` and ``flutterswim plot-branch``: data, units and the figure's data."""
+
+import numpy as np
+import pytest
+
+from flutterswim.cli import main
+
+
+def test_branch_and_plot(tmp_path, capsys):
+    xr = pytest.importorskip("xarray")
+    pytest.importorskip("matplotlib")
+    out = tmp_path / "branch.nc"
+    code = main(["branch", "kappa_E_ratio=0.6:0.9", "--out", str(out), "--points", "6", "--segments", "16",
+                 "--steps", "16", "--quiet"])
+    assert code == 0
+    ds = xr.open_dataset(out, engine="h5netcdf")
+    x = ds["kappa_E_ratio"].values
+    assert x[0] > ds.attrs["hopf_kappa_E_ratio"] and x[-1] == pytest.approx(0.9)
+    assert ds.attrs["bifurcation"] == "supercritical" and ds.attrs["lyapunov_coefficient"] < 0
+    assert ds["advance"].attrs["units"] == "m" and ds.attrs["Conventions"].startswith("CF")
+    # the square-root law: advance grows with the distance to the Hopf point, from zero
+    assert np.all(np.diff(ds["advance"].values) > 0)
+    png = tmp_path / "branch.png"
+    assert main(["plot-branch", str(out), "--out", str(png)]) == 0
+    from flutterswim.orbits.plot import plot_branch
+
+    fig = plot_branch(ds)
+    ys = [line.get_ydata() for line in fig.axes[0].lines if len(line.get_xdata()) == x.size + 1]
+    assert any(np.allclose(np.asarray(y)[1:], ds["advance"].values * 1e3, equal_nan=True) for y in ys)
+
+
+def test_branch_cli_rejects_bad_input_with_one_line(tmp_path, capsys):
+    assert main(["branch", "zeta=0:1", "--out", str(tmp_path / "b.nc")]) == 2
+    err = capsys.readouterr().err
+    assert "zeta" in err and "Traceback" not in err and err.count("\n") == 1
+    assert main(["branch", "kappa_E_ratio=0.6", "--out", str(tmp_path / "b.nc")]) == 2
+    assert main(["plot-branch", str(tmp_path / "missing.nc")]) == 2
