@@ -21,11 +21,57 @@ from typing import Iterator, Sequence
 
 from ._validate import ParameterError
 
-__all__ = ["MARKER", "check_output_file", "check_output_dir", "atomic_path", "atomic_write_text",
+__all__ = ["MARKER", "SIGNATURE", "is_ours", "figure_metadata", "mark_gif", "check_output_file", "check_output_dir", "atomic_path", "atomic_write_text",
            "check_store_path", "write_marker", "has_marker", "remove_own_store"]
 
 #: File inside every store flutterswim creates; nothing without it is ever deleted.
 MARKER = ".flutterswim-store"
+#: Bytes every file flutterswim writes contains (NetCDF attributes, figure metadata, GIF
+#: comment, MP4 tag): an existing file without them is never overwritten.
+SIGNATURE = b"flutterswim"
+_SCAN = 64 << 20
+
+
+def is_ours(path: str | os.PathLike) -> bool:
+    """True if the file carries :data:`SIGNATURE` (searched in its first and last 64 MiB)."""
+    p = Path(os.fspath(path))
+    try:
+        size = p.stat().st_size
+        with open(p, "rb") as f:
+            head = f.read(_SCAN)
+            if SIGNATURE in head:
+                return True
+            if size > _SCAN:
+                f.seek(max(_SCAN - len(SIGNATURE), size - _SCAN))
+                return SIGNATURE in f.read()
+    except OSError:
+        return False
+    return False
+
+
+def figure_metadata(suffix: str) -> dict:
+    """``savefig`` keywords that sign a figure file (png, pdf, svg, jpg)."""
+    from . import __version__
+
+    sfx = suffix.lower().lstrip(".")
+    tag = f"flutterswim {__version__}"
+    if sfx == "png":
+        return {"metadata": {"Software": tag}}
+    if sfx in ("pdf", "svg"):
+        return {"metadata": {"Creator": tag}}
+    if sfx in ("jpg", "jpeg"):
+        return {"pil_kwargs": {"comment": tag.encode()}}
+    return {}
+
+
+def mark_gif(path: str | os.PathLike) -> None:
+    """Insert a GIF comment extension with :data:`SIGNATURE` before the trailer byte."""
+    p = Path(os.fspath(path))
+    data = p.read_bytes()
+    if not data.endswith(b"\x3b") or SIGNATURE in data[-64:]:
+        return
+    note = SIGNATURE + b" animation"
+    p.write_bytes(data[:-1] + b"\x21\xfe" + bytes([len(note)]) + note + b"\x00\x3b")
 
 
 def _writable_dir(folder: Path, what: str, path: Path) -> None:
@@ -67,6 +113,9 @@ def check_output_file(path: str | os.PathLike, suffixes: Sequence[str], *, what:
                              f"{' or '.join(suffixes)}")
     if p.exists() and not os.access(p, os.W_OK):
         raise ParameterError(f"{what}={str(p)!r} exists and is not writable")
+    if p.is_file() and p.stat().st_size > 0 and not is_ours(p):
+        raise ParameterError(f"{what}={str(p)!r} exists and was not written by flutterswim; it is never "
+                             "overwritten. Choose another name, or move the file away first")
     _writable_dir(p.parent if str(p.parent) else Path("."), what, p)
     return p
 

@@ -13,6 +13,7 @@ import argparse
 import json
 import sys
 import time
+from pathlib import Path
 
 from . import defaults
 from .limit_cycle import run_to_limit_cycle
@@ -27,13 +28,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--segments", type=int, default=defaults.N_SEGMENTS,
                     help=f"spatial resolution N (default {defaults.N_SEGMENTS})")
     args = ap.parse_args(argv)
-    from ._paths import atomic_write_text, check_output_dir
+    from ._paths import atomic_write_text, check_output_dir, check_output_file
     from ._validate import ParameterError
     from .analysis.descriptors import describe
     from .plotting.figures import plot_ghosts
 
     try:
         out = check_output_dir(args.out, what="--out")  # before computing
+        for name in ("paper_run.nc", "paper_swimmer.png", "paper_descriptors.json"):
+            check_output_file(out / name, (Path(name).suffix,), what="--out")
     except ParameterError as exc:
         print(f"python -m flutterswim.demo: {exc}", file=sys.stderr)
         return 2
@@ -48,7 +51,10 @@ def main(argv: list[str] | None = None) -> int:
     d = describe(run, n_last=args.cycles)
     run.save(out / "paper_run.nc")
     plot_ghosts(run, out / "paper_swimmer.png")
-    atomic_write_text(out / "paper_descriptors.json", json.dumps(d.to_dict(), indent=2))
+    from . import __version__
+
+    atomic_write_text(out / "paper_descriptors.json",
+                      json.dumps({"generator": f"flutterswim {__version__}", **d.to_dict()}, indent=2))
     print(f"simulated {run.t[-1]:.2f} s of swimming in {wall:.2f} s wall ({run.stats.n_steps} steps); "
           f"limit cycle from t = {d.limit_cycle_time_s:.2f} s")
     print(f"period                  {d.period_s:.4f} s  ({d.frequency_hz:.3f} Hz)")

@@ -65,10 +65,12 @@ def finish(fig, path: str | Path | None, dpi: float | None = None) -> Any:
     p = Path(path)
     if p.suffix.lower() not in (".png", ".pdf", ".svg", ".jpg", ".jpeg"):
         raise ParameterError(f"path={str(path)!r} has an unsupported suffix; use .png, .pdf, .svg or .jpg")
-    from .._paths import atomic_path
+    from .._paths import atomic_path, check_output_file, figure_metadata
 
+    check_output_file(p, (".png", ".pdf", ".svg", ".jpg", ".jpeg"), what="path")
     with atomic_path(p) as tmp:
-        fig.savefig(tmp, dpi=dpi or fig.dpi, format=p.suffix.lower().lstrip(".").replace("jpg", "jpeg"))
+        fig.savefig(tmp, dpi=dpi or fig.dpi, format=p.suffix.lower().lstrip(".").replace("jpg", "jpeg"),
+                    **figure_metadata(p.suffix))
     return p
 
 

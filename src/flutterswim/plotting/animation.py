@@ -72,7 +72,7 @@ def animate(
         raise ParameterError(f"size={size!r} must be at least (64, 64) pixels")
     if fmt == ".mp4":
         w, h = w + (w % 2), h + (h % 2)
-    from .._paths import atomic_path, check_output_file
+    from .._paths import atomic_path, check_output_file, mark_gif
 
     check_output_file(p, (".mp4", ".gif"), what="path")
 
@@ -109,10 +109,13 @@ def animate(
     stamp = ax.text(0.98, 0.92, "", transform=ax.transAxes, ha="right", fontsize=9, animated=True)
     arrow = field_arrow(ax, float(tr.field_angle[0]))
     arrow.set_animated(True)
-    if trail:  # legend from static proxies (the animated lines are drawn by hand)
-        ax.plot([], [], color=TIP_COLOR, lw=0.8, label=f"tip ({'s = l' if it == tr.n_points - 1 else 's = 0'})")
-        ax.plot([], [], color=SWIM_COLOR, lw=1.0, label="centroid")
-        ax.legend(fontsize=7, loc="lower right", frameon=False)
+    if trail:  # legend from proxy handles (the animated lines are drawn by hand)
+        from matplotlib.lines import Line2D
+
+        ax.legend(handles=[Line2D([], [], color=TIP_COLOR, lw=0.8,
+                                  label=f"tip ({'s = l' if it == tr.n_points - 1 else 's = 0'}) trajectory"),
+                           Line2D([], [], color=SWIM_COLOR, lw=1.0, label="centroid trajectory")],
+                  fontsize=7, loc="lower right", frameon=False)
     canvas = fig.canvas
     canvas.draw()
     bg = canvas.copy_from_bbox(fig.bbox)
@@ -154,7 +157,8 @@ def animate(
                 first = next(it_frames)
                 hh, ww = first.shape[:2]
                 wr = imageio_ffmpeg.write_frames(str(tmp), (ww, hh), fps=fps, quality=quality, macro_block_size=1,
-                                                 codec="libx264", pix_fmt_out="yuv420p", ffmpeg_log_level="error")
+                                                 codec="libx264", pix_fmt_out="yuv420p", ffmpeg_log_level="error",
+                                                 output_params=["-metadata", "comment=flutterswim animation"])
                 wr.send(None)
                 try:
                     wr.send(first)
@@ -168,6 +172,7 @@ def animate(
                 with iio.get_writer(str(tmp), mode="I", format="GIF", duration=1000.0 / fps, loop=0) as wr:
                     for fr in frames():
                         wr.append_data(fr)
+                mark_gif(tmp)
     finally:
         if bar is not None:
             bar.close()

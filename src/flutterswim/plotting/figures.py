@@ -57,8 +57,10 @@ def draw_ghosts(ax, obj: Any, window: tuple[float, float], *, n_ghosts: int = 8,
     it = tip_index(tr, tip)
     ax.plot(tr.x[tidx, it] * f, tr.y[tidx, it] * f, color=TIP_COLOR, lw=1.0,
             label=f"tip ({'s = l' if it == tr.n_points - 1 else 's = 0'}) trajectory")
-    ax.plot([], [], color=cmap(0.7), lw=1.6, label="filament, light to dark in time")
-    ax.legend(fontsize=6, loc="best", frameon=False)
+    from matplotlib.lines import Line2D
+
+    shapes = Line2D([], [], color=cmap(0.7), lw=1.6, label="filament, light to dark in time")
+    ax.legend(handles=ax.get_legend_handles_labels()[0] + [shapes], fontsize=6, loc="best", frameon=False)
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")

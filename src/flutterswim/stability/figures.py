@@ -34,12 +34,14 @@ def stability_figures(out_dir, *, params: Parameters = PAPER, step: float = 0.1,
     ``params`` (default: the paper's), bifurcation plots and the first two eigenmodes there,
     plus a GIF of mode 1. The map NetCDF is compressed (``dtype="float32"`` halves it); every
     file is written atomically. The output folder and the grid size are checked first."""
-    from .._paths import check_output_dir
+    from .._paths import check_output_dir, check_output_file
 
     step = positive("step", step)
     if dtype not in ("float64", "float32"):
         raise ParameterError(f"dtype={dtype!r} is not allowed; use 'float64' or 'float32'")
     out = check_output_dir(out_dir, what="out_dir")
+    for name in ("stability_map.nc", "stability_map.png", "bifurcation.png", "eigenmodes.png", "mode1.gif"):
+        check_output_file(out / name, (Path(name).suffix,), what="out_dir")  # before computing
     out.mkdir(parents=True, exist_ok=True)
     from ..simulate import single_blas_thread
 
@@ -48,7 +50,7 @@ def stability_figures(out_dir, *, params: Parameters = PAPER, step: float = 0.1,
 
 
 def _figures(out: Path, params: Parameters, step: float, netcdf: bool, progress: bool, dtype: str):
-    from .._paths import atomic_path
+    from .._paths import atomic_path, mark_gif
 
     g = params.groups
     smap = stability_map(step=step, progress=progress)
@@ -71,5 +73,6 @@ def _figures(out: Path, params: Parameters, step: float, netcdf: bool, progress:
     plot_modes(modes, path=out / "eigenmodes.png")
     with atomic_path(out / "mode1.gif") as tmp:
         animate_mode(modes[0], tmp)
+        mark_gif(tmp)
     return StabilityFigures(nc_path, out / "stability_map.png", out / "bifurcation.png",
                             out / "eigenmodes.png", out / "mode1.gif")

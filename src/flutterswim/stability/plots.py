@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 
@@ -20,10 +19,12 @@ def _plt():
 
 def _finish(fig, path):
     if path is not None:
-        from .._paths import atomic_path
+        from .._paths import atomic_path, check_output_file, figure_metadata
 
+        path = check_output_file(path, (".png", ".pdf", ".svg", ".jpg", ".jpeg"), what="path")
         with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=150, bbox_inches="tight", format=Path(path).suffix.lstrip(".") or "png")
+            fig.savefig(tmp, dpi=150, bbox_inches="tight", format=path.suffix.lstrip(".").replace("jpg", "jpeg"),
+                        **figure_metadata(path.suffix))
     return fig
 
 

@@ -78,10 +78,12 @@ def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str
         for ax in axs:
             ax.axvline(rc, color="tab:blue", ls="--", lw=1)
         axs[0].text(rc, axs[0].get_ylim()[1], f" linear onset {rc:.3f}", color="tab:blue", va="top", fontsize=8)
-    # legend: what the colours mean (proxies, so each entry appears once)
-    axs[0].plot([], [], "o-", color="k", ms=3, lw=1.8, label="swimming stroke")
+    # legend: what the colours mean (proxy handles, not drawn on the axes)
+    from matplotlib.lines import Line2D
+
+    proxies = [Line2D([], [], marker="o", color="k", ms=3, lw=1.8, label="swimming stroke")]
     if np.any(np.asarray(red, bool) & np.isfinite(adv)):
-        axs[0].plot([], [], "o-", color="tab:red", ms=3, lw=1.8, label="self-intersecting stroke")
+        proxies.append(Line2D([], [], marker="o", color="tab:red", ms=3, lw=1.8, label="self-intersecting stroke"))
     failed = ds["failed"].values
     if failed.any():
         axs[0].plot(xv[failed], np.zeros(failed.sum()), "x", color="0.5", label="failed")
@@ -89,7 +91,7 @@ def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str
     if growing.any():
         axs[0].plot(xv[growing], np.zeros(growing.sum()), "^", mfc="none", color="tab:orange", ms=5,
                     label="unstable, still growing at t_cap")
-    axs[0].legend(fontsize=7, loc="best", frameon=False)
+    axs[0].legend(handles=proxies + axs[0].get_legend_handles_labels()[0], fontsize=7, loc="best", frameon=False)
     reached = ds["reached_limit_cycle" if "reached_limit_cycle" in ds else "limit_cycle_reached"].values.astype(bool)
     capped = (~reached) & swim
     if capped.any():
@@ -97,10 +99,9 @@ def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str
                     label="orbit by continuation (run not settled by t_cap)")
         axs[1].legend(fontsize=8)
     if path is not None:
-        from pathlib import Path
+        from .._paths import atomic_path, check_output_file, figure_metadata
 
-        from .._paths import atomic_path
-
+        path = check_output_file(path, (".png", ".pdf", ".svg"), what="path")
         with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=150, format=Path(path).suffix.lstrip(".") or "png")
+            fig.savefig(tmp, dpi=150, format=path.suffix.lstrip("."), **figure_metadata(path.suffix))
     return fig

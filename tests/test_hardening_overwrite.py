@@ -1,0 +1,73 @@
+"""An existing file is overwritten only if flutterswim wrote it (it carries our signature):
+runs, figures, animations and the stability outputs; our own files are replaced freely."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import flutterswim as fs
+from flutterswim._paths import is_ours
+
+
+@pytest.fixture(scope="module")
+def run():
+    return fs.simulate(fs.PAPER, 0.3, n_segments=8)
+
+
+def test_foreign_netcdf_is_never_overwritten(run, tmp_path):
+    data = tmp_path / "data.nc"
+    xr.Dataset({"temperature": ("x", np.arange(3.0))}).to_netcdf(data, engine="h5netcdf")
+    before = data.read_bytes()
+    with pytest.raises(fs.ParameterError, match="not written by flutterswim"):
+        run.save(data)
+    r = subprocess.run([sys.executable, "-m", "flutterswim", "simulate", "--t-end", "1000", "--out", str(data),
+                        "--quiet"], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and "not written by flutterswim" in r.stderr
+    assert data.read_bytes() == before
+
+
+def test_own_files_are_replaced(run, tmp_path):
+    p = run.save(tmp_path / "run.nc")
+    assert is_ours(p)
+    run.save(p)  # again: ours, replaced
+    assert fs.load(p).t.size == run.t.size
+
+
+@pytest.mark.parametrize("suffix", [".png", ".pdf", ".svg"])
+def test_foreign_figure_is_refused_own_figure_replaced(run, tmp_path, suffix):
+    from flutterswim.plotting import plot_swimmer
+
+    mine = tmp_path / f"mine{suffix}"
+    plot_swimmer(run, mine)
+    assert is_ours(mine)
+    plot_swimmer(run, mine)
+    photo = tmp_path / f"photo{suffix}"
+    photo.write_bytes(b"user bytes" * 100)
+    with pytest.raises(fs.ParameterError, match="not written by flutterswim"):
+        plot_swimmer(run, photo)
+    assert photo.read_bytes() == b"user bytes" * 100
+
+
+def test_gif_carries_the_signature_and_stays_readable(run, tmp_path):
+    from flutterswim.plotting import animate
+
+    g = animate(run, tmp_path / "a.gif", fps=20, max_frames=5, size=(128, 96))
+    assert is_ours(g)
+    import imageio.v3 as iio
+
+    frames = iio.imread(g, index=None)
+    assert frames.shape[0] == 5
+    animate(run, g, fps=20, max_frames=4, size=(128, 96))  # ours: replaced
+    assert iio.imread(g, index=None).shape[0] == 4
+
+
+def test_stability_outputs_checked_before_computing(tmp_path):
+    (tmp_path / "eigenmodes.png").write_bytes(b"someone else's figure")
+    from flutterswim.stability import stability_figures
+
+    with pytest.raises(fs.ParameterError, match="eigenmodes.png"):
+        stability_figures(tmp_path, step=1e-6)  # a huge grid: the check must come first
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["eigenmodes.png"]
