@@ -35,3 +35,28 @@ def test_branch_cli_rejects_bad_input_with_one_line(tmp_path, capsys):
     assert "zeta" in err and "Traceback" not in err and err.count("\n") == 1
     assert main(["branch", "kappa_E_ratio=0.6", "--out", str(tmp_path / "b.nc")]) == 2
     assert main(["plot-branch", str(tmp_path / "missing.nc")]) == 2
+
+
+def test_readme_orbits_block_runs(tmp_path):
+    """The README's periodic-orbit block, at small sizes, saved as a script."""
+    import re
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    block = next(b for b in re.findall(r"```python\n(.*?)```", text, flags=re.S) if "continue_orbits" in b)
+    small = {
+        "periodic_orbit(PAPER)": "periodic_orbit(PAPER, n_segments=16, steps=16)",
+        'continue_orbits(PAPER, "kappa_E_ratio", 2.0)': 'continue_orbits(PAPER, "kappa_E_ratio", 0.8, n_points=4, n_segments=16, steps=16)',
+        'hopf_point(PAPER, "kappa_E_ratio")': 'hopf_point(PAPER, "kappa_E_ratio", n_segments=16)',
+    }
+    for big, sm in small.items():
+        assert big in block, big
+        block = block.replace(big, sm)
+    block += "\nassert orb.stable and nf.supercritical and orb.period > 0\nprint('ok')\n"
+    script = tmp_path / "orbits_example.py"
+    script.write_text(block)
+    r = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip().endswith("ok") and (tmp_path / "branch.nc").exists()
