@@ -73,9 +73,11 @@ def plot_branch(ds, path=None, *, x_range: tuple[float, float] | None = None):
     axes[0].set_title(f"Stroke branch: {ds.attrs.get('bifurcation', '')} Hopf bifurcation"
                       + (f" (l1 = {l1:.3g})" if l1 is not None else ""), fontsize=10)
     if path is not None:
-        from .._paths import atomic_path
+        from pathlib import Path
+
+        from .._paths import atomic_path, figure_metadata
 
         with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=150)
+            fig.savefig(tmp, dpi=150, **figure_metadata(Path(path).suffix))
         plt.close(fig)
     return fig
