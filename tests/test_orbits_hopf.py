@@ -149,3 +149,15 @@ def test_bad_parameter_is_named():
         continue_orbits(fs.PAPER, "zeta", 2.0)
     with pytest.raises(fs.ParameterError, match="above the Hopf point"):
         continue_orbits(fs.PAPER, "kappa_E_ratio", 0.5, n_segments=12)
+
+
+def test_multiplier_crossings_along_the_paper_branch_are_reported():
+    """Along kappa_E/kappa_E,fit in [Hopf, 2] every orbit is stable and no non-trivial
+    multiplier crosses the unit circle; the dataset says so (N = 16, coarse but complete)."""
+    br = continue_orbits(fs.PAPER, "kappa_E_ratio", 2.0, n_points=25, n_segments=16, steps=16)
+    ds = br.to_dataset()
+    assert ds.kappa_E_ratio.values[-1] == pytest.approx(2.0)
+    crossings = br.multiplier_crossings()
+    assert (ds.attrs["multiplier_crossings"] == "none") == (not crossings)
+    assert bool(ds.stable.all()) == (not crossings)
+    assert np.all(ds.max_multiplier.values < 1.0) == bool(ds.stable.all())
