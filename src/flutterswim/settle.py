@@ -30,6 +30,7 @@ import numpy as np
 
 from . import defaults
 from ._validate import positive, positive_int
+from .orbits._threads import one_blas_thread
 from .params import Groups, Parameters
 
 __all__ = ["Settled", "settle", "OUTCOMES", "SETTLE_TOLERANCE"]
@@ -163,6 +164,7 @@ class _Watch:
         return float(np.polyfit(th[use], np.log(h[use]), 1)[0])
 
 
+@one_blas_thread
 def settle(params: Parameters | Groups, *, initial=None, n_cycles: int = defaults.N_CYCLES,
            t_max: float | None = None, chunk: float | None = None, n_segments: int = defaults.N_SEGMENTS,
            rtol: float = defaults.RTOL, atol: float = defaults.ATOL,

@@ -147,6 +147,7 @@ def _check_params(params) -> None:
         raise ParameterError(f"params={params!r} must be flutterswim.Parameters or flutterswim.Groups")
 
 
+@one_blas_thread
 def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: int = DEFAULT_STEPS,
                 tol: float = 1e-10, max_newton: int = 12, u_ref: np.ndarray | None = None,
                 warm: Flow | None = None) -> tuple[np.ndarray, float, Flow, float, int]:
