@@ -161,3 +161,15 @@ def test_multiplier_crossings_along_the_paper_branch_are_reported():
     assert (ds.attrs["multiplier_crossings"] == "none") == (not crossings)
     assert bool(ds.stable.all()) == (not crossings)
     assert np.all(ds.max_multiplier.values < 1.0) == bool(ds.stable.all())
+
+
+def test_physical_parameters_of_any_scale_and_similarity():
+    """B (~1e-14 N m^2) and mu enter only through eta = mu l^4 / (B tau): their Hopf points
+    satisfy mu_c / mu_0 = B_0 / B_c, and a branch in B reaches its end."""
+    p = fs.PAPER
+    b_c = hopf_point(p, "B", n_segments=16).value
+    mu_c = hopf_point(p, "mu", n_segments=16).value
+    assert mu_c / p.mu == pytest.approx(p.B / b_c, rel=1e-9)
+    br = continue_orbits(p, "B", 1.0e-14, n_points=5, n_segments=16, steps=16)
+    assert br.values[-1] == pytest.approx(1.0e-14) and br.values[0] < b_c
+    assert all(o.stable for o in br.orbits)

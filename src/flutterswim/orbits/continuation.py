@@ -157,7 +157,7 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     # the shape moves along the orbit as well as in amplitude: a few times the amplitude range
     length_u = 3.0 * math.sqrt(nf.amplitude2_slope * length_p)
     # first orbit from the normal form, a small distance into the branch
-    d1 = side * min(0.01 * length_p, 0.002 * max(1.0, abs(hopf.value)))
+    d1 = side * min(0.01 * length_p, 0.002 * abs(hopf.value) if hopf.value != 0 else 0.01 * length_p)
     amp = math.sqrt(nf.amplitude2_slope * abs(d1))
     sysm = _systems(axis, hopf.value + d1, n_segments)
     u_guess = sysm.straight() + amp * hopf.q.real
@@ -197,7 +197,8 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
             else:
                 xn, fl, res, it = _newton_arclength(axis, n_segments, steps, xk, fls[-1], tangent, w,
                                                     step_ds, tol, max_newton)
-        except (OrbitNotFound, StepFailure, np.linalg.LinAlgError) as exc:
+        except (OrbitNotFound, StepFailure, np.linalg.LinAlgError, ParameterError) as exc:
+            # (ParameterError: the corrector left the parameter's admissible range)
             ds *= 0.5
             if ds < 1e-4 / n_points:
                 message = f"continuation stopped at {parameter}={xk[-1]:.6g}: {exc}"
@@ -268,7 +269,7 @@ def _newton_arclength(axis, n, steps, xk, warm, tangent, w, ds, tol, max_newton)
             _, final = _closing(axis, n, steps, u, T, p, fl, True)
             return x, final, float(np.max(np.abs(final.y[-1, 2:] - u))), it
         if dphi_dp is None:
-            dp = 1e-6 * max(1.0, abs(p))
+            dp = 1e-6 * abs(p) if p != 0 else 1e-6  # relative: physical parameters may be ~1e-14
             _, fl_p = _closing(axis, n, steps, u, T, p + dp, fl, False)
             dphi_dp = (fl_p.y[-1, 2:] - fl.y[-1, 2:]) / dp
         a = np.zeros((m + 2, m + 2))

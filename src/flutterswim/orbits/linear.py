@@ -76,11 +76,15 @@ def hopf_point(params, parameter: str = "kappa_E_ratio", *, n_segments: int = 48
                bracket: tuple[float, float] | None = None, xtol: float = 1e-13) -> HopfPoint:
     """The Hopf point of the straight state along ``parameter`` (see :class:`.parameter.Axis`),
     where the leading complex pair crosses the imaginary axis. ``bracket``: values on either
-    side; by default it is searched from the base value towards zero and upwards."""
+    side; by default it is searched geometrically below and above the base value. ``xtol``
+    is relative to the parameter's size."""
     axis = Axis(params, parameter)
 
     def growth(v: float) -> float:
-        return leading_pair(axis.at(v), n_segments).real
+        try:
+            return leading_pair(axis.at(v), n_segments).real
+        except ParameterError:  # no oscillatory mode at all: no flutter
+            return -1.0
 
     if bracket is None:
         bracket = _bracket(growth, axis.value())
@@ -89,7 +93,8 @@ def hopf_point(params, parameter: str = "kappa_E_ratio", *, n_segments: int = 48
     if glo * ghi > 0:
         raise ParameterError(f"{parameter} in [{lo:g}, {hi:g}] does not bracket a Hopf point "
                              f"(growth rates {glo:.3g} and {ghi:.3g} have one sign)")
-    v = brentq(growth, lo, hi, xtol=xtol, rtol=4 * np.finfo(float).eps, maxiter=200)
+    # xtol relative to the parameter's size (physical parameters such as B are ~1e-14)
+    v = brentq(growth, lo, hi, xtol=xtol * max(abs(lo), abs(hi)), rtol=4 * np.finfo(float).eps, maxiter=200)
     sysm = ShapeSystem.of(axis.at(v), n_segments)
     a = sysm.jac(sysm.straight())
     lam, vr = np.linalg.eig(a)
@@ -100,21 +105,25 @@ def hopf_point(params, parameter: str = "kappa_E_ratio", *, n_segments: int = 48
     j = int(np.argmin(np.abs(lam_l - np.conj(lam[i]))))
     p = vl[:, j]
     p = p / np.conj(np.vdot(p, q))  # conj(p).q = 1
-    dv = 1e-6 * max(1.0, abs(v))
+    dv = 1e-6 * abs(v) if v != 0 else 1e-6  # relative: physical parameters may be ~1e-14
     slope = (growth(v + dv) - growth(v - dv)) / (2 * dv)
     return HopfPoint(axis, float(v), omega, float(slope), q, p, a, n_segments)
 
 
 def _bracket(growth, v0: float) -> tuple[float, float]:
+    """Bracket the sign change of the growth rate by scanning geometrically below and above v0."""
     g0 = growth(v0)
-    factors = (0.8, 0.6, 0.45, 0.3, 0.2, 0.1, 0.05) if g0 > 0 else (1.25, 1.6, 2.0, 3.0, 5.0, 10.0)
-    prev = v0
-    for f in factors:
-        v = v0 * f
-        if growth(v) * g0 <= 0:
-            return (v, prev) if v < prev else (prev, v)
-        prev = v
-    raise ParameterError(f"no Hopf point found between {v0 * factors[-1]:g} and {v0:g}")
+    below = v0 * np.array([0.8, 0.6, 0.45, 0.3, 0.2, 0.1, 0.05, 0.02])
+    above = v0 * np.array([1.25, 1.6, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0])
+    prev_b, prev_a = v0, v0
+    for vb, va in zip(below, above):
+        if growth(vb) * g0 <= 0:
+            return float(vb), float(prev_b)
+        if growth(va) * g0 <= 0:
+            return float(prev_a), float(va)
+        prev_b, prev_a = vb, va
+    raise ParameterError(f"no Hopf point found between {below[-1]:g} and {above[-1]:g} "
+                         f"(the straight state is {'un' if g0 > 0 else ''}stable throughout)")
 
 
 def omega_to_period(omega: float) -> float:
