@@ -173,3 +173,15 @@ def test_physical_parameters_of_any_scale_and_similarity():
     br = continue_orbits(p, "B", 1.0e-14, n_points=5, n_segments=16, steps=16)
     assert br.values[-1] == pytest.approx(1.0e-14) and br.values[0] < b_c
     assert all(o.stable for o in br.orbits)
+
+
+def test_periodic_orbit_near_onset_without_a_guess():
+    """0.5 % above the Hopf point (growth rate / frequency ~ 1e-3) the onset would take
+    hundreds of tau to simulate; the orbit comes from the Hopf eigenvector instead, with the
+    normal form's amplitude."""
+    hp = hopf_point(fs.PAPER.groups, "chi", n_segments=16)
+    nf = normal_form(hp)
+    d = 0.005 * hp.value
+    orb = periodic_orbit(fs.PAPER.groups.replace(chi=hp.value + d), n_segments=16, steps=16)
+    assert orb.stable and orb.residual < 1e-10
+    assert orb.amplitude ** 2 == pytest.approx(nf.amplitude2_slope * d, rel=0.05)

@@ -29,6 +29,9 @@ __all__ = ["PeriodicOrbit", "OrbitNotFound", "periodic_orbit", "solve_orbit", "D
 #: about 4e-8 and the advance's 2e-6, relative (measured by halving, 32 -> 64 -> 128 steps).
 DEFAULT_STEPS = 32
 DEFAULT_SEGMENTS = 48
+#: Growth rate / frequency of the straight state below which a stroke is seeded from the Hopf
+#: point (continuation) rather than from a simulation of the onset.
+NEAR_ONSET = 0.02
 
 
 class OrbitNotFound(RuntimeError):
@@ -253,7 +256,8 @@ def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = 
     """The stroke at ``params`` as a periodic orbit of the shape dynamics.
 
     ``guess``: a neighbouring :class:`PeriodicOrbit` (same resolution), or None to seed from
-    a simulation of the onset from the straight state. Raises :class:`OrbitNotFound` if the
+    a simulation of the onset from the straight state (or, near the Hopf point where that
+    onset is too slow, from the Hopf eigenvector by continuation). Raises :class:`OrbitNotFound` if the
     straight state is stable (no stroke to find) or Newton fails."""
     _check_params(params)
     n_segments = positive_int("n_segments", n_segments, minimum=4)
@@ -261,7 +265,19 @@ def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = 
     tol = positive("tol", tol)
     system = ShapeSystem.of(params, n_segments, phi)
     if guess is None:
-        u0, T = seed_from_simulation(system)
+        from .linear import leading_pair
+
+        g = params.groups if isinstance(params, Parameters) else params
+        lam = leading_pair(g, n_segments)
+        if 0 < lam.real < NEAR_ONSET * lam.imag:
+            # near the Hopf point the onset is too slow to simulate: continue from the Hopf
+            # eigenvector (normal-form amplitude) along chi to this point
+            from .continuation import continue_orbits
+
+            br = continue_orbits(g, "chi", g.chi, n_points=8, n_segments=n_segments, steps=steps, tol=tol)
+            u0, T = br.orbits[-1].u0, br.orbits[-1].period_dimensionless
+        else:
+            u0, T = seed_from_simulation(system)
     else:
         if not isinstance(guess, PeriodicOrbit):
             raise ParameterError(f"guess={guess!r} must be a PeriodicOrbit or None")
