@@ -14,19 +14,11 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import statistics
 import time
 
 import numpy as np
-
-
-def machine() -> str:
-    try:
-        cpu = next(l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name"))
-    except Exception:
-        cpu = platform.processor()
-    return f"{cpu}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}, load {os.getloadavg()}"
+from bench_sweep import machine  # same folder: the one description of the machine
 
 
 def calibration() -> float:
