@@ -119,7 +119,7 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
             rhs = np.concatenate([h * sum(a[i, j] * jac[j] for j in range(3)) for i in range(3)])
             dzdu = sla.lu_solve(lu, rhs, check_finite=False)[2 * m:]
             smat = smat + dzdu @ smat
-        fz = np.array([system.rhs_full(system.full(u + z[i])) for i in range(3)])
+        # (fz is from the last iterate, within stage_tol of z: no new evaluation)
         r = r + h * (RADAU_B @ fz[:, :2])
         u = u + z[2]
         zs[step] = z
