@@ -16,7 +16,7 @@ def register(subparsers) -> None:
     p.add_argument("--out", default="branch.nc")
     p.add_argument("--points", type=int, default=100, help="orbits along the branch (at least; default 100)")
     p.add_argument("--segments", type=int, default=None, help="segments N (default: the sweeps' resolution, 24)")
-    p.add_argument("--steps", type=int, default=None, help="Radau steps per period (default 32)")
+    p.add_argument("--steps", type=int, default=None, help="Radau steps per period (default 24)")
     p.add_argument("--plot", default=None, help="also draw the branch to this PNG")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_branch)
@@ -48,7 +48,7 @@ def _cmd_branch(args) -> int:
     from .linear import hopf_point
     from .parameter import Axis
     from .. import defaults
-    from .periodic import DEFAULT_STEPS
+    from .continuation import BRANCH_STEPS
 
     name, lo, hi = _parse_range(args.range)
     params = preset(args.preset)
@@ -57,7 +57,7 @@ def _cmd_branch(args) -> int:
     if args.plot:
         check_output_file(args.plot, (".png", ".pdf", ".svg"), what="plot")
     n = defaults.SWEEP_N_SEGMENTS if args.segments is None else args.segments
-    steps = DEFAULT_STEPS if args.steps is None else args.steps
+    steps = BRANCH_STEPS if args.steps is None else args.steps
     # continue towards the end of the range where the straight state is unstable
     hp = hopf_point(params, name, n_segments=n, bracket=None)
     from .normal_form import normal_form

@@ -22,7 +22,7 @@ from .._validate import ParameterError, finite, positive, positive_int
 from .linear import hopf_point
 from .normal_form import normal_form
 from .parameter import Axis
-from .periodic import DEFAULT_STEPS, OrbitNotFound, PeriodicOrbit, orbit_from_flow
+from .periodic import OrbitNotFound, PeriodicOrbit, orbit_from_flow
 from .shooting import StepFailure, flow
 from ._threads import one_blas_thread
 from .system import ShapeSystem
@@ -30,6 +30,9 @@ from .system import ShapeSystem
 __all__ = ["Branch", "continue_orbits"]
 
 N_MULTIPLIERS = 6
+#: Radau steps per period along a branch. Against 48 steps at kappa_E ratio 1.5 (N = 24):
+#: period 1.2e-6 and advance 3.6e-5 relative, far below the N = 24 space errors (1.7e-3, 1.4e-2).
+BRANCH_STEPS = 24
 
 
 @dataclass(frozen=True)
@@ -130,7 +133,7 @@ def _systems(axis: Axis, value: float, n: int) -> ShapeSystem:
 
 @one_blas_thread
 def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
-                    n_segments: int = defaults.SWEEP_N_SEGMENTS, steps: int = DEFAULT_STEPS, tol: float = 1e-10,
+                    n_segments: int = defaults.SWEEP_N_SEGMENTS, steps: int = BRANCH_STEPS, tol: float = 1e-10,
                     max_newton: int = 8, progress: bool = False, max_points: int | None = None) -> Branch:
     """Continue the stroke from the Hopf point along ``parameter`` up to ``to``, with at least
     ``n_points`` orbits (more where the branch bends). The default resolution is the sweeps'
