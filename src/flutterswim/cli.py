@@ -58,10 +58,14 @@ def _simulate(args: argparse.Namespace) -> int:
         run = run_to_limit_cycle(params, n_cycles=cycles, **opts)
     path = run.save(out)
     note = ""
-    if args.t_end is None and not run.settings.get("limit_cycle", False):
-        note = " (no limit cycle reached by t_max)"
-    print(f"{run.status}: {run.message}; {run.t[-1]:.3f} s simulated{note}, "
-          f"{run.stats.n_steps} steps in {run.stats.wall_time:.2f} s; wrote {path}")
+    if args.t_end is None:  # the settle engine's verdict and its reason
+        note = f" -> {run.settings.get('outcome', '?')}: {run.settings.get('outcome_reason', '')}"
+        orb = run.settings.get("orbit")
+        if orb:
+            note += (f"; periodic orbit: period {orb['period']:.6g} s, advance {orb['advance'] * 1e3:.6g} mm "
+                     f"per cycle, {'stable' if orb['stable'] else 'UNSTABLE'}")
+    print(f"{run.status}: {run.message}; {run.t[-1]:.3f} s simulated, "
+          f"{run.stats.n_steps} steps in {run.stats.wall_time:.2f} s; wrote {path}{note}")
     return 0 if run.ok else 1
 
 
