@@ -80,12 +80,11 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
     eye3 = np.eye(3 * m)
 
     def step_matrix(z):
-        jac = [system.jac_full(system.full(u + z[i]))[2:, 2:] for i in range(3)]
-        p = eye3.copy()
-        for i in range(3):
-            for j in range(3):
-                p[i * m:(i + 1) * m, j * m:(j + 1) * m] -= (h * a[i, j]) * jac[j]
-        return jac, sla.lu_factor(p, check_finite=False)
+        jac = np.array([system.jac_full(system.full(u + z[i]))[2:, 2:] for i in range(3)])
+        # block (i, j) of P is delta_ij I - h A_ij J_j
+        blocks = (h * a)[:, :, None, None] * jac[None, :, :, :]
+        p = eye3 - blocks.transpose(0, 2, 1, 3).reshape(3 * m, 3 * m)
+        return jac, sla.lu_factor(p, overwrite_a=True, check_finite=False)
 
     for step in range(steps):
         if warm is not None and warm.stages.shape == zs.shape:
@@ -116,7 +115,7 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
             if np.max(np.abs(z - z_lu)) > derivative_tol * scale:
                 jac, lu = step_matrix(z)
             # P dZ/du = h [sum_j A_ij J_j]_i at the converged stages
-            rhs = np.concatenate([h * sum(a[i, j] * jac[j] for j in range(3)) for i in range(3)])
+            rhs = (h * np.tensordot(a, jac, axes=1)).reshape(3 * m, m)
             dzdu = sla.lu_solve(lu, rhs, check_finite=False)[2 * m:]
             smat = smat + dzdu @ smat
         # (fz is from the last iterate, within stage_tol of z: no new evaluation)
