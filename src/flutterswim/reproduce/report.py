@@ -1,0 +1,74 @@
+"""The self-contained HTML report: every figure embedded (base64 PNG), per target a table of
+the paper's statement, our number and the agreement, and the environment (Jinja2)."""
+
+from __future__ import annotations
+
+import base64
+import os
+import platform
+import subprocess
+import sys
+from pathlib import Path
+
+__all__ = ["write_report", "environment"]
+
+_PACKAGES = ("numpy", "scipy", "matplotlib", "xarray", "h5netcdf", "h5py", "numba", "imageio", "imageio-ffmpeg",
+             "jinja2", "threadpoolctl")
+
+
+def environment() -> list[tuple[str, str]]:
+    from importlib.metadata import PackageNotFoundError, version
+
+    from .. import __version__
+
+    env = [("flutterswim", __version__)]
+    root = Path(__file__).resolve().parents[3]
+    try:
+        commit = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, text=True,
+                                timeout=5).stdout.strip()
+        if commit:
+            env.append(("git commit", commit))
+    except (OSError, subprocess.SubprocessError):
+        pass
+    env += [("python", sys.version.split()[0]), ("platform", platform.platform()),
+            ("processor", platform.processor() or platform.machine()), ("logical CPUs", str(os.cpu_count()))]
+    for p in _PACKAGES:
+        try:
+            env.append((p, version(p)))
+        except PackageNotFoundError:
+            env.append((p, "not installed"))
+    return env
+
+
+def write_report(out: Path, records: dict, mode: str, *, name: str = "report.html") -> Path:
+    import jinja2
+
+    from .. import __version__
+    from .._paths import atomic_path
+
+    rows = []
+    for rec in records.values():
+        t = rec.target
+        imgs = []
+        for f in t.figures:
+            p = out / f
+            if p.is_file():
+                imgs.append({"name": f, "data": base64.b64encode(p.read_bytes()).decode("ascii")})
+        comps = list(rec.outcome.comparisons)
+        rows.append({"name": t.name, "title": t.title, "caption": t.caption, "status": rec.status,
+                     "reran": rec.reran, "wall_time": rec.wall_time, "error": rec.error, "images": imgs,
+                     "videos": [v for v in t.videos if (out / v).is_file()], "rows": comps,
+                     "notes": list(rec.outcome.notes), "files": sorted(rec.outputs.items()),
+                     "n_rows": sum(c.ok is not None for c in comps), "n_agree": sum(c.ok is True for c in comps)})
+    env = jinja2.Environment(loader=jinja2.PackageLoader("flutterswim.reproduce", "templates"),
+                             autoescape=jinja2.select_autoescape(["html", "j2"]), undefined=jinja2.StrictUndefined)
+    html = env.get_template("report.html.j2").render(
+        generator=f"flutterswim {__version__}", mode=mode, records=rows,
+        n_ok=sum(r["status"] == "ok" for r in rows), n_skipped=sum(r["status"] == "skipped" for r in rows),
+        n_failed=sum(r["status"] == "failed" for r in rows), n_reran=sum(r["reran"] for r in rows),
+        n_agree=sum(r["n_agree"] for r in rows), n_disagree=sum(r["n_rows"] - r["n_agree"] for r in rows),
+        environment=environment())
+    path = out / name
+    with atomic_path(path) as tmp:
+        tmp.write_text(html, encoding="utf-8")
+    return path

@@ -1,0 +1,75 @@
+"""``reproduce``: build the targets into a folder and write the report."""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from .._validate import ParameterError
+from .targets import Settings, TargetRecord, build_targets
+
+__all__ = ["ReproduceResult", "reproduce", "check_out"]
+
+STORE_KIND = "reproduce"
+
+
+@dataclass(frozen=True)
+class ReproduceResult:
+    """out: the folder; report: the HTML file; records: name -> TargetRecord; wall_time [s]."""
+
+    out: Path
+    report: Path
+    records: dict[str, TargetRecord]
+    wall_time: float
+
+    @property
+    def failed(self) -> list[str]:
+        return [k for k, r in self.records.items() if r.status == "failed"]
+
+    @property
+    def ok(self) -> bool:
+        return not self.failed
+
+
+def check_out(out: str | os.PathLike, targets) -> Path:
+    """The output folder: new, empty, or one of ours (marker file); every output file it would
+    replace must have been written by flutterswim. Checked before any computation."""
+    from .._paths import MARKER, check_output_file, check_store_path
+
+    p = check_store_path(out, overwrite=False, what="--out")
+    names = ["report.html", "manifest.json"] + [f for t in targets for f in t.outputs]
+    for f in names:
+        check_output_file(p / f, (Path(f).suffix,), what="--out")
+    del MARKER
+    return p
+
+
+def reproduce(out: str | os.PathLike, *, mode: str = "quick", trials: str | os.PathLike | None = None,
+              targets: list[str] | None = None, force: bool = False,
+              log: Callable[[str], None] | None = None) -> ReproduceResult:
+    """Build every model figure and table of the paper (or the named ``targets`` and what they
+    need) into ``out``, skipping targets that are up to date, and write ``report.html``."""
+    from .._paths import write_marker
+    from .catalog import select
+    from .report import write_report
+
+    t0 = time.perf_counter()
+    settings = Settings(mode=mode, trials=None if trials is None else str(Path(trials).resolve()))
+    if trials is not None and not Path(trials).is_file():
+        raise ParameterError(f"trials={str(trials)!r} is not a file")
+    todo = select(targets)
+    folder = check_out(out, todo)
+    folder.mkdir(parents=True, exist_ok=True)
+    write_marker(folder, STORE_KIND)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from ..simulate import single_blas_thread
+
+    with single_blas_thread():
+        records = build_targets(todo, folder, settings, log=log, force=force)
+    report = write_report(folder, records, mode)
+    return ReproduceResult(folder, report, records, time.perf_counter() - t0)

@@ -1,0 +1,219 @@
+"""Targets and the engine that builds them.
+
+A :class:`Target` names its output files, its inputs (a JSON-able dict, with the code
+fingerprint and the outputs of the targets it depends on) and a ``build(ctx)`` function that
+writes the outputs and returns an :class:`Outcome` (comparisons with the paper, notes). The
+engine :func:`build_targets` skips targets whose manifest entry is up to date, records each
+finished target in the manifest at once, and writes ``<name>.json`` (the outcome) as data.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+import traceback
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+from .._validate import ParameterError
+from .io import sha256_file, write_json
+from .manifest import Manifest, code_fingerprint, input_key
+
+__all__ = ["Settings", "Comparison", "Outcome", "Target", "Context", "TargetRecord", "build_targets",
+           "MODES"]
+
+MODES = ("quick", "full")
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Resolution of a run. ``quick``: coarse grids, a short branch, small videos (minutes on
+    two cores); ``full``: the paper's map step 0.1, a fine branch, the default simulator
+    resolution."""
+
+    mode: str = "quick"
+    trials: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.mode not in MODES:
+            raise ParameterError(f"mode={self.mode!r} is not allowed; choose one of {MODES}")
+
+    @property
+    def quick(self) -> bool:
+        return self.mode == "quick"
+
+    def pick(self, quick: Any, full: Any) -> Any:
+        return quick if self.quick else full
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """One row of a figure's table: what the paper says, its number (or None), ours, and the
+    agreement (relative difference, or a verdict) with ``ok`` True/False/None (not applicable)."""
+
+    quantity: str
+    paper: str
+    ours: str
+    agreement: str
+    ok: bool | None = None
+    paper_value: float | None = None
+    our_value: float | None = None
+
+
+def compare(quantity: str, paper_value: float | None, our_value: float, *, unit: str = "",
+            rtol: float | None = None, paper_text: str | None = None, fmt: str = "{:.4g}") -> Comparison:
+    """A numeric comparison row; relative difference and ok = |rel| <= rtol when both given."""
+    u = f" {unit}" if unit else ""
+    ours = fmt.format(our_value) + u
+    if paper_value is None:
+        return Comparison(quantity, paper_text or "not stated", ours, "-", None, None, float(our_value))
+    rel = (our_value - paper_value) / abs(paper_value) if paper_value != 0 else float("nan")
+    ok = None if rtol is None else bool(abs(rel) <= rtol)
+    agree = f"{rel * 100:+.1f} %" + ("" if rtol is None else f" ({'within' if ok else 'outside'} {rtol * 100:g} %)")
+    return Comparison(quantity, paper_text or (fmt.format(paper_value) + u), ours, agree, ok,
+                      float(paper_value), float(our_value))
+
+
+def verdict(quantity: str, paper_text: str, ours: str, ok: bool) -> Comparison:
+    return Comparison(quantity, paper_text, ours, "agrees" if ok else "DISAGREES", bool(ok))
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What a build returns. status: "ok" or "skipped" (with the reason in notes)."""
+
+    status: str = "ok"
+    comparisons: tuple[Comparison, ...] = ()
+    notes: tuple[str, ...] = ()
+    values: dict = field(default_factory=dict)  # numbers other targets or the report may use
+
+
+@dataclass(frozen=True)
+class Context:
+    out: Path
+    settings: Settings
+    records: dict  # name -> TargetRecord of the targets built or found up to date so far
+
+    def path(self, name: str) -> Path:
+        return self.out / name
+
+
+@dataclass(frozen=True)
+class Target:
+    """name: short id (file stem); title: the paper's figure name; caption: the paper's words;
+    figures / data / videos: output file names (relative to the output folder);
+    params: JSON-able inputs of the build; deps: targets whose outputs this one reads."""
+
+    name: str
+    title: str
+    caption: str
+    build: Callable[[Context], Outcome]
+    params: Callable[[Settings], dict]
+    figures: tuple[str, ...] = ()
+    data: tuple[str, ...] = ()
+    videos: tuple[str, ...] = ()
+    deps: tuple[str, ...] = ()
+
+    @property
+    def summary_file(self) -> str:
+        return f"{self.name}.json"
+
+    @property
+    def outputs(self) -> tuple[str, ...]:
+        return self.figures + self.data + self.videos + (self.summary_file,)
+
+
+@dataclass(frozen=True)
+class TargetRecord:
+    """A target after the run: status ok / skipped / failed; reran: built in this run;
+    wall_time [s] of the build that made the outputs."""
+
+    target: Target
+    status: str
+    reran: bool
+    wall_time: float
+    outcome: Outcome
+    error: str = ""
+    outputs: dict = field(default_factory=dict)  # file -> sha256
+
+
+def _inputs(t: Target, settings: Settings, records: dict) -> dict:
+    from .. import __version__
+
+    deps = {d: records[d].outputs for d in t.deps if d in records}
+    return {"target": t.name, "settings": t.params(settings), "version": __version__,
+            "code": code_fingerprint(), "deps": deps}
+
+
+def _outcome_from_summary(t: Target, out: Path) -> Outcome:
+    from .io import read_json
+
+    d = read_json(out / t.summary_file)
+    comps = tuple(Comparison(**c) for c in d.get("comparisons", []))
+    return Outcome(d.get("status", "ok"), comps, tuple(d.get("notes", [])), d.get("values", {}))
+
+
+def build_targets(targets: list[Target], out: Path, settings: Settings, *, log: Callable[[str], None] | None = None,
+                  force: bool = False) -> dict[str, TargetRecord]:
+    """Build ``targets`` in order into ``out`` (checked by the caller), skipping up-to-date ones.
+    A failing target is recorded (status failed, the error) and the others go on; targets
+    depending on a failed one fail too."""
+    log = log or (lambda msg: None)
+    man = Manifest.load(out)
+    man.run = {"mode": settings.mode, "trials": settings.trials}
+    records: dict[str, TargetRecord] = {}
+    for t in targets:
+        inputs = _inputs(t, settings, records)
+        key = input_key(inputs)
+        bad = [d for d in t.deps if d not in records or records[d].status == "failed"]
+        if bad:
+            err = f"needs target(s) {', '.join(bad)}, which failed"
+            records[t.name] = TargetRecord(t, "failed", True, 0.0, Outcome("failed", notes=(err,)), err)
+            man.record(t.name, {"title": t.title, "status": "failed", "error": err, "key": key, "inputs": inputs})
+            log(f"{t.name}: FAILED ({err})")
+            continue
+        if not force and man.up_to_date(t.name, key):
+            e = man.targets[t.name]
+            oc = _outcome_from_summary(t, out)
+            records[t.name] = TargetRecord(t, e["status"], False, float(e.get("wall_time_s", 0.0)), oc,
+                                           outputs=dict(e["outputs"]))
+            log(f"{t.name}: up to date")
+            continue
+        log(f"{t.name}: building ...")
+        t0 = time.perf_counter()
+        ctx = Context(out, settings, records)
+        try:
+            oc = t.build(ctx)
+        except KeyboardInterrupt:
+            raise
+        except Exception as exc:  # noqa: BLE001 - a failed target is recorded, the rest go on
+            wall = time.perf_counter() - t0
+            err = f"{type(exc).__name__}: {' '.join(str(exc).split())}"
+            if os.environ.get("FLUTTERSWIM_DEBUG"):
+                traceback.print_exc()
+            records[t.name] = TargetRecord(t, "failed", True, wall, Outcome("failed", notes=(err,)), err)
+            man.record(t.name, {"title": t.title, "status": "failed", "error": err, "key": key,
+                                "inputs": inputs, "wall_time_s": wall})
+            log(f"{t.name}: FAILED in {wall:.1f} s: {err}")
+            continue
+        write_json(out / t.summary_file, {"target": t.name, "title": t.title, "status": oc.status,
+                                          "comparisons": [asdict(c) for c in oc.comparisons],
+                                          "notes": list(oc.notes), "values": oc.values})
+        wall = time.perf_counter() - t0
+        produced = [f for f in t.outputs if (out / f).is_file()]
+        missing = [f for f in t.outputs if f not in produced]
+        if oc.status == "ok" and missing:
+            err = f"the build did not write {missing}"
+            records[t.name] = TargetRecord(t, "failed", True, wall, oc, err)
+            man.record(t.name, {"title": t.title, "status": "failed", "error": err, "key": key, "inputs": inputs})
+            log(f"{t.name}: FAILED: {err}")
+            continue
+        hashes = {f: sha256_file(out / f) for f in produced}
+        records[t.name] = TargetRecord(t, oc.status, True, wall, oc, outputs=hashes)
+        from .. import __version__
+
+        man.record(t.name, {"title": t.title, "status": oc.status, "key": key, "inputs": inputs,
+                            "version": __version__, "wall_time_s": wall, "outputs": hashes})
+        log(f"{t.name}: {oc.status} in {wall:.1f} s")
+    return records
