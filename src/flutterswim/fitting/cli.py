@@ -1,0 +1,59 @@
+"""CLI: ``flutterswim fit trials.csv --preset paper [--voltage 85] [--tip trailing] --out fit.json``."""
+
+from __future__ import annotations
+
+__all__ = ["register"]
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("fit", help="fit B, tau and kappa_E to a trials CSV, with uncertainty",
+                              description="Fit B, tau and kappa_E (geometry and viscosity from the preset) to the "
+                                          "per-voltage means and SEMs of a trials CSV "
+                                          "(voltage_V, sample, period_s, advance_mm, lateral_mm).")
+    p.add_argument("trials")
+    p.add_argument("--preset", default="paper", help="geometry and viscosity (default: paper)")
+    p.add_argument("--voltage", type=float, default=None, help="voltage to fit (default: the one with most trials)")
+    p.add_argument("--tip", choices=("trailing", "leading"), default="trailing",
+                   help="which end's lateral excursion the CSV holds (default: trailing)")
+    p.add_argument("--paper-cost", action="store_true", help="the paper's cost and bounds instead of SEM-weighted least squares")
+    p.add_argument("--profiles", action="store_true", help="also compute profile likelihoods (slower)")
+    p.add_argument("--bootstrap", type=int, default=0, help="parametric bootstrap refits (default 0)")
+    p.add_argument("--segments", type=int, default=24)
+    p.add_argument("--out", default="fit.json")
+    p.add_argument("--plot", default=None, help="figure of the data (Fig. 3e), the fit and its profiles")
+    p.set_defaults(func=_cmd_fit)
+
+
+def _cmd_fit(args) -> int:
+    import numpy as np
+
+    from .._paths import check_output_file
+    from .._validate import ParameterError
+    from ..params import preset
+    from .data import read_trials, summarise
+    from .fit import fit
+
+    out = check_output_file(args.out, (".json",))
+    if args.plot:
+        check_output_file(args.plot, (".png", ".pdf", ".svg"), what="--plot")
+    base = preset(args.preset)
+    trials = read_trials(args.trials)
+    summary = summarise(trials)
+    v = args.voltage if args.voltage is not None else float(summary.voltage_V[np.argmax(summary.n)])
+    mean, sem = summary.at(v)
+    if not args.paper_cost and not np.all(np.isfinite(sem)):
+        raise ParameterError(f"voltage {v:g} V has {int(summary.n[np.isclose(summary.voltage_V, v)][0])} trial(s): "
+                             "the SEM needs at least two (or use --paper-cost)")
+    res = fit(mean, sem if np.all(np.isfinite(sem)) else None, base=base, cost="paper" if args.paper_cost else "sem",
+              tip=args.tip, profiles=args.profiles, bootstrap=args.bootstrap, n_segments=args.segments)
+    res.save(out)
+    s = res.sigma_rel
+    print(f"{out}: B = {res.B * 1e6:.4g} N mm^2 (+-{s[0]:.1%}), tau = {res.tau:.4g} s (+-{s[1]:.1%}), "
+          f"kappa_E = {res.kappa_E * 1e-3:.4g} 1/mm (+-{s[2]:.1%}) at {v:g} V; paper cost C = {res.paper_cost:.3g}; "
+          f"{res.card.describe()}")
+    if args.plot:
+        from .plot import plot_fit
+
+        plot_fit(res, summary, trials, args.plot)
+        print(f"figure: {args.plot}")
+    return 0 if res.converged else 1

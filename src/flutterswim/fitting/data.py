@@ -1,0 +1,120 @@
+"""Trial data: the CSV of measured descriptors, per-voltage means and standard errors, and
+the paper's Fig. 3e (mean +- SEM against voltage).
+
+CSV columns (others are ignored): ``voltage_V, sample, period_s, advance_mm, lateral_mm``.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._validate import ParameterError
+
+__all__ = ["Trials", "Summary", "read_trials", "summarise", "plot_trials", "COLUMNS"]
+
+COLUMNS = ("voltage_V", "sample", "period_s", "advance_mm", "lateral_mm")
+DESCRIPTORS = ("period_s", "advance_mm", "lateral_mm")
+
+
+@dataclass(frozen=True)
+class Trials:
+    """One row per trial."""
+
+    voltage_V: np.ndarray
+    sample: np.ndarray
+    values: np.ndarray  # (n, 3): period_s, advance_mm, lateral_mm
+
+
+@dataclass(frozen=True)
+class Summary:
+    """Per voltage: number of trials, mean and SEM of the three descriptors (period [s],
+    advance [mm], lateral [mm])."""
+
+    voltage_V: np.ndarray
+    n: np.ndarray
+    mean: np.ndarray  # (m, 3)
+    sem: np.ndarray  # (m, 3)
+
+    def at(self, voltage: float) -> tuple[np.ndarray, np.ndarray]:
+        i = np.nonzero(np.isclose(self.voltage_V, voltage))[0]
+        if i.size == 0:
+            raise ParameterError(f"voltage={voltage!r} V is not in the data; it has {self.voltage_V.tolist()} V")
+        return self.mean[i[0]], self.sem[i[0]]
+
+
+def read_trials(path: str | Path) -> Trials:
+    """Read the trials CSV; a clear error names a missing column or a bad value."""
+    p = Path(path)
+    if not p.is_file():
+        raise ParameterError(f"trials={str(p)!r} is not a file")
+    try:
+        with open(p, newline="") as f:
+            rows = list(csv.DictReader(f))
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise ParameterError(f"trials={str(p)!r} is not a readable CSV file ({exc})") from None
+    if not rows:
+        raise ParameterError(f"trials={str(p)!r} has no data rows")
+    missing = [c for c in COLUMNS if c not in rows[0]]
+    if missing:
+        raise ParameterError(f"trials={str(p)!r} lacks the column(s) {', '.join(missing)}; "
+                             f"required: {', '.join(COLUMNS)}")
+    vals = np.empty((len(rows), 3))
+    volt = np.empty(len(rows))
+    for i, r in enumerate(rows):
+        try:
+            volt[i] = float(r["voltage_V"])
+            vals[i] = [float(r[c]) for c in DESCRIPTORS]
+        except (TypeError, ValueError):
+            raise ParameterError(f"trials={str(p)!r}, row {i + 2}: a number is required in "
+                                 f"{', '.join(('voltage_V',) + DESCRIPTORS)}") from None
+    if not (np.all(np.isfinite(vals)) and np.all(vals[:, 0] > 0) and np.all(vals[:, 1:] >= 0)):
+        raise ParameterError(f"trials={str(p)!r}: periods must be > 0 and advances and lateral "
+                             "excursions >= 0, all finite")
+    return Trials(volt, np.array([r["sample"] for r in rows]), vals)
+
+
+def summarise(trials: Trials) -> Summary:
+    """Mean and standard error of the mean per voltage (SEM = std(ddof=1) / sqrt(n); with
+    one trial the SEM is unknown: NaN)."""
+    vs = np.unique(trials.voltage_V)
+    n = np.array([np.count_nonzero(trials.voltage_V == v) for v in vs])
+    mean = np.array([trials.values[trials.voltage_V == v].mean(axis=0) for v in vs])
+    sem = np.array([trials.values[trials.voltage_V == v].std(axis=0, ddof=1) / math.sqrt(k) if k > 1
+                    else np.full(3, np.nan) for v, k in zip(vs, n)])
+    return Summary(vs, n, mean, sem)
+
+
+def plot_trials(summary: Summary, path=None, *, trials: Trials | None = None, model=None):
+    """Fig. 3e: advance per cycle and period against voltage, mean +- SEM (red), the trials
+    (grey dots) and, optionally, model values per voltage (``model``: (m, 3) array)."""
+    import matplotlib
+
+    if path is not None:
+        matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axs = plt.subplots(1, 3, figsize=(10, 3.4), constrained_layout=True)
+    labels = (("period_s", "period [s]"), ("advance_mm", "advance per cycle [mm]"),
+              ("lateral_mm", "lateral peak-to-peak [mm]"))
+    for k, (ax, (_, lab)) in enumerate(zip(axs, labels)):
+        if trials is not None:
+            ax.plot(trials.voltage_V, trials.values[:, k], ".", color="0.6", ms=4, label="trials")
+        ax.errorbar(summary.voltage_V, summary.mean[:, k], yerr=summary.sem[:, k], fmt="o", color="tab:red",
+                    capsize=3, label="mean +- SEM")
+        if model is not None:
+            ax.plot(summary.voltage_V, np.asarray(model)[:, k], "s", mfc="none", color="k", label="model")
+        ax.set_xlabel("voltage [V]")
+        ax.set_ylabel(lab)
+    axs[0].legend(fontsize=8)
+    if path is not None:
+        from .._paths import atomic_path, figure_metadata
+
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=150, **figure_metadata(Path(path).suffix))
+        plt.close(fig)
+    return fig

@@ -1,0 +1,223 @@
+"""``fit``: B, tau and kappa_E from measured descriptors (and optionally shapes, the onset, or
+several voltages), with their uncertainty.
+
+Costs:
+- ``"sem"`` (default): least squares of (model - mean) / SEM per descriptor, solved by scipy's
+  trust-region reflective method in the identifiable coordinates (log eta_perp, log chi,
+  log tau) and mapped back;
+- ``"paper"``: the paper's C = sum (c_e / c_n - 1)^2, minimised by SLSQP over factors in
+  [0.5, 1.5] of B0, tau0, kappa_E0 (the paper's procedure).
+The descriptors come from the periodic-orbit solver, so the cost is smooth.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .._validate import ParameterError, positive
+from ..params import Parameters, preset
+from .model import DescriptorModel, NotSwimming, to_identifiable, to_physical
+from .uncertainty import NAMES, covariance, identifiability_card
+
+__all__ = ["FitResult", "fit", "PAPER_GUESS", "paper_cost"]
+
+#: The paper's initial guess (SI): B0 = 2e-8 N mm^2, tau0 = 0.3 s, kappa_E0 = 18 1/mm.
+PAPER_GUESS = (2.0e-14, 0.3, 18.0e3)
+PENALTY = 1e3  # weighted residual when there is no stable stroke
+
+
+def paper_cost(measured: np.ndarray, model: np.ndarray) -> float:
+    """C = sum_k (c_e / c_n - 1)^2 over (period, advance, lateral)."""
+    return float(np.sum((np.asarray(measured) / np.asarray(model) - 1.0) ** 2))
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """Fitted B [N m^2], tau [s], kappa_E [1/m], relative 1-sigma of each, correlations, the
+    identifiability card, profiles and bootstrap if asked, the costs and the settings."""
+
+    B: float
+    tau: float
+    kappa_E: float
+    sigma_rel: np.ndarray
+    correlation: np.ndarray
+    cost: float
+    paper_cost: float
+    cost_kind: str
+    converged: bool
+    message: str
+    n_model_evaluations: int
+    wall_time_s: float
+    measured: np.ndarray
+    sem: np.ndarray
+    model: np.ndarray
+    card: Any
+    profiles: dict = field(default_factory=dict)
+    bootstrap_sigma_rel: np.ndarray | None = None
+    settings: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        def f(v):
+            return None if v is None or not math.isfinite(float(v)) else float(v)
+
+        out = {
+            "values": {"B_N_m2": self.B, "tau_s": self.tau, "kappa_E_per_m": self.kappa_E,
+                       "B_N_mm2": self.B * 1e6, "kappa_E_per_mm": self.kappa_E * 1e-3},
+            "sigma_rel": {n: f(s) for n, s in zip(NAMES, self.sigma_rel)},
+            "correlation": {f"{a}-{b}": f(self.correlation[i, j]) for i, a in enumerate(NAMES)
+                            for j, b in enumerate(NAMES) if j > i},
+            "cost": {"kind": self.cost_kind, "value": self.cost, "paper_C": self.paper_cost},
+            "convergence": {"converged": self.converged, "message": self.message,
+                            "model_evaluations": self.n_model_evaluations, "wall_time_s": self.wall_time_s},
+            "data": {"descriptors": ["period_s", "advance_mm", "lateral_mm"],
+                     "measured": self.measured.tolist(), "sem": [f(s) for s in self.sem],
+                     "model": self.model.tolist()},
+            "identifiability": {"singular_values": self.card.singular_values.tolist(),
+                                "condition_number": self.card.condition_number,
+                                "weakest_combination_exponents": dict(zip(NAMES, self.card.weakest.tolist())),
+                                "summary": self.card.describe(),
+                                "sensitivities_dlog_descriptor_dlog_parameter":
+                                    {d: dict(zip(NAMES, row)) for d, row in
+                                     zip(("period", "advance", "lateral"), self.card.sensitivities.tolist())}},
+            "settings": self.settings,
+        }
+        if self.profiles:
+            out["profiles"] = {k: {"values": v["values"].tolist(), "chi2": v["chi2"].tolist(),
+                                   "sigma_rel_profile": f(v["sigma_rel"])} for k, v in self.profiles.items()}
+        if self.bootstrap_sigma_rel is not None:
+            out["bootstrap_sigma_rel"] = dict(zip(NAMES, self.bootstrap_sigma_rel.tolist()))
+        return out
+
+    def save(self, path) -> None:
+        from .._paths import atomic_write_text, check_output_file
+
+        p = check_output_file(path, (".json",))
+        atomic_write_text(p, json.dumps({"software": "flutterswim fit", **self.to_dict()}, indent=2))
+
+
+def _weighted(model, x, mean, sem):
+    try:
+        y = model(x)
+    except NotSwimming:
+        return np.full(3, PENALTY), None
+    return (y - mean) / sem, y
+
+
+def fit(measured, sem=None, *, base: Parameters | None = None, guess=PAPER_GUESS, cost: str = "sem",
+        tip: str = "trailing", model=None, profiles: bool = False, bootstrap: int = 0,
+        n_segments: int = 24, seed: int = 0) -> FitResult:
+    """Fit (B, tau, kappa_E) to ``measured`` = (period [s], advance [mm], lateral [mm]) with
+    standard errors ``sem`` (same units; required for the default cost and for uncertainties).
+
+    ``base``: geometry and viscosity (default: the paper preset); ``guess``: (B, tau, kappa_E)
+    to start from (default: the paper's initial guess); ``model``: a descriptor model (default
+    :class:`DescriptorModel` on periodic orbits, N = ``n_segments``)."""
+    t0 = time.perf_counter()
+    base = preset("paper") if base is None else base
+    if not isinstance(base, Parameters):
+        raise ParameterError(f"base={base!r} must be flutterswim.Parameters")
+    mean = np.asarray(measured, float)
+    if mean.shape != (3,) or not np.all(np.isfinite(mean)) or np.any(mean <= 0):
+        raise ParameterError(f"measured={measured!r} must be three positive numbers (period s, advance mm, lateral mm)")
+    if cost not in ("sem", "paper"):
+        raise ParameterError(f"cost={cost!r} must be 'sem' or 'paper'")
+    sem_arr = None if sem is None else np.asarray(sem, float)
+    if sem_arr is not None and (sem_arr.shape != (3,) or not np.all(sem_arr > 0)):
+        raise ParameterError(f"sem={sem!r} must be three positive standard errors (or None)")
+    if cost == "sem" and sem_arr is None:
+        raise ParameterError("sem=None: the default cost weights by the standard errors; give sem or cost='paper'")
+    B0, tau0, k0 = (positive(n, v) for n, v in zip(("guess B", "guess tau", "guess kappa_E"), guess))
+    model = DescriptorModel(base, tip=tip, n_segments=n_segments) if model is None else model
+    x0 = to_identifiable(base, B0, tau0, k0)
+    from scipy.optimize import least_squares, minimize
+
+    if cost == "sem":
+        def fun(x):
+            return _weighted(model, x, mean, sem_arr)[0]
+
+        def jac(x):
+            y = model(x)
+            return model_jacobian(model, x, y) / sem_arr[:, None]
+
+        res = least_squares(fun, x0, jac=jac, method="trf", xtol=1e-13, ftol=1e-15, gtol=1e-15, max_nfev=60)
+        x, ok, msg = res.x, bool(res.success), str(res.message)
+    else:
+        lo = np.log(np.array([0.5, 0.5, 0.5]))
+        # optimisation variables: log factors (alpha: kappa_E, beta: B, gamma: tau) as in the paper
+
+        def x_of(f):
+            return to_identifiable(base, B0 * math.exp(f[1]), tau0 * math.exp(f[2]), k0 * math.exp(f[0]))
+
+        def c_of(f):
+            try:
+                return paper_cost(mean, model(x_of(f)))
+            except NotSwimming:
+                return 1e6
+
+        def g_of(f, h=1e-6):
+            return np.array([(c_of(f + h * e) - c_of(f - h * e)) / (2 * h) for e in np.eye(3)])
+
+        r = minimize(c_of, np.zeros(3), jac=g_of, method="SLSQP",
+                     bounds=[(lo[0], -lo[0])] * 3, options={"ftol": 1e-14, "maxiter": 100})
+        x, ok, msg = x_of(r.x), bool(r.success), str(r.message)
+    y = model(x)
+    B, tau, kE = to_physical(base, x)
+    jw = model_jacobian(model, x, y)
+    sens = jw / y[:, None]
+    weights = sem_arr if sem_arr is not None else 0.05 * mean  # 5 % when no SEMs are given
+    jw_w = jw / weights[:, None]
+    cov = covariance(jw_w)
+    card = identifiability_card(jw_w, sens)
+    chi2 = float(np.sum(((y - mean) / weights) ** 2))
+    prof = {}
+    if profiles and sem_arr is not None:
+        from .profile import profile_likelihood
+
+        prof = profile_likelihood(model, base, x, mean, sem_arr, cov.sigma_rel)
+    boot = None
+    if bootstrap:
+        if sem_arr is None:
+            raise ParameterError("bootstrap needs the standard errors (sem)")
+        boot = _bootstrap(model, x, mean, sem_arr, bootstrap, seed)
+    return FitResult(B, tau, kE, cov.sigma_rel, cov.correlation, chi2 if cost == "sem" else paper_cost(mean, y),
+                     paper_cost(mean, y), cost, ok, msg, getattr(model, "n_evaluations", 0),
+                     time.perf_counter() - t0, mean, sem_arr if sem_arr is not None else np.full(3, np.nan), y,
+                     card, prof, boot,
+                     {"tip": tip, "n_segments": n_segments, "guess": list(guess), "cost": cost,
+                      "base": {k: float(v) for k, v in asdict(base).items()},
+                      "uncertainty_weights": "sem" if sem_arr is not None else "5% of the measured values"})
+
+
+def model_jacobian(model, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """d(descriptors)/dx: the model's own (exact in log tau) or central differences."""
+    if hasattr(model, "jacobian"):
+        return model.jacobian(x, y)
+    jac = np.zeros((3, 3))
+    for k in range(3):
+        e = np.zeros(3)
+        e[k] = 1e-5
+        jac[:, k] = (model(x + e) - model(x - e)) / 2e-5
+    return jac
+
+
+def _bootstrap(model, x, mean, sem, n, seed):
+    """Parametric bootstrap: refit data drawn from N(mean, sem); spread of log parameters."""
+    from scipy.optimize import least_squares
+
+    from .model import LOG_MAP
+
+    rng = np.random.default_rng(seed)
+    ys = []
+    for _ in range(n):
+        d = mean + sem * rng.standard_normal(3)
+        r = least_squares(lambda z, d=d: _weighted(model, z, d, sem)[0], x,
+                          jac=lambda z: model_jacobian(model, z, model(z)) / sem[:, None], method="trf",
+                          xtol=1e-12, ftol=1e-14, gtol=1e-14, max_nfev=40)
+        ys.append(LOG_MAP @ r.x)
+    return np.std(np.array(ys), axis=0, ddof=1)

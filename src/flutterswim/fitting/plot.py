@@ -1,0 +1,54 @@
+"""Figure of a fit: the data (Fig. 3e), the model at the fit, residuals and profiles."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["plot_fit"]
+
+
+def plot_fit(res, summary, trials, path=None):
+    import matplotlib
+
+    if path is not None:
+        matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axs = plt.subplots(2, 3, figsize=(10.5, 6.4), constrained_layout=True)
+    labels = ("period [s]", "advance per cycle [mm]", "lateral peak-to-peak [mm]")
+    for k in range(3):
+        ax = axs[0, k]
+        ax.plot(trials.voltage_V, trials.values[:, k], ".", color="0.6", ms=4, label="trials")
+        ax.errorbar(summary.voltage_V, summary.mean[:, k], yerr=summary.sem[:, k], fmt="o", color="tab:red",
+                    capsize=3, label="mean +- SEM")
+        v = summary.voltage_V[np.argmin(np.abs(summary.mean[:, k] - res.measured[k]))]
+        ax.plot([v], [res.model[k]], "s", mfc="none", color="k", ms=8, label="model at the fit")
+        ax.set_xlabel("voltage [V]")
+        ax.set_ylabel(labels[k])
+    axs[0, 0].legend(fontsize=8)
+    names = (("B", 1e6, "B [N mm$^2$]"), ("tau", 1.0, r"$\tau$ [s]"), ("kappa_E", 1e-3, r"$\kappa_E$ [1/mm]"))
+    best = (res.B, res.tau, res.kappa_E)
+    for k, (n, scale, lab) in enumerate(names):
+        ax = axs[1, k]
+        if res.profiles:
+            pr = res.profiles[n]
+            ax.plot(pr["values"] * scale, pr["chi2"] - pr["chi2"].min(), "o-", color="k", ms=3, label="profile")
+            ax.axhline(1.0, color="tab:blue", ls=":", lw=1, label=r"$\Delta\chi^2 = 1$")
+            ax.set_ylabel(r"$\Delta\chi^2$")
+        else:
+            ax.text(0.5, 0.5, "profiles not computed\n(--profiles)", ha="center", va="center", transform=ax.transAxes)
+        ax.axvline(best[k] * scale, color="tab:red", lw=1)
+        ax.axvspan(best[k] * scale * (1 - res.sigma_rel[k]), best[k] * scale * (1 + res.sigma_rel[k]),
+                   color="tab:red", alpha=0.15, label=r"$\pm 1\sigma$ (Jacobian)")
+        ax.set_xlabel(lab)
+        ax.legend(fontsize=7)
+    fig.suptitle(f"fit: {res.card.describe()}", fontsize=9)
+    if path is not None:
+        from .._paths import atomic_path, figure_metadata
+
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=130, **figure_metadata(Path(path).suffix))
+        plt.close(fig)
+    return fig
