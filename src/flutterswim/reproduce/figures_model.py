@@ -92,14 +92,17 @@ def build_fig4c(ctx: Context) -> Outcome:
     cyc = detect_cycles(tr)
     wins = kymograph_windows(tr, n_cycles=1, cycles=cyc)
     n_g = fig4c_params(ctx.settings)["n_ghosts"]
-    it = tip_index(tr, "end")
+    orb = read_json(ctx.path("paper_orbit.json"))["orbit"]
+    tip = "start" if orb["leading_end"] == "s=l" else "end"  # the trailing end: the larger sway
+    it = tip_index(tr, tip)
     ghosts = {}
     for name, (a, b) in wins.items():
         idx = np.flatnonzero((tr.t >= a) & (tr.t <= b))
         ghosts[name] = idx[np.unique(np.linspace(0, idx.size - 1, n_g).round().astype(int))]
-    fig = plot_fig4c(tr, wins, ghosts, it)
+    fig = plot_fig4c(tr, wins, ghosts, it, "s = 0" if tip == "start" else "s = l")
     save_figure(fig, ctx.path("fig4c.png"))
-    data = {"tip_x": _var(("t",), tr.x[:, it], "m", "tip (s = l) x"), "tip_y": _var(("t",), tr.y[:, it], "m", "tip (s = l) y")}
+    data = {"tip_x": _var(("t",), tr.x[:, it], "m", f"trailing tip ({tip} of the filament) x"),
+            "tip_y": _var(("t",), tr.y[:, it], "m", f"trailing tip ({tip} of the filament) y")}
     for name, idx in ghosts.items():
         data[f"ghost_{name}_t"] = _var((f"ghost_{name}",), tr.t[idx], "s", f"times of the shapes drawn ({name})")
         data[f"ghost_{name}_x"] = _var((f"ghost_{name}", "s"), tr.x[idx], "m", f"shapes drawn ({name}), x")
@@ -192,7 +195,7 @@ def build_video_s4(ctx: Context) -> Outcome:
 
 # --- Fig. 4b --------------------------------------------------------------------------------
 def fig4b_params(s: Settings) -> dict:
-    return {"n_points": s.pick(30, 150), "n_segments": s.pick(16, 48), "to": 2.0, "params": PAPER.to_dict()}
+    return {"n_points": s.pick(40, 150), "n_segments": s.pick(24, 48), "to": 2.0, "params": PAPER.to_dict()}
 
 
 def build_fig4b(ctx: Context) -> Outcome:
@@ -206,6 +209,10 @@ def build_fig4b(ctx: Context) -> Outcome:
     write_netcdf(ctx.path("fig4b.nc"), ds)
     fig = plot_branch(ds, None, x_range=(0.0, prm["to"]))
     fig.axes[-1].set_xlabel(r"$\kappa_E / \kappa_{E,fit}$ (dimensionless)")
+    for ax in fig.axes:
+        ax.axvline(PAPER_ONSET_RATIO, color="tab:red", ls="--", lw=0.8)
+    fig.axes[0].text(PAPER_ONSET_RATIO, 0.5, "paper: ~0.65 ", transform=fig.axes[0].get_xaxis_transform(),
+                     fontsize=7, color="tab:red", ha="right")
     save_figure(fig, ctx.path("fig4b.png"))
     _close(fig)
     g = PAPER.groups

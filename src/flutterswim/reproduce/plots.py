@@ -31,7 +31,7 @@ def plot_b_readings(ratios, growth: dict, out: dict, paper_ratio: float):
     return fig
 
 
-def plot_fig4c(tr, wins: dict, ghosts: dict, it: int):
+def plot_fig4c(tr, wins: dict, ghosts: dict, it: int, tip_label: str = "s = l"):
     import matplotlib
 
     cmap = matplotlib.colormaps["Greens"]
@@ -39,7 +39,7 @@ def plot_fig4c(tr, wins: dict, ghosts: dict, it: int):
     fig = new_figure((10.0, 5.2))
     gs = fig.add_gridspec(2, 2, height_ratios=[1.0, 1.3])
     ax = fig.add_subplot(gs[0, :])
-    ax.plot(tr.x[:, it] * mm, tr.y[:, it] * mm, color=TIP_COLOR, lw=0.6, label="tip trajectory (s = l)")
+    ax.plot(tr.x[:, it] * mm, tr.y[:, it] * mm, color=TIP_COLOR, lw=0.6, label=f"trailing tip trajectory ({tip_label})")
     for idx in ghosts.values():
         for n, i in enumerate(idx):
             ax.plot(tr.x[i] * mm, tr.y[i] * mm, color=cmap(0.35 + 0.6 * n / max(1, idx.size - 1)), lw=1.3)
@@ -79,7 +79,7 @@ def plot_fig4de(tr, wins: dict, vel: dict):
                         xytext=(t[-10], (uc[0] + v * (t[-10] - t[0])) * mm),
                         arrowprops=dict(arrowstyle="-|>", color=SWIM_COLOR, lw=2))
         axs[0].legend(fontsize=7, loc="upper left")
-        axs[0].set_title(("Fig. 4d, near onset: " if name == "onset" else "Fig. 4e, limit cycle: ")
+        axs[0].set_title(("Fig. 4d, near onset\n" if name == "onset" else "Fig. 4e, at the limit cycle\n")
                          + axs[0].get_title(), fontsize=7)
     return fig
 

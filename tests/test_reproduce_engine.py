@@ -1,0 +1,155 @@
+"""The reproduce engine: up-to-date targets are skipped, changed outputs rebuilt, a SIGKILL
+keeps every finished target, foreign files are never overwritten, the CLI's exit codes."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+from flutterswim import ParameterError
+from flutterswim.reproduce.io import write_json
+from flutterswim.reproduce.manifest import Manifest
+from flutterswim.reproduce.targets import Outcome, Settings, Target, build_targets, compare
+
+pytest.importorskip("xarray")
+pytest.importorskip("jinja2")
+
+
+def _counter_target(name, calls, value=1.0, deps=()):
+    def build(ctx):
+        calls.append(name)
+        write_json(ctx.path(f"{name}_data.json"), {"value": value})
+        return Outcome("ok", (compare("x", 1.0, value, rtol=0.1),))
+
+    return Target(name, name, "", build, lambda s: {"value": value}, data=(f"{name}_data.json",), deps=deps)
+
+
+def test_rerun_skips_up_to_date_and_rebuilds_changed(tmp_path):
+    calls: list[str] = []
+    ts = [_counter_target("a", calls), _counter_target("b", calls, deps=("a",))]
+    rec = build_targets(ts, tmp_path, Settings())
+    assert calls == ["a", "b"] and all(r.status == "ok" and r.reran for r in rec.values())
+    man = json.loads((tmp_path / "manifest.json").read_text())
+    e = man["targets"]["a"]
+    assert set(e["outputs"]) == {"a_data.json", "a.json"} and e["wall_time_s"] >= 0 and e["version"]
+    calls.clear()
+    rec = build_targets(ts, tmp_path, Settings())
+    assert calls == [] and not any(r.reran for r in rec.values())
+    # a damaged output makes its target (and the one reading it) rebuild
+    (tmp_path / "a_data.json").write_text("{}")
+    rec = build_targets(ts, tmp_path, Settings())
+    # a rebuilds; b reads a's outputs, which come back byte-identical, so b stays up to date
+    assert calls == ["a"] and rec["a"].reran and not rec["b"].reran
+    # changed inputs rebuild
+    calls.clear()
+    build_targets([_counter_target("a", calls, value=2.0)], tmp_path, Settings())
+    assert calls == ["a"]
+
+
+def test_failure_is_recorded_and_dependents_fail(tmp_path):
+    def boom(ctx):
+        raise RuntimeError("no convergence")
+
+    calls: list[str] = []
+    ts = [Target("bad", "bad", "", boom, lambda s: {}), _counter_target("c", calls, deps=("bad",)),
+          _counter_target("d", calls)]
+    rec = build_targets(ts, tmp_path, Settings())
+    assert rec["bad"].status == "failed" and "no convergence" in rec["bad"].error
+    assert rec["c"].status == "failed" and rec["d"].status == "ok" and calls == ["d"]
+    assert Manifest.load(tmp_path).targets["bad"]["status"] == "failed"
+
+
+SCRIPT = textwrap.dedent("""
+    import sys, time
+    from pathlib import Path
+    from flutterswim.reproduce.io import write_json
+    from flutterswim.reproduce.targets import Outcome, Settings, Target, build_targets
+
+    def fast(ctx):
+        write_json(ctx.path("fast_data.json"), {"v": 1})
+        return Outcome()
+
+    def slow(ctx):
+        from flutterswim._paths import atomic_path
+        with atomic_path(ctx.path("slow_data.json")) as tmp:
+            tmp.write_text("partial")
+            print("slow started", flush=True)
+            time.sleep(60)
+        return Outcome()
+
+    build_targets([Target("fast", "", "", fast, lambda s: {}, data=("fast_data.json",)),
+                   Target("slow", "", "", slow, lambda s: {}, data=("slow_data.json",))],
+                  Path(sys.argv[1]), Settings())
+""")
+
+
+def test_sigkill_loses_no_finished_target(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    proc = subprocess.Popen([sys.executable, "-c", SCRIPT, str(out)], stdout=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline().strip() == "slow started"
+        os.kill(proc.pid, signal.SIGKILL)
+    finally:
+        proc.wait(timeout=30)
+    man = Manifest.load(out)  # a valid manifest with the finished target
+    assert man.targets["fast"]["status"] == "ok"
+    assert "slow" not in man.targets
+    assert json.loads((out / "fast_data.json").read_text())["v"] == 1
+    assert not (out / "slow_data.json").exists()  # never a half-written output under its name
+    assert man.up_to_date("fast", man.targets["fast"]["key"])
+
+
+def test_out_folder_safety(tmp_path):
+    from flutterswim.reproduce import reproduce
+
+    foreign = tmp_path / "mine"
+    foreign.mkdir()
+    (foreign / "notes.txt").write_text("user data")
+    with pytest.raises(ParameterError, match="not a flutterswim store"):
+        reproduce(foreign, targets=["table1"])
+    assert (foreign / "notes.txt").read_text() == "user data"
+    ours = tmp_path / "ours"
+    reproduce(ours, targets=["table1"])
+    (ours / "table1_data.json").write_text('{"written by": "someone else"}')  # no signature
+    with pytest.raises(ParameterError, match="was not written by flutterswim"):
+        reproduce(ours, targets=["table1"])
+    with pytest.raises(ParameterError, match="unknown"):
+        reproduce(tmp_path / "x", targets=["fig99"])
+    with pytest.raises(ParameterError, match="mode"):
+        reproduce(tmp_path / "y", mode="fast")
+
+
+def test_cli_exit_codes(tmp_path, capsys):
+    from flutterswim.cli import main
+
+    assert main(["reproduce", "--out", str(tmp_path / "r"), "--only", "table1", "--quiet"]) == 0
+    assert "1 of 1 targets ok" in capsys.readouterr().out
+    t0 = time.perf_counter()
+    assert main(["reproduce", "--out", str(tmp_path / "r"), "--only", "table1", "--quiet"]) == 0
+    assert time.perf_counter() - t0 < 30
+    assert main(["reproduce", "--out", str(tmp_path / "r"), "--trials", str(tmp_path / "none.csv")]) == 2
+    (tmp_path / "file").write_text("x")
+    assert main(["reproduce", "--out", str(tmp_path / "file")]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "none.csv" in err
+    with pytest.raises(SystemExit) as exc:
+        main(["reproduce", "--out", str(tmp_path / "q"), "--quick", "--full"])
+    assert exc.value.code == 2
+
+
+def test_fig3e_is_skipped_with_a_reason(tmp_path):
+    from flutterswim.reproduce import reproduce
+
+    res = reproduce(tmp_path / "r", targets=["fig3e"])
+    rec = res.records["fig3e"]
+    assert rec.status == "skipped" and any(n.startswith("skipped:") for n in rec.outcome.notes)
+    assert "skipped" in Path(res.report).read_text()

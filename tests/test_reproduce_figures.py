@@ -1,0 +1,192 @@
+"""Figure data of ``flutterswim reproduce`` against mathematics (not pixels): the onset of
+the branch is the linear threshold, the eigenmodes satisfy the free-end conditions and their
+ODE, the kymograph's average velocity is the periodic orbit's speed, the steering circle has
+radius U / Omega; two runs write identical data files; the report renders in Chromium."""
+
+from __future__ import annotations
+
+import math
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import flutterswim as fs
+
+xr = pytest.importorskip("xarray")
+pytest.importorskip("jinja2")
+pytest.importorskip("matplotlib")
+
+FAST = ["table1", "b_readings", "fig6a", "fig6b", "fig6cd", "paper_run", "fig4b", "fig4c", "fig4de", "fig5"]
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    from flutterswim.reproduce import figures_model as fm
+    from flutterswim.reproduce import reproduce
+
+    mp = pytest.MonkeyPatch()
+    # a short branch (the Hopf point does not depend on the number of orbits)
+    mp.setattr(fm, "fig4b_params", lambda s: {"n_points": 8, "n_segments": 24, "to": 1.2,
+                                              "params": fs.PAPER.to_dict()})
+    try:
+        res = reproduce(tmp_path_factory.mktemp("rep") / "out", mode="quick", targets=FAST)
+    finally:
+        mp.undo()
+    assert res.ok, {k: r.error for k, r in res.records.items() if r.status == "failed"}
+    return res
+
+
+def _open(res, name):
+    return xr.open_dataset(res.out / name, engine="h5netcdf")
+
+
+def test_b_readings_match_the_formula_and_the_curves(built):
+    from flutterswim.params import PAPER
+
+    ds = _open(built, "b_readings.nc")
+    L1, L2 = math.log(2 * PAPER.l / PAPER.b), math.log(PAPER.l / PAPER.b)
+    vals = built.records["b_readings"].outcome.values["readings"]
+    # eta_perp ~ 1 / ln(2l/b): doubling b multiplies it by ln(2l/b) / ln(l/b)
+    assert vals["full width"]["eta_perp"] / vals["semi-axis"]["eta_perp"] == pytest.approx(L1 / L2, rel=1e-12)
+    for key in ("semi", "full"):
+        x, re_ = ds["kappa_E_ratio"].values, ds[f"re_omega_{key}"].values
+        k = np.flatnonzero((re_[:-1] <= 0) & (re_[1:] > 0))[0]
+        cross = x[k] - re_[k] * (x[k + 1] - x[k]) / (re_[k + 1] - re_[k])
+        # root following along kappa_E vs the Hopf-Newton threshold (independent solves)
+        assert cross == pytest.approx(ds.attrs[f"onset_ratio_{key}"], abs=1e-4)
+    assert abs(ds.attrs["onset_ratio_full"] - 0.65) < 0.005 < 0.03 < abs(ds.attrs["onset_ratio_semi"] - 0.65)
+
+
+def test_eigenmodes_satisfy_free_end_conditions_and_the_ode(built):
+    ds = _open(built, "fig6cd.nc")
+    s = ds["s"].values
+    chi, eta = ds.attrs["chi"], ds.attrs["eta_perp"]
+    for m in (1, 2):
+        f = {k: ds[f"mode{m}_{k}_re"].values + 1j * ds[f"mode{m}_{k}_im"].values
+             for k in ("r", "r_s", "r_ss", "r_sss", "r_ssss", "kappa", "kappa_s")}
+        om = ds.attrs[f"mode{m}_omega_re"] + 1j * ds.attrs[f"mode{m}_omega_im"]
+        scale = np.max(np.abs(f["r_ss"]))
+        for end in (0, -1):  # zero moment theta_s - kappa and zero shear at both free ends
+            assert abs(f["r_ss"][end] - f["kappa"][end]) < 1e-8 * scale
+            assert abs(f["r_sss"][end] - f["kappa_s"][end]) < 1e-8 * np.max(np.abs(f["r_sss"]))
+        # the interior equations: r'''' - kappa'' + omega eta r = 0 and (1 + omega) kappa = -chi r'
+        c = chi / (1 + om)
+        assert np.max(np.abs(f["r_ssss"] + c * f["r_sss"] + om * eta * f["r"])) < 1e-8 * np.max(np.abs(f["r_ssss"]))
+        assert np.allclose((1 + om) * f["kappa"], -chi * f["r_s"], atol=1e-10 * np.max(np.abs(f["kappa"])))
+        # the stored derivatives are those of the stored shape (finite differences, O(h^2))
+        h = s[1] - s[0]
+        assert np.max(np.abs(np.gradient(f["r"], h, edge_order=2) - f["r_s"])) < 2e-3 * np.max(np.abs(f["r_s"]))
+        # the stored shape is the stability package's eigenmode (normalised the same way)
+        mode = fs.stability.eigenmodes(chi, eta, n_points=s.size)[m - 1]
+        assert np.allclose(mode.r, f["r"], atol=1e-8)
+    assert ds.attrs["mode1_omega_re"] > 0 > ds.attrs["mode2_omega_re"]
+
+
+def test_bifurcation_and_map_cross_zero_at_the_neutral_curve(built):
+    from flutterswim.stability import critical_chi
+
+    g = fs.PAPER.groups
+    chi_cr, _ = critical_chi(g.eta_perp)
+    ds = _open(built, "fig6b.nc")
+    c, r = ds["chi"].values, ds["re_omega_vs_chi"].values
+    k = np.flatnonzero((r[:-1] <= 0) & (r[1:] > 0))
+    assert k.size == 1
+    assert c[k[0]] - r[k[0]] * (c[k[0] + 1] - c[k[0]]) / (r[k[0] + 1] - r[k[0]]) == pytest.approx(chi_cr, abs=0.05)
+    assert np.all(ds["im_omega_vs_chi"].values > 0)
+    m = _open(built, "fig6a_map.nc")
+    n = _open(built, "fig6a_neutral.nc")
+    for e in (20.0, 71.0, 200.0):
+        row = m["re_omega"].sel(eta_perp=e).values
+        chis = m["chi"].values
+        unstable = chis[row > 0]
+        crit = float(n["chi_cr"].sel(eta_perp=e, method="nearest"))
+        # the map is unstable exactly beyond +-chi_cr (grid step 1)
+        assert np.all(np.abs(unstable) >= crit - 1e-9)
+        assert np.all(row[np.abs(chis) > crit + 1.0] > 0)
+
+
+def test_branch_onset_is_the_linear_threshold(built):
+    from flutterswim.stability import critical_chi
+
+    g = fs.PAPER.groups
+    linear = critical_chi(g.eta_perp)[0] / g.chi
+    ds = _open(built, "fig4b.nc")
+    hopf = ds.attrs["hopf_kappa_E_ratio"]
+    assert hopf == pytest.approx(linear, rel=1e-2)  # N = 24 discrete vs the continuum
+    x = ds["kappa_E_ratio"].values
+    assert np.all(x > hopf) and np.all(ds["advance"].values > 0)
+    # the amplitude grows like sqrt(kappa - kappa_cr) near a supercritical Hopf point
+    a = ds["amplitude"].values
+    assert ds.attrs["lyapunov_coefficient"] < 0 and a[1] / a[0] == pytest.approx(
+        math.sqrt((x[1] - hopf) / (x[0] - hopf)), rel=0.1)
+
+
+def test_kymograph_velocity_is_the_orbit_speed(built):
+    ds = _open(built, "fig4de.nc")
+    v = ds.attrs["limit_average_velocity_m_s"]
+    assert v == pytest.approx(ds.attrs["orbit_speed_m_s"], rel=1e-2)
+    assert ds.attrs["onset_average_velocity_m_s"] < 0.5 * v
+    # the line's slope is the centroid's net displacement along the path over the window
+    t, u = ds["limit_t"].values, ds["limit_centroid_along"].values
+    assert (u[-1] - u[0]) / (t[-1] - t[0]) == pytest.approx(v, rel=1e-12)
+
+
+def test_onset_shapes_are_small_and_limit_shapes_large(built):
+    ds = _open(built, "fig4c.nc")
+    p2p = {k: np.ptp(ds[f"ghost_{k}_y"].values[:, 0]) for k in ("onset", "limit")}
+    assert p2p["onset"] < 0.5 * p2p["limit"]
+    assert ds.attrs["onset_window_s"][1] < ds.attrs["limit_window_s"][0]
+
+
+def test_steering_circle_radius_is_U_over_Omega(built):
+    ds = _open(built, "fig5.nc")
+    predicted = ds.attrs["orbit_speed_m_s"] / ds.attrs["rate_rad_s"]
+    assert ds.attrs["circle_radius_m"] == pytest.approx(predicted, rel=3e-2)
+    sel = ds["avg_in_fit"].values.astype(bool)
+    d = np.hypot(ds["avg_x"].values[sel] - ds.attrs["circle_xc_m"], ds["avg_y"].values[sel] - ds.attrs["circle_yc_m"])
+    assert np.std(d) < 0.01 * ds.attrs["circle_radius_m"]
+    # the field turns only after onset
+    t, phi = ds["t"].values, ds["field_angle"].values
+    assert np.all(phi[t <= ds.attrs["start_s"]] == 0)
+
+
+def test_two_runs_write_identical_data_files(built, tmp_path):
+    from flutterswim.reproduce import reproduce
+
+    names = ["table1", "b_readings", "fig6cd", "paper_run", "fig4c"]
+    res = reproduce(tmp_path / "again", targets=names)
+    assert res.ok
+    files = [f for n in names for f in built.records[n].target.data + (built.records[n].target.summary_file,)]
+    assert any(f.endswith(".nc") for f in files)
+    for f in files:
+        assert (res.out / f).read_bytes() == (built.out / f).read_bytes(), f
+
+
+def _chromium() -> str | None:
+    for name in ("chromium", "chromium-browser", "google-chrome"):
+        p = shutil.which(name)
+        if p:
+            return p
+    return None
+
+
+def test_report_renders_in_headless_chromium(built):
+    exe = _chromium()
+    if exe is None:
+        pytest.skip("no chromium on PATH (Debian: apt-get install chromium; .ci/run installs it)")
+    html = Path(built.report)
+    n_img = html.read_text().count("<img ")
+    assert n_img >= 8
+    proc = subprocess.run([exe, "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+                           "--virtual-time-budget=10000", "--dump-dom", html.resolve().as_uri()],
+                          capture_output=True, text=True, timeout=120)
+    dom = proc.stdout
+    m = re.search(r'data-images-loaded="(\d+)"\s+data-images-total="(\d+)"', dom)
+    assert m, f"the page's load script did not run: {proc.stderr[-500:]}"
+    assert int(m.group(1)) == int(m.group(2)) == n_img  # every image decoded (naturalWidth > 0)
+    text = re.sub(r"<[^>]+>", " ", re.sub(r"<(script|style)[^>]*>.*?</\1>", " ", dom, flags=re.S))
+    assert len(text.split()) > 500 and "0.65" in text  # not blank; the b readings are there
