@@ -10,7 +10,6 @@ import subprocess
 import sys
 import textwrap
 import time
-from pathlib import Path
 
 import pytest
 
@@ -146,10 +145,22 @@ def test_cli_exit_codes(tmp_path, capsys):
     assert exc.value.code == 2
 
 
-def test_fig3e_is_skipped_with_a_reason(tmp_path):
+def test_fig3e_from_a_trials_csv(tmp_path):
+    pytest.importorskip("flutterswim.fitting")
     from flutterswim.reproduce import reproduce
 
-    res = reproduce(tmp_path / "r", targets=["fig3e"])
-    rec = res.records["fig3e"]
-    assert rec.status == "skipped" and any(n.startswith("skipped:") for n in rec.outcome.notes)
-    assert "skipped" in Path(res.report).read_text()
+    import numpy as np
+
+    rows = ["voltage_V,sample,period_s,advance_mm,lateral_mm"]
+    data = {80: [(0.5, 0.30, 1.0), (0.7, 0.34, 1.2)], 85: [(0.40, 0.40, 1.1), (0.44, 0.38, 1.3), (0.36, 0.42, 1.0)]}
+    for v, trials in data.items():
+        rows += [f"{v},s{i},{p},{a},{lat}" for i, (p, a, lat) in enumerate(trials)]
+    csv = tmp_path / "trials.csv"
+    csv.write_text("\n".join(rows) + "\n")
+    res = reproduce(tmp_path / "r", targets=["fig3e"], trials=csv)
+    assert res.records["fig3e"].status == "ok"
+    d = json.loads((res.out / "fig3e_data.json").read_text())
+    for k, v in enumerate(data):
+        x = np.array(data[v])
+        assert np.allclose(d["mean"][k], x.mean(axis=0))
+        assert np.allclose(d["sem"][k], x.std(axis=0, ddof=1) / np.sqrt(len(x)))

@@ -20,7 +20,7 @@ xr = pytest.importorskip("xarray")
 pytest.importorskip("jinja2")
 pytest.importorskip("matplotlib")
 
-FAST = ["table1", "b_readings", "fig6a", "fig6b", "fig6cd", "paper_run", "fig4b", "fig4c", "fig4de", "fig5"]
+FAST = ["table1", "b_readings", "fig6a", "fig6b", "fig6cd", "paper_run", "fig4b", "fig4c", "fig4de", "fig5", "fig3e"]
 
 
 @pytest.fixture(scope="module")
@@ -154,6 +154,19 @@ def test_steering_circle_radius_is_U_over_Omega(built):
     assert np.all(phi[t <= ds.attrs["start_s"]] == 0)
 
 
+def test_synthetic_fit_recovers_the_truth(built):
+    import json
+
+    rec = built.records["fig3e"]
+    if rec.status == "skipped":
+        pytest.skip(rec.outcome.notes[0])
+    d = json.loads((built.out / "fig3e_data.json").read_text())
+    assert d["source"] == "synthetic"
+    fitted = d["fit"]["values"]
+    for k, v in (("B_N_m2", "B"), ("tau_s", "tau"), ("kappa_E_per_m", "kappa_E")):
+        assert fitted[k] == pytest.approx(d["truth"][v], rel=1e-2)
+
+
 def test_two_runs_write_identical_data_files(built, tmp_path):
     from flutterswim.reproduce import reproduce
 
@@ -180,7 +193,7 @@ def test_report_renders_in_headless_chromium(built):
         pytest.skip("no chromium on PATH (Debian: apt-get install chromium; .ci/run installs it)")
     html = Path(built.report)
     n_img = html.read_text().count("<img ")
-    assert n_img >= 8
+    assert n_img >= 8 + (built.records["fig3e"].status == "ok")
     proc = subprocess.run([exe, "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
                            "--virtual-time-budget=10000", "--dump-dom", html.resolve().as_uri()],
                           capture_output=True, text=True, timeout=120)
