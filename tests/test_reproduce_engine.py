@@ -47,6 +47,13 @@ def test_rerun_skips_up_to_date_and_rebuilds_changed(tmp_path):
     rec = build_targets(ts, tmp_path, Settings())
     # a rebuilds; b reads a's outputs, which come back byte-identical, so b stays up to date
     assert calls == ["a"] and rec["a"].reran and not rec["b"].reran
+    # a changed source file of the code that built it makes a target out of date
+    man = Manifest.load(tmp_path)
+    e = man.targets["a"]
+    assert any(k.startswith("reproduce/") for k in e["code"])
+    assert man.up_to_date("a", e["key"])
+    e["code"][next(iter(e["code"]))] = "0" * 64
+    assert not man.up_to_date("a", e["key"])
     # changed inputs rebuild
     calls.clear()
     build_targets([_counter_target("a", calls, value=2.0)], tmp_path, Settings())

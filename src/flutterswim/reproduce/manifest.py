@@ -1,8 +1,9 @@
 """The manifest: one JSON file per output folder recording, for every target, its inputs
 (and their key), the package version, the wall time, and the SHA-256 of each output file.
 
-A target is up to date when its entry has the same input key and every listed output file
-still has its recorded hash. The manifest is rewritten atomically after each target, so an
+A target is up to date when its entry has the same input key, every listed output file
+still has its recorded hash, and every flutterswim source file loaded when it was built is
+unchanged. The manifest is rewritten atomically after each target, so an
 interrupted run keeps every target finished before the interruption.
 """
 
@@ -17,7 +18,7 @@ from typing import Any
 
 from .io import clean_json, sha256_file
 
-__all__ = ["Manifest", "input_key", "code_fingerprint", "MANIFEST_NAME"]
+__all__ = ["Manifest", "input_key", "code_hashes", "code_fingerprint", "MANIFEST_NAME"]
 
 MANIFEST_NAME = "manifest.json"
 
@@ -28,22 +29,39 @@ def input_key(inputs: dict) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-_FINGERPRINT: str | None = None
+def _root() -> Path:
+    return Path(__file__).resolve().parents[1]
+
+
+def code_hashes() -> dict[str, str]:
+    """SHA-256 of the source of every flutterswim module loaded so far (path relative to the
+    package) plus the report template: the code a target was built with. A change to one of
+    them makes the target out of date; edits to modules it never loaded do not."""
+    import sys
+
+    root = _root()
+    out = {}
+    for name, mod in list(sys.modules.items()):
+        f = getattr(mod, "__file__", None)
+        if not (name == "flutterswim" or name.startswith("flutterswim.")) or not f:
+            continue
+        p = Path(f).resolve()
+        if p.suffix == ".py" and p.is_file() and root in p.parents:
+            out[str(p.relative_to(root))] = sha256_file(p)
+    for p in sorted((root / "reproduce" / "templates").glob("*.j2")):
+        out[str(p.relative_to(root))] = sha256_file(p)
+    return dict(sorted(out.items()))
 
 
 def code_fingerprint() -> str:
-    """SHA-256 over the package's Python sources (paths and contents, sorted): any change of
-    the code makes every target out of date."""
-    global _FINGERPRINT
-    if _FINGERPRINT is None:
-        root = Path(__file__).resolve().parents[1]
-        h = hashlib.sha256()
-        for p in sorted(root.rglob("*.py")) + sorted(root.rglob("*.j2")):
-            h.update(str(p.relative_to(root)).encode())
-            h.update(b"\0")
-            h.update(p.read_bytes())
-        _FINGERPRINT = h.hexdigest()
-    return _FINGERPRINT
+    """SHA-256 over all the package's Python sources (paths and contents, sorted)."""
+    root = _root()
+    h = hashlib.sha256()
+    for p in sorted(root.rglob("*.py")) + sorted(root.rglob("*.j2")):
+        h.update(str(p.relative_to(root)).encode())
+        h.update(b"\0")
+        h.update(p.read_bytes())
+    return h.hexdigest()
 
 
 @dataclass
@@ -76,6 +94,14 @@ class Manifest:
             return False
         for rel, digest in e.get("outputs", {}).items():
             p = self.folder / rel
+            if not p.is_file() or sha256_file(p) != digest:
+                return False
+        code = e.get("code")
+        if not code:
+            return False
+        root = _root()
+        for rel, digest in code.items():
+            p = root / rel
             if not p.is_file() or sha256_file(p) != digest:
                 return False
         return True

@@ -1,7 +1,8 @@
 """Targets and the engine that builds them.
 
-A :class:`Target` names its output files, its inputs (a JSON-able dict, with the code
-fingerprint and the outputs of the targets it depends on) and a ``build(ctx)`` function that
+A :class:`Target` names its output files, its inputs (a JSON-able dict, with the package
+version and the output hashes of the targets it depends on; the manifest adds the hashes of
+the source files loaded) and a ``build(ctx)`` function that
 writes the outputs and returns an :class:`Outcome` (comparisons with the paper, notes). The
 engine :func:`build_targets` skips targets whose manifest entry is up to date, records each
 finished target in the manifest at once, and writes ``<name>.json`` (the outcome) as data.
@@ -18,7 +19,7 @@ from typing import Any, Callable
 
 from .._validate import ParameterError
 from .io import sha256_file, write_json
-from .manifest import Manifest, code_fingerprint, input_key
+from .manifest import Manifest, code_hashes, input_key
 
 __all__ = ["Settings", "Comparison", "Outcome", "Target", "Context", "TargetRecord", "build_targets",
            "MODES"]
@@ -142,8 +143,7 @@ def _inputs(t: Target, settings: Settings, records: dict) -> dict:
     from .. import __version__
 
     deps = {d: records[d].outputs for d in t.deps if d in records}
-    return {"target": t.name, "settings": t.params(settings), "version": __version__,
-            "code": code_fingerprint(), "deps": deps}
+    return {"target": t.name, "settings": t.params(settings), "version": __version__, "deps": deps}
 
 
 def _outcome_from_summary(t: Target, out: Path) -> Outcome:
@@ -214,6 +214,7 @@ def build_targets(targets: list[Target], out: Path, settings: Settings, *, log: 
         from .. import __version__
 
         man.record(t.name, {"title": t.title, "status": oc.status, "key": key, "inputs": inputs,
-                            "version": __version__, "wall_time_s": wall, "outputs": hashes})
+                            "version": __version__, "wall_time_s": wall, "outputs": hashes,
+                            "code": code_hashes()})
         log(f"{t.name}: {oc.status} in {wall:.1f} s")
     return records
