@@ -19,7 +19,7 @@ import numpy as np
 
 from .._validate import ParameterError, positive, positive_int
 from ..params import Groups, Parameters
-from .shooting import Flow, flow
+from .shooting import Flow, StepFailure, flow
 from ._threads import one_blas_thread
 from .system import ShapeSystem
 
@@ -169,7 +169,10 @@ def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: in
     res = math.inf
     fl = warm
     for it in range(1, max_newton + 1):
-        fl = flow(system, u, T, steps, variational=True, warm=fl, derivative_tol=1e-6)
+        try:
+            fl = flow(system, u, T, steps, variational=True, warm=fl, derivative_tol=1e-6)
+        except StepFailure as exc:  # the iterate left the region where the steps converge
+            raise OrbitNotFound(f"Newton iteration {it}: {exc}") from None
         r = fl.y[-1, 2:] - u
         res = float(np.max(np.abs(r)))
         if res < tol:
@@ -241,12 +244,34 @@ def _with_shape_descriptors(orb: PeriodicOrbit) -> PeriodicOrbit:
 
 
 def _p2p(q: np.ndarray) -> float:
-    """Peak-to-peak of a periodic signal sampled uniformly over one period, from its
-    trigonometric interpolant on a grid 16 times finer (exact for band-limited signals)."""
+    """Peak-to-peak of a periodic signal sampled uniformly over one period: the extremes of
+    its trigonometric interpolant, located on a grid 16 times finer and refined by Newton's
+    method on the interpolant's derivative (to rounding: no dependence on the phase origin)."""
     m = q.size
-    c = np.fft.rfft(q)
-    fine = np.fft.irfft(c, 16 * m) * 16
-    return float(fine.max() - fine.min())
+    c = np.fft.rfft(q) / m
+    if m % 2 == 0:
+        c[-1] *= 0.5
+    k = np.arange(c.size)
+    w = np.where(k == 0, 1.0, 2.0) * c
+
+    def deriv(phi, order):
+        e = np.exp(2j * np.pi * np.outer(np.atleast_1d(phi), k))
+        return np.real(e @ (w * (2j * np.pi * k) ** order))
+
+    fine = np.fft.irfft(np.fft.rfft(q), 16 * m) * 16
+    ext = []
+    for i in (int(np.argmax(fine)), int(np.argmin(fine))):
+        phi = i / (16 * m)
+        for _ in range(6):
+            d1, d2 = deriv(phi, 1)[0], deriv(phi, 2)[0]
+            if d2 == 0:
+                break
+            step = d1 / d2
+            phi -= step
+            if abs(step) < 1e-15:
+                break
+        ext.append(deriv(phi, 0)[0])
+    return float(ext[0] - ext[1])
 
 
 @one_blas_thread
