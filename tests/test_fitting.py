@@ -9,7 +9,7 @@ import pytest
 
 import flutterswim as fs
 from flutterswim.fitting import DescriptorModel, LocalSurrogate, fit, read_trials, summarise, to_identifiable
-from flutterswim.fitting.model import LOG_MAP, to_physical
+from flutterswim.fitting.model import to_physical
 from flutterswim.fitting.richer import compare_information, fit_shapes, shape_data_from_model
 
 BASE = fs.PAPER
