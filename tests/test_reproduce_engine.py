@@ -171,3 +171,25 @@ def test_fig3e_from_a_trials_csv(tmp_path):
         x = np.array(data[v])
         assert np.allclose(d["mean"][k], x.mean(axis=0))
         assert np.allclose(d["sem"][k], x.std(axis=0, ddof=1) / np.sqrt(len(x)))
+
+
+@pytest.mark.slow
+def test_quick_run_end_to_end(tmp_path):
+    """The whole ``--quick`` run through the CLI: every target ok, videos decodable, report written."""
+    out = tmp_path / "q"
+    t0 = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-m", "flutterswim", "reproduce", "--out", str(out), "--quick", "--quiet"],
+                          capture_output=True, text=True, timeout=900)
+    wall = time.perf_counter() - t0
+    assert proc.returncode == 0, proc.stderr
+    man = json.loads((out / "manifest.json").read_text())
+    from flutterswim.reproduce import TARGETS
+
+    assert {t.name for t in TARGETS} <= set(man["targets"])
+    assert all(e["status"] in ("ok", "skipped") for e in man["targets"].values())
+    import imageio_ffmpeg
+
+    for v in ("video_s4.mp4", "video_s5.mp4"):
+        frames = imageio_ffmpeg.count_frames_and_secs(str(out / v))[0]
+        assert frames > 50
+    print(f"--quick end to end: {wall:.1f} s")
