@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import mobility
-from .activity import activity_rate, activity_slope
+from .activity import activity_slope
 
 __all__ = ["Filament", "centreline"]
 
@@ -110,12 +110,12 @@ class Filament:
 
     def rhs(self, y: np.ndarray, phi: float, sigma: float) -> np.ndarray:
         """Time derivative of the state y (2N+3,) for field direction phi and strength sigma."""
-        n = self.n
-        dy = np.empty_like(y)
-        dy[: n + 2] = self.velocities(y)
-        theta, kappa = y[2 : n + 2], y[n + 2 :]
-        dy[n + 2 :] = activity_rate(kappa, self.node_theta(theta), self.chi * sigma, phi)
-        return dy
+        from . import rosw
+
+        k = rosw.kernels() if self.compiled else rosw
+        y = np.ascontiguousarray(y, dtype=float)
+        return k.rhs(y, self._avg, self._diff, self._weights, self.eta_par, self.eta_perp, self.chi * sigma,
+                     float(phi), np.empty_like(y))
 
     def jacobian(self, y: np.ndarray, phi: float, sigma: float, *, exact: bool = False) -> np.ndarray:
         """Jacobian of :meth:`rhs`. By default it leaves out the change of G with theta

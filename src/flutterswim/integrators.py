@@ -1,13 +1,20 @@
 """Time integrators for the stiff filament ODE y' = f(t, y).
 
-``ros34pw2`` (default): the 4-stage, order-3 Rosenbrock-W method ROS34PW2 of
-Rang & Angermann (BIT 45, 2005), L-stable and stiffly accurate. A W-method keeps
-its order with an approximate Jacobian, so the mobility matrix's dependence on the
-shape (a non-stiff term) may be left out of J. One LU per step, no Newton iterations.
-Adaptive steps from the embedded order-2 solution; output at requested times by
-cubic Hermite interpolation (order 3, like the method).
+Compiled Rosenbrock-W methods (:mod:`flutterswim.rosw`: the whole step loop in one numba
+kernel, the filament's right-hand side and structured linear algebra inlined, Jacobian and
+LU reused across steps), used by :func:`integrate_filament`:
 
-``radau`` / ``bdf``: scipy.integrate.solve_ivp, the baseline of the benchmarks.
+``ros34pw3``: ROS34PW3 of Rang & Angermann (BIT 45, 2005), 4 stages, order 4 with
+the exact Jacobian, order 3 as a W-method, embedded order 3; A-stable.
+``ros34pw2`` (default): ROS34PW2 (same paper), order 3 as a W-method, embedded order 2, L-stable and
+stiffly accurate.
+
+``ros34pw2-wave1``: ROS34PW2 stepped in Python with a fresh Jacobian and a full (2N+3)-square
+LU every step (the wave-1 default, kept as a baseline and for fields that change between
+breakpoints). ``radau`` / ``bdf``: scipy.integrate.solve_ivp, baselines.
+
+Each method states its order (``order``: the order it shows on this problem with the
+W-Jacobian, fitted by tests/test_integrators_order.py).
 """
 
 from __future__ import annotations
@@ -19,7 +26,7 @@ from typing import Callable
 import numpy as np
 import scipy.linalg as sla
 
-__all__ = ["SolverStats", "Solution", "METHODS", "integrate"]
+__all__ = ["SolverStats", "Solution", "METHODS", "DEFAULT_METHOD", "integrate", "integrate_filament"]
 
 Fun = Callable[[float, np.ndarray], np.ndarray]
 
@@ -91,14 +98,59 @@ ROS34PW2 = _ros34pw2()
 
 
 @dataclass(frozen=True)
+class CompiledRosW:
+    """Tableau of a compiled Rosenbrock-W method in the transformed form (:mod:`flutterswim.rosw`):
+    A (s, s), C (s, s), b, bt (error weights), gamma; ``order`` of the step, ``q`` of the
+    error estimate (step-size exponent 1/(q+1))."""
+
+    name: str
+    order: int
+    q: int
+    gamma: float
+    a: np.ndarray
+    c: np.ndarray
+    b: np.ndarray
+    bt: np.ndarray
+
+    @classmethod
+    def from_hairer(cls, tab: RosenbrockW, q: int) -> "CompiledRosW":
+        """Transform a tableau in Hairer's convention: with Gamma = gam + gamma I,
+        A = a Gamma^-1, C = diag(1/gamma) - Gamma^-1, b_T = b Gamma^-1, bt_T = (b - bh) Gamma^-1."""
+        gi = np.linalg.inv(tab.gam + tab.gamma * np.eye(len(tab.b)))
+        c = np.diag(np.full(len(tab.b), 1.0 / tab.gamma)) - gi
+        return cls(tab.name, tab.order, q, tab.gamma, np.tril(tab.a @ gi, -1), np.tril(c, -1), tab.b @ gi,
+                   (tab.b - tab.bh) @ gi)
+
+
+def _ros34pw3() -> CompiledRosW:
+    """ROS34PW3, Rang & Angermann, BIT 45 (2005) 761-787, in the transformed form of
+    OrdinaryDiffEq.jl (ROS34PW3 tableau: a, C, b, btilde, gamma), coefficients copied as given there."""
+    a = np.zeros((4, 4))
+    a[1, 0] = 2.3541034887609085
+    a[2, 0], a[2, 1] = 2.1274518517432335, 0.7018666706430658
+    a[3, 0], a[3, 1], a[3, 2] = 1.6573541366907125, 0.37998365119129385, 0.7677537933767512
+    c = np.zeros((4, 4))
+    c[1, 0] = -2.20302237067446
+    c[2, 0], c[2, 1] = -2.750060114993467, -0.8408569631081119
+    c[3, 0], c[3, 1], c[3, 2] = -3.0077871973155896, -0.7070774625618249, -1.1874362749274354
+    b = np.array([2.5468758076906703, 0.5527809704437551, 0.920521963049926, 0.7201674983256354])
+    bt = np.array([0.20632710213677674, 0.0026042321416049896, 0.006723394920071124, 0.7201674983256354])
+    return CompiledRosW("ros34pw3", 3, 3, 1.0685790213016289, a, c, b, bt)
+
+
+@dataclass(frozen=True)
 class ScipyMethod:
     name: str
     order: int
     scipy_name: str
 
 
-METHODS: dict[str, RosenbrockW | ScipyMethod] = {
-    "ros34pw2": ROS34PW2,
+DEFAULT_METHOD = "ros34pw2"
+
+METHODS: dict[str, RosenbrockW | CompiledRosW | ScipyMethod] = {
+    "ros34pw3": _ros34pw3(),
+    "ros34pw2": CompiledRosW.from_hairer(ROS34PW2, 2),
+    "ros34pw2-wave1": ROS34PW2,
     "radau": ScipyMethod("radau", 5, "Radau"),
     "bdf": ScipyMethod("bdf", 5, "BDF"),
 }
@@ -122,7 +174,7 @@ def integrate(
     y0: np.ndarray,
     t_eval: np.ndarray,
     *,
-    method: str = "ros34pw2",
+    method: str = "ros34pw2-wave1",
     rtol: float = 1e-5,
     atol: float = 1e-7,
     max_step: float = np.inf,
@@ -149,7 +201,9 @@ def integrate(
 
         raise ParameterError(f"method={method!r} is unknown; choose one of {sorted(METHODS)}")
     if isinstance(scheme, ScipyMethod):
-        return _integrate_scipy(fun, t_span, y0, t_eval, scheme, rtol, atol, max_step, check)
+        return _integrate_scipy(fun, jac, t_span, y0, t_eval, scheme, rtol, atol, max_step, check)
+    if isinstance(scheme, CompiledRosW):
+        scheme = ROS34PW2  # a Python right-hand side: the Python-stepped ROS34PW2
     return _integrate_rosw(
         fun, jac, t_span, y0, t_eval, scheme, rtol, atol, max_step, first_step,
         breakpoints, time_dependent, check, max_steps, progress, scale_cap,
@@ -276,15 +330,112 @@ def _fd_jac(fun, t, y, f0):
     return jmat
 
 
-def _integrate_scipy(fun, t_span, y0, t_eval, scheme, rtol, atol, max_step, check):
+def _integrate_scipy(fun, jac, t_span, y0, t_eval, scheme, rtol, atol, max_step, check):
     from scipy.integrate import solve_ivp
 
     wall0 = time.perf_counter()
+    kw = {} if jac is None else {"jac": jac}
     sol = solve_ivp(fun, t_span, y0, method=scheme.scipy_name, t_eval=t_eval, rtol=rtol,
-                    atol=atol, max_step=max_step)
+                    atol=atol, max_step=max_step, **kw)
     stats = SolverStats(scheme.name, scheme.order, int(sol.t.size and len(sol.t)), 0,
                         int(sol.nfev), int(sol.njev), int(sol.nlu), time.perf_counter() - wall0)
     status = "completed" if sol.success else "failed"
     y_final = sol.y[:, -1] if sol.y.size else np.asarray(y0)
     t_final = float(sol.t[-1]) if sol.t.size else float(t_span[0])
     return Solution(sol.t, sol.y.T, status, sol.message, t_final, y_final, stats)
+
+
+#: LU reuse window |gamma h / gamma h0 - 1| and the largest Jacobian age (accepted steps).
+REUSE = 0.25
+MAX_AGE = 20
+
+_STATUS = {1: "step size collapsed", 2: "non-finite state", 3: "singular iteration matrix",
+           4: "maximum number of steps reached"}
+
+
+def integrate_filament(
+    fil,
+    pieces: list[tuple[float, float, float]],
+    t_end: float,
+    y0: np.ndarray,
+    t_eval: np.ndarray,
+    *,
+    method: str = DEFAULT_METHOD,
+    rtol: float = 1e-5,
+    atol: float = 1e-7,
+    max_step: float = np.inf,
+    fixed_step: float = 0.0,
+    check: Callable[[float, np.ndarray], str | None] | None = None,
+    max_steps: int = 10_000_000,
+    progress: Callable[[float], None] | None = None,
+    scale_cap: np.ndarray | None = None,
+    reuse: bool = True,
+) -> Solution:
+    """Integrate the filament (:class:`flutterswim.filament.Filament`) with a compiled
+    Rosenbrock-W method (:mod:`flutterswim.rosw`). ``pieces``: (t_start, phi, sigma), the field
+    steady from each t_start to the next (or ``t_end``). ``check(t, y)`` and ``progress(t)``
+    run at every frame of ``t_eval`` (not every step). ``fixed_step`` > 0: constant steps,
+    no error control. ``reuse=False``: a fresh Jacobian and LU every step."""
+    from . import rosw
+
+    tab = METHODS[method]
+    if not isinstance(tab, CompiledRosW):
+        raise ValueError(f"{method!r} is not a compiled Rosenbrock-W method")
+    k = rosw.kernels()
+    wall0 = time.perf_counter()
+    n = fil.n
+    y = np.array(y0, dtype=float)
+    size = y.size
+    out = np.full((len(t_eval), size), np.nan)
+    t_eval = np.ascontiguousarray(t_eval, dtype=float)
+    t = float(pieces[0][0])
+    i_out = 0
+    while i_out < len(t_eval) and t_eval[i_out] <= t:
+        out[i_out] = y
+        i_out += 1
+    cap = np.full(size, np.inf) if scale_cap is None else np.asarray(scale_cap, float)
+    avg, diff, w = fil._avg, fil._diff, fil._weights
+    lu = np.zeros((n + 2, n + 2))
+    piv = np.zeros(n + 2, dtype=np.int64)
+    th0, tn0, s0 = np.zeros(n), np.zeros(n + 1), np.zeros(n + 1)
+    stats = np.zeros(5, dtype=np.int64)
+    f = np.empty(size)
+    h = np.nan
+    status, message = "completed", "reached t_end"
+    every_frame = check is not None or progress is not None
+    for p, (_ta, phi, sigma) in enumerate(pieces):
+        tb = pieces[p + 1][0] if p + 1 < len(pieces) else t_end
+        if tb <= t:
+            continue
+        chi_sigma = fil.chi * sigma
+        wstate = np.zeros(2)  # the Jacobian depends on the field: new factors per piece
+        k.rhs(y, avg, diff, w, fil.eta_par, fil.eta_perp, chi_sigma, phi, f)
+        stats[2] += 1
+        if not np.isfinite(h):
+            scale = atol + rtol * np.minimum(np.abs(y), cap)
+            h = min(max_step, 0.01 * max(1e-3, 1.0 / max(1e-12, float(np.sqrt(np.mean((f / scale) ** 2))))))
+        stops = [tb]
+        if every_frame:
+            stops = [x for x in t_eval[i_out:] if t < x < tb] + [tb]
+        code = 0
+        for stop in stops:
+            t, h, i_out, code = k.run(y, f, t, stop, h, t_eval, out, i_out, tab.a, tab.c, tab.b, tab.bt,
+                                      tab.gamma, float(tab.q), rtol, atol, cap, max_step, fixed_step, avg, diff,
+                                      w, fil.eta_par, fil.eta_perp, chi_sigma, phi, max_steps,
+                                      REUSE if reuse else -1.0, MAX_AGE if reuse else 1, lu, piv, th0, tn0, s0,
+                                      wstate, stats)
+            if code:
+                break
+            if progress is not None:
+                progress(t)
+            reason = check(t, y) if check is not None else None
+            if reason is not None:
+                status, message = "stopped", reason
+                break
+        if code:
+            status, message = "failed", f"{_STATUS[code]} at t={t:.6g} (h={h:.3g})"
+        if status != "completed":
+            break
+    stats_ = SolverStats(tab.name, tab.order, int(stats[0]), int(stats[1]), int(stats[2]), int(stats[3]),
+                         int(stats[4]), time.perf_counter() - wall0)
+    return Solution(np.asarray(t_eval[:i_out]), out[:i_out], status, message, t, y, stats_)

@@ -22,7 +22,7 @@ from .drag import resistance
 
 __all__ = ["kernels", "assemble", "joint_drag", "apply", "apply_theta_derivative", "solve", "inverse"]
 
-KERNELS = ("resistance", "joint_drag", "apply", "assemble", "apply_theta_derivative", "solve", "inverse")
+KERNELS = ("resistance", "joint_drag", "apply", "assemble", "apply_theta_derivative", "_solve3", "solve", "inverse")
 
 
 def kernels():
@@ -141,8 +141,100 @@ def apply_theta_derivative(theta, tn, avg, weights, eta_par, eta_perp, h, z):
 
 
 def solve(theta, tn, weights, eta_par, eta_perp, h, b):
-    """z = G^-1 b."""
-    return np.linalg.solve(assemble(theta, tn, weights, eta_par, eta_perp, h), b)
+    """z = G^-1 b in O(N), without forming G.
+
+    G is bordered lower-triangular in the joint rates: the cut-moment row of joint j
+    (j = 2..N) involves U0 and omega_0..omega_{j-2} only, with omega_{j-2} entering through
+    the drag on joint j-1 alone. So, for the three right-hand sides (b with U0 = 0; 0 with
+    U0 = e_x; 0 with U0 = e_y), omega_0..omega_{N-2} follow by forward substitution
+    (running sums of the drag and of its moment, as in :func:`apply`); the border, rows
+    0, 1 (total force) and 2 (moment at joint 1) in the unknowns U0x, U0y and omega_{N-1}
+    (which enters the total force only), is a 3 x 3 dense solve. b, z: (N+2,)."""
+    n = theta.size
+    om = np.zeros((3, n))
+    vx = np.zeros(3)
+    vy = np.zeros(3)
+    sx = np.zeros(3)
+    sy = np.zeros(3)
+    p = np.zeros(3)
+    vx[1] = 1.0
+    vy[2] = 1.0
+    rxx, rxy, ryy = resistance(tn[0], weights[0], eta_par, eta_perp)
+    for c in range(3):
+        sx[c] = -(rxx * vx[c] + rxy * vy[c])
+        sy[c] = -(rxy * vx[c] + ryy * vy[c])
+    xp = h * np.cos(theta[0])  # X_{j-1}
+    yp = h * np.sin(theta[0])
+    r2 = np.zeros(3)
+    for c in range(3):
+        r2[c] = p[c] - (xp * sy[c] - yp * sx[c])
+    for j in range(2, n + 1):
+        xj = xp + h * np.cos(theta[j - 1])
+        yj = yp + h * np.sin(theta[j - 1])
+        rxx, rxy, ryy = resistance(tn[j - 1], weights[j - 1], eta_par, eta_perp)
+        nx = -h * np.sin(theta[j - 2])
+        ny = h * np.cos(theta[j - 2])
+        dfx = -(rxx * nx + rxy * ny)  # drag on joint j-1 per unit omega_{j-2}
+        dfy = -(rxy * nx + ryy * ny)
+        dx = xp - xj
+        dy = yp - yj
+        alpha = dx * dfy - dy * dfx
+        for c in range(3):
+            fx = -(rxx * vx[c] + rxy * vy[c])
+            fy = -(rxy * vx[c] + ryy * vy[c])
+            rk = p[c] - (xj * sy[c] - yj * sx[c]) + dx * fy - dy * fx
+            target = b[1 + j] if c == 0 else 0.0
+            w = (target - rk) / alpha
+            om[c, j - 2] = w
+            vx[c] += nx * w
+            vy[c] += ny * w
+            fx += dfx * w
+            fy += dfy * w
+            sx[c] += fx
+            sy[c] += fy
+            p[c] += xp * fy - yp * fx
+        xp = xj
+        yp = yj
+    rxx, rxy, ryy = resistance(tn[n], weights[n], eta_par, eta_perp)
+    m = np.zeros((3, 3))
+    rhs = np.zeros(3)
+    for c in range(3):
+        fx = sx[c] - (rxx * vx[c] + rxy * vy[c])
+        fy = sy[c] - (rxy * vx[c] + ryy * vy[c])
+        if c == 0:
+            rhs[0] = b[0] - fx
+            rhs[1] = b[1] - fy
+            rhs[2] = b[2] - r2[0]
+        else:
+            m[0, c - 1] = fx
+            m[1, c - 1] = fy
+            m[2, c - 1] = r2[c]
+    nx = -h * np.sin(theta[n - 1])
+    ny = h * np.cos(theta[n - 1])
+    m[0, 2] = -(rxx * nx + rxy * ny)
+    m[1, 2] = -(rxy * nx + ryy * ny)
+    u = _solve3(m, rhs)
+    z = np.empty(n + 2)
+    z[0] = u[0]
+    z[1] = u[1]
+    for k in range(n - 1):
+        z[2 + k] = om[0, k] + u[0] * om[1, k] + u[1] * om[2, k]
+    z[n + 1] = u[2]
+    return z
+
+
+def _solve3(m, r):
+    """3 x 3 solve by Cramer's rule (m well scaled: rows of drag and moment)."""
+    det = (m[0, 0] * (m[1, 1] * m[2, 2] - m[1, 2] * m[2, 1]) - m[0, 1] * (m[1, 0] * m[2, 2] - m[1, 2] * m[2, 0])
+           + m[0, 2] * (m[1, 0] * m[2, 1] - m[1, 1] * m[2, 0]))
+    x = np.empty(3)
+    for k in range(3):
+        a = m.copy()
+        for i in range(3):
+            a[i, k] = r[i]
+        x[k] = (a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]) - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
+                + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0])) / det
+    return x
 
 
 def inverse(theta, tn, weights, eta_par, eta_perp, h):

@@ -15,7 +15,7 @@ from ._validate import ParameterError, finite, positive, positive_int
 from .field import Field
 from .filament import Filament, centreline
 from .initial import InitialState
-from .integrators import METHODS, integrate
+from .integrators import DEFAULT_METHOD, METHODS, CompiledRosW, integrate, integrate_filament
 from .params import Groups, Parameters
 from .result import SimulationResult
 
@@ -36,7 +36,7 @@ def simulate(
     t_start: float = 0.0,
     rtol: float = defaults.RTOL,
     atol: float = defaults.ATOL,
-    method: str = "ros34pw2",
+    method: str = DEFAULT_METHOD,
     max_step: float | None = None,
     stop_on_self_intersection: bool = False,
     forces: bool = False,
@@ -101,13 +101,20 @@ def simulate(
     bar, tick = _progress(progress, t0, t1)
     try:
         with single_blas_thread():  # the matrices are small: BLAS threads only add overhead
-            sol = integrate(
-                fun, jac, (t0, t1), y0, t_eval, method=method, rtol=rtol, atol=atol,
-                max_step=np.inf if max_step is None else positive("max_step", max_step) / tau,
-                breakpoints=fld.breakpoints, time_dependent=not fld.steady_between_breakpoints,
-                check=_check if (stop_on_self_intersection or check is not None) else None,
-                progress=tick, scale_cap=np.r_[1.0, 1.0, np.full(n, np.pi), np.full(n + 1, np.inf)],
-            )
+            cap = np.r_[1.0, 1.0, np.full(n, np.pi), np.full(n + 1, np.inf)]
+            chk = _check if (stop_on_self_intersection or check is not None) else None
+            mstep = np.inf if max_step is None else positive("max_step", max_step) / tau
+            if isinstance(METHODS[method], CompiledRosW) and fld.steady_between_breakpoints:
+                edges = [t0] + sorted(b for b in fld.breakpoints if t0 < b < t1) + [t1]
+                pieces = [(a, direction(0.5 * (a + b)), strength(0.5 * (a + b))) for a, b in zip(edges[:-1], edges[1:])]
+                sol = integrate_filament(fil, pieces, t1, y0, t_eval, method=method, rtol=rtol, atol=atol,
+                                         max_step=mstep, check=chk, progress=tick, scale_cap=cap)
+            else:  # a field changing between breakpoints: Python-stepped (ros34pw2-wave1 for compiled names)
+                sol = integrate(
+                    fun, jac, (t0, t1), y0, t_eval, method=method, rtol=rtol, atol=atol, max_step=mstep,
+                    breakpoints=fld.breakpoints, time_dependent=not fld.steady_between_breakpoints,
+                    check=chk, progress=tick, scale_cap=cap,
+                )
     finally:
         if bar is not None:
             bar.close()
