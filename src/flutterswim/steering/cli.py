@@ -1,0 +1,76 @@
+"""CLI: ``flutterswim steer --preset paper --path square --side 10 --out steer.nc --metrics steer.json``."""
+
+from __future__ import annotations
+
+__all__ = ["register"]
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("steer", help="follow a path by turning the field (closed or open loop)",
+                              description="Path following on the full model: the field is turned by a controller "
+                                          "that observes the swimmer at 50 fps with tracking noise and a one-frame "
+                                          "delay (or by a pre-planned schedule with --open-loop).")
+    p.add_argument("--preset", default="paper")
+    p.add_argument("--path", choices=("square", "circle", "figure8", "waypoints"), default="square")
+    p.add_argument("--side", type=float, default=10.0, help="square side [body lengths] (default 10)")
+    p.add_argument("--radius", type=float, default=2.0, help="circle radius [body lengths] (default 2)")
+    p.add_argument("--size", type=float, default=10.0, help="figure-eight length [body lengths]")
+    p.add_argument("--waypoints", default=None, help="CSV of x, y [body lengths] for --path waypoints")
+    p.add_argument("--open-loop", action="store_true", help="pre-planned field schedule instead of feedback")
+    p.add_argument("--noise-px", type=float, default=0.2)
+    p.add_argument("--um-per-px", type=float, default=14.0)
+    p.add_argument("--segments", type=int, default=24)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", default="steer.nc")
+    p.add_argument("--metrics", default="steer.json")
+    p.add_argument("--plot", default=None, help="figure of the path, the trajectory and the commanded field")
+    p.add_argument("--quiet", action="store_true")
+    p.set_defaults(func=_cmd_steer)
+
+
+def _cmd_steer(args) -> int:
+    import json
+
+    from .._paths import atomic_write_text, check_output_file
+    from .._validate import ParameterError, positive
+    from ..params import preset
+    from . import path as paths
+    from .reduced import identify
+    from .steer import steer
+
+    out = check_output_file(args.out, (".nc",))
+    met = check_output_file(args.metrics, (".json",), what="--metrics")
+    if args.plot:
+        check_output_file(args.plot, (".png", ".pdf", ".svg"), what="--plot")
+    params = preset(args.preset)
+    L = params.l
+    if args.path == "square":
+        side = positive("--side", args.side) * L
+        factory = lambda p, h: paths.square(side, p, h)  # noqa: E731
+    elif args.path == "circle":
+        r = positive("--radius", args.radius) * L
+        factory = lambda p, h: paths.circle(r, p, h)  # noqa: E731
+    elif args.path == "figure8":
+        size = positive("--size", args.size) * L
+        factory = lambda p, h: paths.figure8(size, p, h)  # noqa: E731
+    else:
+        if not args.waypoints:
+            raise ParameterError("--path waypoints needs --waypoints FILE.csv")
+        factory = lambda p, h: paths.waypoints_csv(args.waypoints, L, p)  # noqa: E731
+    reduced = identify(params, n_segments=args.segments)
+    res = steer(params, factory, reduced, closed_loop=not args.open_loop, noise_px=args.noise_px,
+                um_per_px=args.um_per_px, n_segments=args.segments, seed=args.seed, progress=not args.quiet)
+    res.run.save(out)
+    m = dict(res.metrics)
+    m["reduced_model"] = {"U_mm_s": reduced.U * 1e3, "period_s": reduced.period, "k_per_s": reduced.k,
+                          "omega_max_rad_s": reduced.omega_max, "r_min_mm": reduced.r_min * 1e3}
+    atomic_write_text(met, json.dumps(m, indent=2))
+    print(f"{out}: {res.path.name}, {'closed' if res.closed_loop else 'open'} loop: cross-track RMS "
+          f"{m['cross_track_rms_bl']:.3f} body lengths (max {m['cross_track_max_bl']:.3f}), corner overshoot "
+          f"{m['corner_overshoot_bl']:.3f}, trapped: {m['trapped']}; metrics in {met}")
+    if args.plot:
+        from .plot import plot_steer
+
+        plot_steer(res, args.plot)
+        print(f"figure: {args.plot}")
+    return 1 if m["trapped"] else 0

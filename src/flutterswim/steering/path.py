@@ -1,0 +1,168 @@
+"""Reference paths for path following: polylines (square, waypoints) and closed curves
+(circle, figure eight), sampled densely; the signed cross-track error and the progress along
+a path. Lengths in metres."""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._validate import ParameterError, positive
+
+__all__ = ["RefPath", "square", "circle", "figure8", "waypoints_csv"]
+
+
+@dataclass(frozen=True)
+class RefPath:
+    """Points (P, 2) along the path (dense), arc length s (P,), corners (indices of vertices
+    where the direction turns by more than 30 degrees), closed or not, and a name."""
+
+    points: np.ndarray
+    s: np.ndarray
+    corners: np.ndarray
+    closed: bool
+    name: str
+
+    @property
+    def length(self) -> float:
+        return float(self.s[-1])
+
+    def tangent(self, i: int) -> np.ndarray:
+        j = min(i + 1, len(self.points) - 1)
+        k = max(j - 1, 0)
+        d = self.points[j] - self.points[k]
+        return d / (np.linalg.norm(d) + 1e-300)
+
+    def project(self, p: np.ndarray, near: int | None = None, window: int = 400) -> tuple[int, float]:
+        """Index of the closest path point (searched near ``near`` if given: the path may cross
+        itself) and the signed cross-track error (positive: left of the path direction)."""
+        pts = self.points
+        if near is None:
+            idx = np.arange(len(pts))
+        else:
+            lo = max(0, near - window // 4)
+            idx = np.arange(lo, min(len(pts), near + window))
+        d = np.hypot(pts[idx, 0] - p[0], pts[idx, 1] - p[1])
+        i = int(idx[np.argmin(d)])
+        t = self.tangent(i)
+        r = p - pts[i]
+        return i, float(t[0] * r[1] - t[1] * r[0])
+
+
+def _polyline(vertices: np.ndarray, closed: bool, name: str, step: float) -> RefPath:
+    v = np.asarray(vertices, float)
+    if closed:
+        v = np.vstack([v, v[:1]])
+    pts, corners = [v[0]], []
+    for a, b in zip(v[:-1], v[1:]):
+        n = max(2, int(math.ceil(np.linalg.norm(b - a) / step)))
+        seg = a + np.outer(np.linspace(0, 1, n + 1)[1:], b - a)
+        corners.append(len(pts) - 1)
+        pts.extend(seg)
+    pts = np.array(pts)
+    s = np.r_[0.0, np.cumsum(np.hypot(*np.diff(pts, axis=0).T))]
+    # vertices where the direction turns by more than 30 degrees (the start is not a corner)
+    cs = []
+    for c in corners[1:] + ([len(pts) - 1] if closed else []):
+        if 0 < c < len(pts) - 1:
+            d0, d1 = pts[c] - pts[c - 1], pts[c + 1] - pts[c]
+            ang = abs(math.atan2(d0[0] * d1[1] - d0[1] * d1[0], d0 @ d1))
+            if ang > math.radians(30):
+                cs.append(c)
+    return RefPath(pts, s, np.array(cs, int), closed, name)
+
+
+def square(side: float, start=(0.0, 0.0), heading: float = 0.0, step: float = 1e-5) -> RefPath:
+    """A square of ``side`` [m] starting at the middle of its first edge, at ``start``, along
+    ``heading``, turning left."""
+    side = positive("side", side)
+    e = np.array([math.cos(heading), math.sin(heading)])
+    n = np.array([-e[1], e[0]])
+    p0 = np.asarray(start, float)
+    # starting mid-edge: all four vertices are corners, and the lap closes on a straight
+    v = [p0, p0 + side / 2 * e, p0 + side / 2 * e + side * n, p0 - side / 2 * e + side * n, p0 - side / 2 * e]
+    return _polyline(np.array(v), True, f"square({side:.4g} m)", step)
+
+
+def circle(radius: float, start=(0.0, 0.0), heading: float = 0.0, n: int = 4000) -> RefPath:
+    """A circle of ``radius`` [m] through ``start``, tangent to ``heading`` there, turning left."""
+    radius = positive("radius", radius)
+    c = np.asarray(start, float) + radius * np.array([-math.sin(heading), math.cos(heading)])
+    a = heading - math.pi / 2 + np.linspace(0, 2 * math.pi, n + 1)
+    pts = c + radius * np.stack([np.cos(a), np.sin(a)], axis=1)
+    s = np.r_[0.0, np.cumsum(np.hypot(*np.diff(pts, axis=0).T))]
+    return RefPath(pts, s, np.array([], int), True, f"circle({radius:.4g} m)")
+
+
+def figure8(size: float, start=(0.0, 0.0), heading: float = 0.0, n: int = 6000) -> RefPath:
+    """A figure eight (lemniscate of Gerono) of overall length ``size`` [m] starting at its
+    crossing along ``heading``."""
+    size = positive("size", size)
+    u = np.linspace(0, 2 * math.pi, n + 1)
+    x, y = size / 2 * np.sin(u), size / 4 * np.sin(2 * u)
+    c, s_ = math.cos(heading - math.atan2(1, 1)), math.sin(heading - math.atan2(1, 1))
+    pts = np.stack([c * x - s_ * y, s_ * x + c * y], axis=1) + np.asarray(start, float)
+    s = np.r_[0.0, np.cumsum(np.hypot(*np.diff(pts, axis=0).T))]
+    return RefPath(pts, s, np.array([], int), True, f"figure8({size:.4g} m)")
+
+
+def waypoints_csv(path: str | Path, scale: float, start=(0.0, 0.0)) -> RefPath:
+    """Waypoints ``x, y`` from a CSV (in units of ``scale`` metres), relative to the first."""
+    p = Path(path)
+    if not p.is_file():
+        raise ParameterError(f"waypoints={str(p)!r} is not a file")
+    rows = []
+    with open(p, newline="") as f:
+        for i, row in enumerate(csv.reader(f)):
+            try:
+                rows.append([float(row[0]), float(row[1])])
+            except (ValueError, IndexError):
+                if i == 0:
+                    continue
+                raise ParameterError(f"waypoints={str(p)!r}, line {i + 1}: two numbers x, y are required") from None
+    if len(rows) < 2:
+        raise ParameterError(f"waypoints={str(p)!r} needs at least two points")
+    v = (np.array(rows) - rows[0]) * scale + np.asarray(start, float)
+    return _polyline(v, False, f"waypoints({p.name})", 1e-5)
+
+
+def fillet(path: RefPath, radius: float, step: float = 1e-5) -> RefPath:
+    """The path with each corner replaced by a circular arc of ``radius`` tangent to both
+    edges (what a swimmer with that smallest turning radius can follow); corners are kept
+    as the indices of the points nearest the original vertices."""
+    if path.corners.size == 0:
+        return path
+    pts = path.points
+    out = [pts[0]]
+    k_prev = 0
+    for c in path.corners:
+        a, b = pts[max(c - 1, 0)], pts[min(c + 1, len(pts) - 1)]
+        d0 = (pts[c] - a) / np.linalg.norm(pts[c] - a)
+        d1 = (b - pts[c]) / np.linalg.norm(b - pts[c])
+        turn = math.atan2(d0[0] * d1[1] - d0[1] * d1[0], d0 @ d1)
+        dist = radius * math.tan(abs(turn) / 2)
+        p_in = pts[c] - dist * d0
+        # straight part up to the arc
+        seg = pts[k_prev:c + 1]
+        keep = seg[(seg - p_in) @ d0 < 0]
+        out.extend(keep)
+        nrm = np.array([-d0[1], d0[0]]) * math.copysign(1.0, turn)
+        centre = p_in + radius * nrm
+        a0 = math.atan2(p_in[1] - centre[1], p_in[0] - centre[0])
+        n = max(8, int(abs(turn) * radius / step))
+        ang = a0 + np.linspace(0, turn, n + 1)
+        out.extend(centre + radius * np.stack([np.cos(ang), np.sin(ang)], axis=1))
+        p_out = pts[c] + dist * d1
+        rest = pts[c:]
+        k_prev = c + int(np.argmax((rest - p_out) @ d1 > 0))
+    out.extend(pts[k_prev:])
+    p = np.array(out)
+    keep = np.r_[True, np.hypot(*np.diff(p, axis=0).T) > 1e-12]
+    p = p[keep]
+    s = np.r_[0.0, np.cumsum(np.hypot(*np.diff(p, axis=0).T))]
+    corners = np.array([int(np.argmin(np.hypot(*(p - pts[c]).T))) for c in path.corners], int)
+    return RefPath(p, s, corners, path.closed, f"{path.name} filleted r={radius:.3g} m")

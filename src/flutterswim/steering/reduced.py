@@ -1,0 +1,118 @@
+"""The reduced model of steering, identified from simulations of the full model.
+
+A unicycle: the cycle-averaged swimmer moves at speed U along its heading psi, which relaxes
+towards the field direction phi at rate k: dpsi/dt = -k sin(psi - phi). In a field turning at
+rate Omega the heading lags by delta with sin(delta) = Omega / k and the path is a circle of
+radius U / Omega. Above a step-out rate Omega_max the swimmer cannot follow: in this model the
+stroke is lost (the filament stops in a bent equilibrium turning with the field) well before
+the unicycle limit Omega = k, so Omega_max is found from the full model, by bisection on the
+rotation rate. The smallest turning radius is U / Omega_max.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..params import Parameters
+from .schedules import rotation
+from .turning import cycle_average, describe_turning
+
+__all__ = ["ReducedModel", "identify", "rotating_run", "follows"]
+
+
+@dataclass(frozen=True)
+class ReducedModel:
+    """U [m/s], stroke period [s], heading relaxation rate k [1/s], step-out rate Omega_max
+    [rad/s] (bracketed to ``omega_max_bracket``), smallest turning radius U/Omega_max [m]."""
+
+    U: float
+    period: float
+    k: float
+    omega_max: float
+    omega_max_bracket: tuple[float, float]
+    r_min: float
+    onset_time: float
+
+    def radius(self, omega: float) -> float:
+        return self.U / abs(omega)
+
+    def lag(self, omega: float) -> float:
+        return math.asin(min(1.0, abs(omega) / self.k))
+
+
+def rotating_run(params: Parameters, omega: float, *, turns: float = 0.6, onset: float = 12.0,
+                 n_segments: int = 24, period: float | None = None):
+    """Simulate from the paper's onset, then a field turning at ``omega`` [rad/s] for ``turns``."""
+    from ..simulate import simulate
+
+    t_end = onset + turns * 2 * math.pi / abs(omega) + 4 * (period or 0.4)
+    return simulate(params, t_end, field=rotation(2 * math.pi / omega, onset), n_segments=n_segments, frame_dt=0.02)
+
+
+def follows(run, omega: float, U: float, period: float, onset: float) -> tuple[bool, object]:
+    """Whether the swimmer follows the turning field: the heading turns with the field (rate
+    within 5 %) at a speed above half the straight-line speed."""
+    cx, cy = run.x.mean(axis=1), run.y.mean(axis=1)
+    avg = cycle_average(run.t, cx, cy, run.field_angle, period)
+    d = describe_turning(avg, onset + 4 * period, run.t[-1] - period)
+    return bool(d.following and d.speed_turning > 0.5 * U), d
+
+
+def identify(params: Parameters, *, n_segments: int = 24, onset: float = 12.0, rel_tol: float = 0.02) -> ReducedModel:
+    """U and the period from the periodic orbit; k from the heading lag at a slow rotation;
+    Omega_max by bisection on the rotation rate to ``rel_tol``."""
+    from ..orbits import periodic_orbit
+
+    orb = periodic_orbit(params, n_segments=n_segments)
+    U, T = orb.speed, orb.period
+    slow = 0.05 / T  # rad/s: about a hundredth of a turn per stroke
+    ok, d = follows(rotating_run(params, slow, turns=0.3, onset=onset, n_segments=n_segments, period=T), slow, U, T, onset)
+    k = slow / math.sin(abs(d.heading_lag)) if ok and d.heading_lag != 0 else math.nan
+    lo, hi = slow, None
+    w = slow
+    while hi is None:  # grow until the swimmer fails to follow
+        w *= 2.0
+        if not follows(rotating_run(params, w, onset=onset, n_segments=n_segments, period=T), w, U, T, onset)[0]:
+            hi = w
+        else:
+            lo = w
+        if w > 100 / T:
+            hi = w
+    while hi / lo - 1 > rel_tol:
+        mid = math.sqrt(lo * hi)
+        if follows(rotating_run(params, mid, onset=onset, n_segments=n_segments, period=T), mid, U, T, onset)[0]:
+            lo = mid
+        else:
+            hi = mid
+    om = math.sqrt(lo * hi)
+    return ReducedModel(U, T, k, om, (lo, hi), U / om, onset)
+
+
+def plot_radius(model: ReducedModel, omegas, radii, path=None):
+    """Turning radius against the rotation rate: measured points and U / Omega."""
+    import matplotlib
+
+    if path is not None:
+        matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(5, 3.6), constrained_layout=True)
+    w = np.geomspace(min(omegas) * 0.8, model.omega_max * 1.2, 100)
+    ax.loglog(w, model.U / w * 1e3, "-", color="0.4", label=r"$U/\Omega$")
+    ax.loglog(omegas, np.asarray(radii) * 1e3, "o", color="tab:red", label="full model (circle fit)")
+    ax.axvline(model.omega_max, color="tab:blue", ls="--", lw=1, label=r"step-out $\Omega_{max}$")
+    ax.set_xlabel(r"field rotation rate $\Omega$ [rad/s]")
+    ax.set_ylabel("turning radius [mm]")
+    ax.legend(fontsize=8)
+    if path is not None:
+        from pathlib import Path
+
+        from .._paths import atomic_path, figure_metadata
+
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=150, **figure_metadata(Path(path).suffix))
+        plt.close(fig)
+    return fig

@@ -1,0 +1,127 @@
+"""Field-direction schedules for steering: constant rotation, steps, ramps, and a CSV of
+``t, angle[, strength]``; and the ``flutterswim simulate`` options that build them.
+
+Angles in the API are radians; on the command line and in CSV files, degrees.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._validate import ParameterError, finite, positive
+from ..field import Field, Piecewise, Schedule
+
+__all__ = ["Rotation", "rotation", "step", "ramp", "from_csv", "add_field_options", "field_from_args"]
+
+
+@dataclass(frozen=True)
+class Rotation(Schedule):
+    """phi(t) = phi0 + rate (t - start) for t > start, phi0 before: a field turning at a
+    constant rate [rad per time unit] from ``start``."""
+
+    rate: float
+    start: float = 0.0
+    phi0: float = 0.0
+
+    def __post_init__(self) -> None:
+        for k in ("rate", "start", "phi0"):
+            object.__setattr__(self, k, finite(k, getattr(self, k)))
+
+    @property
+    def breakpoints(self) -> tuple[float, ...]:  # type: ignore[override]
+        return (self.start,)
+
+    def __call__(self, t: float) -> float:
+        return self.phi0 + self.rate * max(0.0, t - self.start)
+
+    def scaled(self, time_scale: float) -> "Schedule":
+        return Rotation(self.rate * time_scale, self.start / time_scale, self.phi0)
+
+    def describe(self) -> str:
+        return f"rotation(rate={self.rate:.6g} rad per time unit, start={self.start:.6g}, phi0={self.phi0:.6g})"
+
+
+def rotation(seconds_per_turn: float, start: float = 0.0, phi0: float = 0.0) -> Field:
+    """A field turning once every ``seconds_per_turn`` (negative: clockwise) from ``start``."""
+    spt = finite("seconds_per_turn", seconds_per_turn)
+    if spt == 0:
+        raise ParameterError("seconds_per_turn=0 is not allowed: a turn takes a non-zero time")
+    return Field(direction=Rotation(2 * math.pi / spt, start, phi0))
+
+
+def step(angle: float, at: float, phi0: float = 0.0) -> Field:
+    """The field jumps from ``phi0`` to ``angle`` [rad] at time ``at``."""
+    at = finite("at", at)
+    # (a hold schedule keeps its first value before its first time)
+    return Field(direction=Piecewise([at - 1.0, at], [finite("phi0", phi0), finite("angle", angle)]))
+
+
+def ramp(angle: float, start: float, duration: float, phi0: float = 0.0) -> Field:
+    """The field turns linearly from ``phi0`` to ``angle`` over [start, start + duration]."""
+    duration = positive("duration", duration)
+    return Field(direction=Piecewise([finite("start", start), start + duration], [phi0, finite("angle", angle)],
+                                     kind="linear"))
+
+
+def from_csv(path: str | Path) -> Field:
+    """A schedule from a CSV of ``t, angle[, strength]`` (header optional; t in the run's time
+    unit, angle in degrees), interpolated linearly and held after the last row."""
+    p = Path(path)
+    if not p.is_file():
+        raise ParameterError(f"field CSV={str(p)!r} is not a file")
+    rows = []
+    with open(p, newline="") as f:
+        for i, row in enumerate(csv.reader(f)):
+            if not row or row[0].strip().startswith("#"):
+                continue
+            try:
+                rows.append([float(v) for v in row[:3]])
+            except ValueError:
+                if i == 0:
+                    continue  # a header
+                raise ParameterError(f"field CSV={str(p)!r}, line {i + 1}: numbers t, angle[, strength] are required") from None
+    if len(rows) < 1 or any(len(r) < 2 for r in rows):
+        raise ParameterError(f"field CSV={str(p)!r} needs rows of t, angle_deg[, strength]")
+    a = np.array([r[:2] for r in rows])
+    direction = Piecewise(a[:, 0], np.radians(a[:, 1]), kind="linear")
+    if all(len(r) == 3 for r in rows):
+        return Field(direction=direction, strength=Piecewise(a[:, 0], [r[2] for r in rows], kind="linear"))
+    return Field(direction=direction)
+
+
+def add_field_options(p) -> None:
+    """Field options of ``flutterswim simulate``."""
+    g = p.add_argument_group("field schedule (angles in degrees, times in s)")
+    g.add_argument("--field-angle", type=float, default=None, help="constant field direction [deg]")
+    g.add_argument("--field-rotate", type=float, default=None, help="seconds per turn of a rotating field (negative: clockwise)")
+    g.add_argument("--field-start", type=float, default=0.0, help="time at which the rotation, step or ramp starts [s]")
+    g.add_argument("--field-step", type=float, default=None, help="jump to this direction [deg] at --field-start")
+    g.add_argument("--field-ramp", type=float, nargs=2, default=None, metavar=("ANGLE_DEG", "DURATION_S"),
+                   help="turn linearly to ANGLE_DEG over DURATION_S from --field-start")
+    g.add_argument("--field-csv", default=None, help="CSV of t, angle_deg[, strength]")
+
+
+def field_from_args(args) -> Field | None:
+    """The Field the options describe, or None (the default field). At most one schedule."""
+    chosen = [k for k in ("field_angle", "field_rotate", "field_step", "field_ramp", "field_csv")
+              if getattr(args, k, None) is not None]
+    if len(chosen) > 1:
+        raise ParameterError(f"give one field schedule, not {', '.join('--' + c.replace('_', '-') for c in chosen)}")
+    if not chosen:
+        return None
+    start = finite("--field-start", args.field_start)
+    k = chosen[0]
+    if k == "field_angle":
+        return Field(direction=math.radians(finite("--field-angle", args.field_angle)))
+    if k == "field_rotate":
+        return rotation(args.field_rotate, start)
+    if k == "field_step":
+        return step(math.radians(finite("--field-step", args.field_step)), start)
+    if k == "field_ramp":
+        return ramp(math.radians(finite("--field-ramp angle", args.field_ramp[0])), start, args.field_ramp[1])
+    return from_csv(args.field_csv)

@@ -1,0 +1,192 @@
+"""``steer``: follow a path on the full model by turning the field, in closed loop (the
+:class:`.control.Controller` observing at 50 fps with tracking noise and a one-frame delay) or
+open loop (a pre-planned schedule of the same path at the reduced model's speed). Metrics:
+cross-track error of the cycle-averaged centroid, corner overshoot, time to reacquire after a
+corner, waypoint arrivals, and whether the filament was trapped."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._validate import ParameterError, positive
+from ..params import Parameters
+from .control import Controller, wrap
+from .path import RefPath
+from .reduced import ReducedModel
+
+__all__ = ["SteerResult", "steer", "metrics"]
+
+
+@dataclass(frozen=True)
+class SteerResult:
+    """The run (SimulationResult, commanded field in ``field_angle``), the path placed at the
+    swimmer's averaged position when control starts, the metrics, and the settings."""
+
+    run: object
+    path: RefPath
+    metrics: dict
+    closed_loop: bool
+    control_start: float
+
+
+def _centroid(run) -> tuple[np.ndarray, np.ndarray]:
+    return run.x.mean(axis=1), run.y.mean(axis=1)
+
+
+def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loop: bool = True,
+          noise_px: float = 0.2, um_per_px: float = 14.0, fps: float = 50.0, delay_frames: int = 1,
+          n_segments: int = 24, onset: float = 10.0, laps: float = 1.0, seed: int = 0,
+          lookahead_bl: float = 0.15, correction_bl: float = 0.4, rate_fraction: float = 0.8,
+          progress: bool = False) -> SteerResult:
+    """Swim ``laps`` of the path made by ``path_factory(start_xy, heading)`` [m]."""
+    from ..result import concatenate
+    from ..simulate import simulate
+
+    if not isinstance(params, Parameters):
+        raise ParameterError(f"params={params!r} must be flutterswim.Parameters")
+    fps = positive("fps", fps)
+    dt = 1.0 / fps
+    rng = np.random.default_rng(seed)
+    sigma = noise_px * um_per_px * 1e-6
+    # onset along the initial field direction (0), then control
+    first = simulate(params, onset, n_segments=n_segments, frame_dt=dt)
+    cx, cy = _centroid(first)
+    m = first.t > onset - reduced.period
+    start = np.array([cx[m].mean(), cy[m].mean()]) + reduced.U * reduced.period / 2 * np.array([1.0, 0.0])
+    path: RefPath = path_factory(start, 0.0)
+    duration = 1.1 * laps * path.length / reduced.U + 3 * reduced.period  # corners slow it down
+    # the controller tracks the path with its corners rounded to the turning radius it allows
+    from .path import fillet
+
+    r_turn = reduced.U / (rate_fraction * reduced.omega_max)
+    ctrl = Controller(fillet(path, r_turn), reduced.period, reduced.U, reduced.omega_max, lookahead_bl * params.l,
+                      correction_bl * params.l, rate_fraction=rate_fraction, fps=fps)
+    for t, x, y in zip(first.t, cx, cy):  # the camera has watched the onset too
+        ctrl.observe(t, np.array([x, y]) + sigma * rng.standard_normal(2))
+    parts = [first]
+    state = first.final_state()
+    t = onset
+    pending = deque_of(delay_frames, 0.0)
+    n = int(round(duration / dt))
+    plan = _open_loop_plan(path, reduced, onset) if not closed_loop else None
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=n, desc="steer", unit="frame", leave=False)
+    trapped_at = math.nan
+    for k in range(n):
+        cmd = pending.popleft()
+        part = simulate(params, t + dt, t_start=t, initial=state, field=cmd, n_segments=n_segments, n_frames=2)
+        if not part.ok:
+            raise RuntimeError(f"the simulation failed at t={t:.4g} s: {part.message}")
+        parts.append(part)
+        state, t = part.final_state(), t + dt
+        xy = np.array([part.x[-1].mean(), part.y[-1].mean()]) + sigma * rng.standard_normal(2)
+        ctrl.observe(t, xy)
+        pending.append(ctrl.update(t) if closed_loop else plan(t))
+        if bar is not None:
+            bar.update(1)
+        if k % int(10 * fps) == 0 and k > 0 and _stalled(parts, reduced):
+            trapped_at = t
+            break
+    if bar is not None:
+        bar.close()
+    run = concatenate(parts)
+    met = metrics(run, path, reduced, onset, params.l)
+    met["trapped"] = bool(math.isfinite(trapped_at)) or met["trapped"]
+    met.update(closed_loop=closed_loop, noise_px=noise_px, um_per_px=um_per_px, fps=fps, delay_frames=delay_frames,
+               path=path.name, lookahead_bl=lookahead_bl, correction_bl=correction_bl)
+    return SteerResult(run, path, met, closed_loop, onset)
+
+
+def deque_of(n: int, value: float):
+    from collections import deque
+
+    return deque([value] * max(1, int(n)))
+
+
+def _stalled(parts, reduced: ReducedModel) -> bool:
+    """Trapped: the centroid moved less than a fifth of the expected distance in 5 periods."""
+    recent = parts[-int(5 * reduced.period / (parts[-1].t[-1] - parts[-1].t[0])):]
+    if len(recent) < 2:
+        return False
+    a = np.array([recent[0].x[0].mean(), recent[0].y[0].mean()])
+    b = np.array([recent[-1].x[-1].mean(), recent[-1].y[-1].mean()])
+    return float(np.hypot(*(b - a))) < 0.2 * reduced.U * 5 * reduced.period
+
+
+def _open_loop_plan(path: RefPath, reduced: ReducedModel, t0: float):
+    """Field direction planned for the path at speed U, with the unicycle lag compensated and
+    the same turn-rate limit: the heading the swimmer should have at arc length U (t - t0)."""
+    ang = np.unwrap(np.arctan2(np.gradient(path.points[:, 1]), np.gradient(path.points[:, 0])))
+    state = {"cmd": 0.0}
+
+    def plan(t: float) -> float:
+        s = reduced.U * (t - t0)
+        if path.closed:
+            s %= path.length
+        want = float(np.interp(s, path.s, ang))
+        step = 0.8 * reduced.omega_max / 50.0
+        state["cmd"] += max(-step, min(step, wrap(want - state["cmd"])))
+        return state["cmd"]
+
+    return plan
+
+
+def metrics(run, path: RefPath, reduced: ReducedModel, t0: float, body_length: float) -> dict:
+    """Cross-track error of the true cycle-averaged centroid after control starts (RMS, max;
+    mm and body lengths), corner overshoot (largest outward excursion near a corner), time to
+    reacquire (|error| < 0.1 body length) after each corner, waypoint arrivals, trapped."""
+    from .turning import _moving_average
+
+    cx, cy = _centroid(run)
+    ts, ax = _moving_average(run.t, cx, reduced.period)
+    _, ay = _moving_average(run.t, cy, reduced.period)
+    m = ts >= t0
+    ts, ax, ay = ts[m], ax[m], ay[m]
+    errs, idx = [], []
+    near = 0
+    for p in zip(ax, ay):
+        i, e = path.project(np.array(p), near=near)
+        near = i
+        idx.append(i)
+        errs.append(e)
+    e, idx = np.array(errs), np.array(idx)
+    bl = body_length
+    over, reacq = [], []
+    s_corners = list(path.s[path.corners]) + [math.inf]
+    for c, s_next in zip(path.corners, s_corners[1:]):
+        w = np.abs(path.s[idx] - path.s[c]) < 1.5 * bl
+        if not w.any():
+            continue
+        over.append(float(max(0.0, -e[w].min())))  # left turns: outward is to the right
+        # time from passing the vertex until the error stays below 0.1 body length (to the next vertex)
+        after = np.nonzero((path.s[idx] > path.s[c]) & (path.s[idx] < s_next))[0]
+        if after.size:
+            bad = np.nonzero(np.abs(e[after]) >= 0.1 * bl)[0]
+            if bad.size == 0:
+                reacq.append(0.0)
+            elif bad[-1] + 1 < after.size:
+                reacq.append(float(ts[after[bad[-1] + 1]] - ts[after[0]]))
+            else:
+                reacq.append(math.nan)
+    arrivals = []  # when the averaged position passes each vertex along the path, within 1 body length
+    for c in path.corners:
+        hit = np.nonzero((path.s[idx] >= path.s[c]) & (np.abs(e) < bl))[0]
+        arrivals.append(float(ts[hit[0]]) if hit.size else math.nan)
+    speed = np.hypot(np.gradient(ax, ts), np.gradient(ay, ts))
+    covered = float(path.s[idx].max() - path.s[idx[0]]) if idx.size else 0.0
+    return {
+        "cross_track_rms_mm": float(np.sqrt(np.mean(e ** 2)) * 1e3), "cross_track_rms_bl": float(np.sqrt(np.mean(e ** 2)) / bl),
+        "cross_track_max_mm": float(np.abs(e).max() * 1e3), "cross_track_max_bl": float(np.abs(e).max() / bl),
+        "corner_overshoot_bl": float(max(over) / bl) if over else 0.0,
+        "corner_overshoot_mm": float(max(over) * 1e3) if over else 0.0,
+        "reacquire_after_corner_s": reacq, "waypoint_arrival_s": arrivals,
+        "path_covered_fraction": covered / path.length,
+        "mean_speed_mm_s": float(np.mean(speed) * 1e3),
+        "trapped": bool(np.mean(speed[-max(1, speed.size // 10):]) < 0.2 * reduced.U),
+    }

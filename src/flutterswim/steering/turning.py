@@ -1,0 +1,119 @@
+"""Analysis of a turning run: the cycle-averaged centroid path and heading, the heading lag to
+the field, the turning radius by a circle fit, and the speed while turning.
+
+The body oscillates within a stroke by about a third of its length, so everything here uses
+the centroid averaged over a sliding window of one period (a moving average removes the
+stroke's harmonics exactly for a periodic stroke).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._validate import ParameterError
+
+__all__ = ["Averaged", "cycle_average", "fit_circle", "TurningDescriptors", "describe_turning"]
+
+
+@dataclass(frozen=True)
+class Averaged:
+    """Cycle-averaged path: times t (K,), centroid x, y (K,), heading (K,) [rad, unwrapped,
+    direction of the averaged velocity], speed (K,), field direction (K,) and the heading lag
+    (heading - field) (K,) [rad]. Lengths and times in the run's units."""
+
+    t: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    heading: np.ndarray
+    speed: np.ndarray
+    field: np.ndarray
+    lag: np.ndarray
+    period: float
+
+
+def _moving_average(t: np.ndarray, v: np.ndarray, window: float) -> tuple[np.ndarray, np.ndarray]:
+    """Average of v over [t - window/2, t + window/2] (trapezoidal on the samples, with
+    linear interpolation at the window ends), on the samples whose window fits."""
+    from scipy.integrate import cumulative_trapezoid
+
+    cv = cumulative_trapezoid(v, t, initial=0.0)
+    lo, hi = t - window / 2, t + window / 2
+    ok = (lo >= t[0]) & (hi <= t[-1])
+    ts = t[ok]
+    avg = (np.interp(ts + window / 2, t, cv) - np.interp(ts - window / 2, t, cv)) / window
+    return ts, avg
+
+
+def cycle_average(t: np.ndarray, x: np.ndarray, y: np.ndarray, field: np.ndarray, period: float) -> Averaged:
+    """From the centroid (x, y) (T,) and field direction (T,) sampled at t, with the stroke
+    period. Heading: direction of the averaged displacement over one period."""
+    if not period > 0:
+        raise ParameterError(f"period={period!r} must be > 0")
+    ts, ax = _moving_average(t, x, period)
+    _, ay = _moving_average(t, y, period)
+    if ts.size < 5:
+        raise ParameterError("the run is too short for a cycle average (needs several periods)")
+    vx, vy = np.gradient(ax, ts), np.gradient(ay, ts)
+    heading = np.unwrap(np.arctan2(vy, vx))
+    fld = np.interp(ts, t, np.unwrap(field))
+    lag = heading - fld
+    return Averaged(ts, ax, ay, heading, np.hypot(vx, vy), fld, lag, period)
+
+
+def fit_circle(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float, float]:
+    """Least-squares circle through points (algebraic Kasa fit refined by Gauss-Newton on the
+    geometric distance). Returns (xc, yc, radius, rms distance)."""
+    a = np.stack([x, y, np.ones_like(x)], axis=1)
+    b = x * x + y * y
+    c, *_ = np.linalg.lstsq(a, b, rcond=None)
+    xc, yc = c[0] / 2, c[1] / 2
+    r = math.sqrt(max(c[2] + xc * xc + yc * yc, 0.0))
+    for _ in range(20):
+        d = np.hypot(x - xc, y - yc)
+        res = d - r
+        j = np.stack([-(x - xc) / d, -(y - yc) / d, -np.ones_like(d)], axis=1)
+        step, *_ = np.linalg.lstsq(j, -res, rcond=None)
+        xc, yc, r = xc + step[0], yc + step[1], r + step[2]
+        if np.max(np.abs(step)) < 1e-12 * max(1.0, r):
+            break
+    d = np.hypot(x - xc, y - yc)
+    return float(xc), float(yc), float(abs(r)), float(np.sqrt(np.mean((d - abs(r)) ** 2)))
+
+
+@dataclass(frozen=True)
+class TurningDescriptors:
+    """Of the part of a run where the field turns: mean turn rate of the field and of the
+    heading [rad per time unit], heading lag to the field (mean and its std) [rad], turning
+    radius from a circle fit of the averaged path and its rms residual, speed while turning."""
+
+    field_turn_rate: float
+    heading_turn_rate: float
+    heading_lag: float
+    heading_lag_std: float
+    turning_radius: float
+    circle_fit_rms: float
+    speed_turning: float
+    following: bool
+
+
+def describe_turning(avg: Averaged, t0: float | None = None, t1: float | None = None) -> TurningDescriptors:
+    """Turning descriptors of ``avg`` over [t0, t1] (default: where the field turns)."""
+    t = avg.t
+    m = np.ones_like(t, bool)
+    if t0 is not None:
+        m &= t >= t0
+    if t1 is not None:
+        m &= t <= t1
+    if np.count_nonzero(m) < 5:
+        raise ParameterError("fewer than 5 averaged samples in the turning window")
+    tt = t[m]
+    frate = float(np.polyfit(tt, avg.field[m], 1)[0])
+    hrate = float(np.polyfit(tt, avg.heading[m], 1)[0])
+    lag = avg.lag[m]
+    xc, yc, r, rms = fit_circle(avg.x[m], avg.y[m])
+    following = abs(hrate - frate) < 0.05 * max(abs(frate), 1e-12)
+    return TurningDescriptors(frate, hrate, float(np.mean(lag)), float(np.std(lag)), r, rms,
+                              float(np.mean(avg.speed[m])), bool(following))
