@@ -151,6 +151,8 @@ def solve(theta, tn, weights, eta_par, eta_perp, h, b):
     0, 1 (total force) and 2 (moment at joint 1) in the unknowns U0x, U0y and omega_{N-1}
     (which enters the total force only), is a 3 x 3 dense solve. b, z: (N+2,)."""
     n = theta.size
+    cs = np.cos(theta)
+    sn = np.sin(theta)
     om = np.zeros((3, n))
     vx = np.zeros(3)
     vy = np.zeros(3)
@@ -163,17 +165,17 @@ def solve(theta, tn, weights, eta_par, eta_perp, h, b):
     for c in range(3):
         sx[c] = -(rxx * vx[c] + rxy * vy[c])
         sy[c] = -(rxy * vx[c] + ryy * vy[c])
-    xp = h * np.cos(theta[0])  # X_{j-1}
-    yp = h * np.sin(theta[0])
+    xp = h * cs[0]  # X_{j-1}
+    yp = h * sn[0]
     r2 = np.zeros(3)
     for c in range(3):
         r2[c] = p[c] - (xp * sy[c] - yp * sx[c])
     for j in range(2, n + 1):
-        xj = xp + h * np.cos(theta[j - 1])
-        yj = yp + h * np.sin(theta[j - 1])
+        xj = xp + h * cs[j - 1]
+        yj = yp + h * sn[j - 1]
         rxx, rxy, ryy = resistance(tn[j - 1], weights[j - 1], eta_par, eta_perp)
-        nx = -h * np.sin(theta[j - 2])
-        ny = h * np.cos(theta[j - 2])
+        nx = -h * sn[j - 2]
+        ny = h * cs[j - 2]
         dfx = -(rxx * nx + rxy * ny)  # drag on joint j-1 per unit omega_{j-2}
         dfy = -(rxy * nx + ryy * ny)
         dx = xp - xj
@@ -209,8 +211,8 @@ def solve(theta, tn, weights, eta_par, eta_perp, h, b):
             m[0, c - 1] = fx
             m[1, c - 1] = fy
             m[2, c - 1] = r2[c]
-    nx = -h * np.sin(theta[n - 1])
-    ny = h * np.cos(theta[n - 1])
+    nx = -h * sn[n - 1]
+    ny = h * cs[n - 1]
     m[0, 2] = -(rxx * nx + rxy * ny)
     m[1, 2] = -(rxy * nx + ryy * ny)
     u = _solve3(m, rhs)

@@ -19,8 +19,8 @@ E the injection of the interior moments into G's rows, D the theta_s stencil, A 
 average and S = d kappa_t/d theta at the joints, (I - c J) x = r reduces to
     (G + c E D - c^2/(1+c) E S A) x_z = G r_z + c/(1+c) E r_kappa,
     x_kappa = (r_kappa + c S A x_theta) / (1 + c),
-an (N+2)-square dense LU (instead of 2N+3), G r_z by the O(N) product
-:func:`flutterswim.mobility.apply`; the right-hand side uses the O(N) forward
+an (N+2)-square dense LU (instead of 2N+3), G r_z with the G kept from the factorisation;
+the right-hand side uses the O(N) forward
 substitution :func:`flutterswim.mobility.solve`.
 """
 
@@ -129,14 +129,15 @@ def lu_solve(lu, piv, x):
     return x
 
 
-def w_factor(y, c, avg, diff, weights, eta_par, eta_perp, chi_sigma, phi, lu, piv, th0, tn0, s0):
-    """Factor M = G + c E D - c^2/(1+c) E S A at state y; keep theta, the joint angles and
-    S at y (th0, tn0, s0) for :func:`w_solve`. False if singular."""
+def w_factor(y, c, avg, diff, weights, eta_par, eta_perp, chi_sigma, phi, lu, piv, g0, s0):
+    """Factor M = G + c E D - c^2/(1+c) E S A at state y; keep G (g0) and S (s0) at y for
+    :func:`w_solve`. False if singular."""
     n = avg.shape[1]
-    th0[:] = y[2 : n + 2]
-    band_product(avg, th0, 0, tn0)
+    th0 = y[2 : n + 2].copy()
+    tn0 = band_product(avg, th0, 0, np.empty(n + 1))
     s0[:] = activity.activity_slope(tn0, chi_sigma, phi)
-    lu[:, :] = mobility.assemble(th0, tn0, weights, eta_par, eta_perp, 1.0 / n)
+    g0[:, :] = mobility.assemble(th0, tn0, weights, eta_par, eta_perp, 1.0 / n)
+    lu[:, :] = g0
     q = c * c / (1.0 + c)
     for j in range(1, n):
         for k in range(max(0, j - 2), min(n, j + 2)):
@@ -144,10 +145,18 @@ def w_factor(y, c, avg, diff, weights, eta_par, eta_perp, chi_sigma, phi, lu, pi
     return lu_factor(lu, piv)
 
 
-def w_solve(r, c, avg, weights, eta_par, eta_perp, lu, piv, th0, tn0, s0, x):
-    """x = (I - c J0)^-1 r with the factors of :func:`w_factor`."""
+def w_solve(r, c, avg, lu, piv, g0, s0, x):
+    """x = (I - c J0)^-1 r with the factors of :func:`w_factor` (G r_z as a dense product with
+    the kept G: cheaper than the O(N) :func:`flutterswim.mobility.apply`, whose cost is its
+    2N + 2 sines and cosines)."""
     n = avg.shape[1]
-    g = mobility.apply(th0, tn0, weights, eta_par, eta_perp, 1.0 / n, r[: n + 2])
+    m = n + 2
+    g = np.zeros(m)
+    for i in range(m):
+        acc = 0.0
+        for q in range(m):
+            acc += g0[i, q] * r[q]
+        g[i] = acc
     f = c / (1.0 + c)
     for j in range(1, n):
         g[1 + j] += f * r[n + 2 + j]
@@ -173,13 +182,13 @@ def hermite(t0, y0, f0, t1, y1, f1, t, out):
 
 def run(y, f, t, t_stop, h, t_eval, out, i_out, tab_a, tab_c, tab_b, tab_bt, gamma, q, rtol, atol, cap,
         max_step, fixed, avg, diff, weights, eta_par, eta_perp, chi_sigma, phi, max_steps, reuse, max_age,
-        lu, piv, th0, tn0, s0, wstate, stats):
+        lu, piv, g0, s0, wstate, stats):
     """Integrate from t to t_stop (y, f = f(y) updated in place); frames at t_eval[i_out:] <= t
     are written to out. Returns (t, h, i_out, status): status 0 reached t_stop, 1 step size
     collapsed, 2 non-finite state, 3 singular matrix, 4 too many steps.
 
     ``fixed`` > 0: constant steps of that size, no error control (order tests).
-    ``wstate`` = [c0 = gamma h0 of the factors (0: none), J age]; ``stats`` (int64) += [steps,
+    ``wstate`` = [c0 = gamma h0 of the factors (0: none), J age, unused]; ``stats`` (int64) += [steps,
     rejected, rhs, jacobians, LUs]; the factors persist across calls."""
     n_state = y.size
     s = tab_b.size
@@ -204,7 +213,7 @@ def run(y, f, t, t_stop, h, t_eval, out, i_out, tab_a, tab_c, tab_b, tab_bt, gam
         c = gamma * h
         c0 = wstate[0]
         if c0 <= 0.0 or abs(c / c0 - 1.0) > reuse or wstate[1] >= max_age:
-            ok = w_factor(y, c, avg, diff, weights, eta_par, eta_perp, chi_sigma, phi, lu, piv, th0, tn0, s0)
+            ok = w_factor(y, c, avg, diff, weights, eta_par, eta_perp, chi_sigma, phi, lu, piv, g0, s0)
             stats[3] += 1
             stats[4] += 1
             if not ok:
@@ -235,7 +244,7 @@ def run(y, f, t, t_stop, h, t_eval, out, i_out, tab_a, tab_c, tab_b, tab_bt, gam
                         rr[m] += cc * u[j, m]
             for m in range(n_state):
                 rr[m] *= c  # (I - c0 J0) u = c (f + sum C u / h)
-            w_solve(rr, c0, avg, weights, eta_par, eta_perp, lu, piv, th0, tn0, s0, yi)
+            w_solve(rr, c0, avg, lu, piv, g0, s0, yi)
             u[i, :] = yi
         ynew[:] = y
         err[:] = 0.0
@@ -254,8 +263,9 @@ def run(y, f, t, t_stop, h, t_eval, out, i_out, tab_a, tab_c, tab_b, tab_bt, gam
         e = np.sqrt(e / n_state) if finite else np.inf
         if fixed <= 0.0 and e > 1.0:
             stats[1] += 1
-            if wstate[1] > 0:
-                wstate[0] = 0.0  # the J was reused: refresh it before shrinking further
+            if wstate[1] > 0:  # the J was reused: retry the same step with a fresh one (CVODE)
+                wstate[0] = 0.0
+                continue
             h *= 0.2 if not np.isfinite(e) else max(0.2, 0.9 * e**expo)
             if h < 1e-14 * max(1.0, abs(t)):
                 status = 1 if finite else 2
