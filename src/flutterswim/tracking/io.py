@@ -1,0 +1,192 @@
+"""Frame sources: a TIFF stack, a folder of PNG or TIFF frames, an MP4 or AVI movie, or an
+array, read lazily one grey-level frame at a time (float32, (H, W)), optionally cropped.
+
+ROI: (x0, y0, x1, y1) in pixels of the full frame, columns x0 <= x < x1, rows y0 <= y < y1.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Iterator
+
+import numpy as np
+
+from .._validate import ParameterError
+
+__all__ = ["Frames", "open_frames", "parse_roi", "FRAME_SUFFIXES", "MOVIE_SUFFIXES", "STACK_SUFFIXES"]
+
+STACK_SUFFIXES = (".tif", ".tiff")
+FRAME_SUFFIXES = (".png", ".tif", ".tiff")
+MOVIE_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv")
+
+
+def _gray(a: np.ndarray) -> np.ndarray:
+    a = np.asarray(a)
+    if a.ndim == 3 and a.shape[-1] in (3, 4):
+        a = a[..., :3].astype(np.float32) @ np.array([0.299, 0.587, 0.114], np.float32)
+    if a.ndim != 2:
+        raise ParameterError(f"a frame has shape {a.shape}; a grey-level (H, W) or colour (H, W, 3) image is required")
+    return a.astype(np.float32, copy=False)
+
+
+def _natural_key(p: Path) -> list:
+    return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", p.name)]
+
+
+@dataclass
+class Frames:
+    """A lazy sequence of frames: ``len``, iteration and indexing give (H, W) float32 frames
+    (cropped to ``roi``). fps: the container's frame rate if known (movies), else None."""
+
+    source: str
+    n_frames: int
+    shape: tuple[int, int]
+    fps: float | None
+    _get: Callable[[int], np.ndarray]
+    _iter: Callable[[], Iterator[np.ndarray]]
+    roi: tuple[int, int, int, int] | None = None
+
+    def __len__(self) -> int:
+        return self.n_frames
+
+    def _crop(self, a: np.ndarray) -> np.ndarray:
+        if self.roi is None:
+            return a
+        x0, y0, x1, y1 = self.roi
+        return a[y0:y1, x0:x1]
+
+    def __getitem__(self, i: int) -> np.ndarray:
+        return self._crop(_gray(self._get(int(i))))
+
+    def __iter__(self) -> Iterator[np.ndarray]:
+        for a in self._iter():
+            yield self._crop(_gray(a))
+
+
+def parse_roi(roi: Any, shape: tuple[int, int]) -> tuple[int, int, int, int] | None:
+    """(x0, y0, x1, y1) from a tuple or the string "x0,y0,x1,y1", checked against the frame
+    shape (H, W)."""
+    if roi is None:
+        return None
+    if isinstance(roi, str):
+        parts = roi.replace(" ", "").split(",")
+    else:
+        parts = list(roi)
+    try:
+        x0, y0, x1, y1 = (int(float(v)) for v in parts)
+    except (TypeError, ValueError):
+        raise ParameterError(f"roi={roi!r} must be four integers x0,y0,x1,y1 (pixels)") from None
+    H, W = shape
+    if not (0 <= x0 < x1 <= W and 0 <= y0 < y1 <= H) or x1 - x0 < 8 or y1 - y0 < 8:
+        raise ParameterError(f"roi={roi!r} must satisfy 0 <= x0 < x1 <= {W} and 0 <= y0 < y1 <= {H} "
+                             "(frame width and height) and span at least 8 x 8 pixels")
+    return x0, y0, x1, y1
+
+
+def _from_array(a: np.ndarray, name: str) -> Frames:
+    if a.ndim not in (3, 4):
+        raise ParameterError(f"input array has shape {a.shape}; (T, H, W) or (T, H, W, 3) is required")
+    return Frames(name, a.shape[0], tuple(a.shape[1:3]), None, lambda i: a[i], lambda: iter(a))
+
+
+def _tiff_stack(p: Path) -> Frames:
+    import tifffile
+
+    try:
+        arr = tifffile.memmap(p, mode="r")  # uncompressed: frames read on demand
+    except (ValueError, tifffile.TiffFileError, OSError):
+        arr = tifffile.imread(p)
+    arr = np.asarray(arr) if not isinstance(arr, np.memmap) else arr
+    if arr.ndim == 2:
+        arr = arr[None]
+    if arr.ndim == 4 and arr.shape[-1] not in (3, 4):
+        arr = arr.reshape((-1,) + arr.shape[-2:])
+    return _from_array(arr, str(p))
+
+
+def _read_image(p: Path) -> np.ndarray:
+    if p.suffix.lower() in STACK_SUFFIXES:
+        import tifffile
+
+        return tifffile.imread(p)
+    import imageio.v3 as iio
+
+    return iio.imread(p)
+
+
+def _folder(p: Path) -> Frames:
+    files = sorted((f for f in p.iterdir() if f.is_file() and f.suffix.lower() in FRAME_SUFFIXES), key=_natural_key)
+    if not files:
+        raise ParameterError(f"input={str(p)!r} is a folder without PNG or TIFF frames")
+    sfx = {f.suffix.lower().replace(".tiff", ".tif") for f in files}
+    if len(sfx) > 1:
+        raise ParameterError(f"input={str(p)!r} mixes frame formats {sorted(sfx)}; one format per folder is required")
+    first = _gray(_read_image(files[0]))
+    return Frames(str(p), len(files), first.shape, None, lambda i: _read_image(files[i]),
+                  lambda: (_read_image(f) for f in files))
+
+
+def _movie(p: Path) -> Frames:
+    import imageio_ffmpeg
+
+    gen = imageio_ffmpeg.read_frames(str(p), pix_fmt="gray")
+    meta = gen.__next__()
+    gen.close()
+    W, H = meta["size"]
+    fps = float(meta.get("fps") or 0) or None
+    n, _ = imageio_ffmpeg.count_frames_and_secs(str(p))
+
+    def it() -> Iterator[np.ndarray]:
+        g = imageio_ffmpeg.read_frames(str(p), pix_fmt="gray")
+        g.__next__()
+        try:
+            for buf in g:
+                yield np.frombuffer(buf, np.uint8).reshape(H, W)
+        finally:
+            g.close()
+
+    cache: dict[int, np.ndarray] = {}
+
+    def get(i: int) -> np.ndarray:
+        if not cache:
+            for k, a in enumerate(it()):
+                cache[k] = a
+        return cache[i]
+
+    return Frames(str(p), int(n), (H, W), fps, get, it)
+
+
+def open_frames(source: Any, roi: Any = None) -> Frames:
+    """Frames from a path (TIFF stack, folder of PNG/TIFF frames, MP4/AVI movie), an array
+    (T, H, W), or an object with a ``frames`` array (a rendered :class:`Movie`)."""
+    if hasattr(source, "frames") and isinstance(source.frames, np.ndarray):
+        fr = _from_array(source.frames, "movie")
+        fr.fps = getattr(source, "fps", None)
+    elif isinstance(source, np.ndarray):
+        fr = _from_array(source, "array")
+    else:
+        try:
+            p = Path(os.fspath(source))
+        except TypeError:
+            raise ParameterError(f"input={source!r} is not a path or an array of frames") from None
+        if not p.exists():
+            raise ParameterError(f"input={str(p)!r} does not exist")
+        if p.is_dir():
+            fr = _folder(p)
+        elif p.suffix.lower() in STACK_SUFFIXES:
+            fr = _tiff_stack(p)
+        elif p.suffix.lower() in MOVIE_SUFFIXES:
+            fr = _movie(p)
+        else:
+            raise ParameterError(f"input={str(p)!r} has the suffix {p.suffix!r}; a TIFF stack (.tif), a folder "
+                                 f"of PNG/TIFF frames or a movie ({', '.join(MOVIE_SUFFIXES)}) is required")
+    if fr.n_frames < 2:
+        raise ParameterError(f"input={fr.source!r} holds {fr.n_frames} frame(s); at least 2 are required")
+    fr.roi = parse_roi(roi, fr.shape)
+    if fr.roi is not None:
+        x0, y0, x1, y1 = fr.roi
+        fr.shape = (y1 - y0, x1 - x0)
+    return fr

@@ -1,0 +1,138 @@
+"""Tip refinement by a least-squares fit of the line-end model to the raw pixels.
+
+Near an end the image of a PSF-blurred line is, in curvilinear coordinates (q along the
+centreline and its tangent extension, d across it)::
+
+    mu(q, d) = b + A exp(-d^2 / (2 sigma^2)) Phi((q_end - q) / sigma)
+
+(Phi the normal CDF; exact for a straight end, accurate while the radius of curvature is
+much larger than sigma). The four parameters (q_end, sigma, A, b) are fitted to the raw
+pixels with |d| <= 3 sigma and q_end - ``inner`` <= q <= q_end + ``outer`` by variable
+projection (A and b linear). This uses all the light near the end, not one sampled line:
+for Gaussian noise its spread is close to the Cramér-Rao bound sqrt(2) / SNR px.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.interpolate import make_interp_spline
+
+__all__ = ["refine_tips", "resample"]
+
+
+def _arclength(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    return np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
+
+
+def _curve(x: np.ndarray, y: np.ndarray):
+    s = _arclength(x, y)
+    k = 3 if s.size >= 4 else 1
+    return s, make_interp_spline(s, np.stack([x, y], -1), k=k)
+
+
+def _points(spl, s_end: float, q: np.ndarray) -> np.ndarray:
+    """(M, 2) points at parameters q; linear continuation by the end tangents outside [0, s_end]."""
+    qc = np.clip(q, 0.0, s_end)
+    p = spl(qc)
+    tan = spl.derivative()(qc)
+    tan /= np.maximum(np.hypot(tan[:, 0], tan[:, 1]), 1e-12)[:, None]
+    return p + (q - qc)[:, None] * tan
+
+
+def _fit_end(img: np.ndarray, spl, s_end: float, q0: float, outward: int, sigma0: float,
+             inner: float, outer: float) -> tuple[float, float]:
+    """Fitted end parameter q_end (same parametrisation as ``spl``) and sigma; NaN if the
+    fit fails. ``outward`` = +1 for the s_end end, -1 for the s = 0 end."""
+    from scipy.optimize import least_squares
+    from scipy.special import ndtr
+
+    H, W = img.shape
+    # dense polyline of the curve near the end (the inner part and the tangent extension)
+    lo, hi = (q0 - inner - 4, q0 + outer + 4) if outward > 0 else (q0 - outer - 4, q0 + inner + 4)
+    qq = np.arange(lo, hi + 1e-9, 0.25)
+    P = _points(spl, s_end, qq)
+    r = int(math.ceil(3 * sigma0 + 1))
+    c0, c1 = int(max(math.floor(P[:, 0].min()) - r, 0)), int(min(math.ceil(P[:, 0].max()) + r + 1, W))
+    r0, r1 = int(max(math.floor(P[:, 1].min()) - r, 0)), int(min(math.ceil(P[:, 1].max()) + r + 1, H))
+    if c1 - c0 < 3 or r1 - r0 < 3:
+        return math.nan, math.nan, 0.0
+    yy, xx = np.mgrid[r0:r1, c0:c1]
+    px, py = xx.ravel().astype(float), yy.ravel().astype(float)
+    # nearest polyline point for each pixel: q, and signed distance d
+    d2 = (px[:, None] - P[None, :, 0]) ** 2 + (py[:, None] - P[None, :, 1]) ** 2
+    j = np.argmin(d2, axis=1)
+    q = qq[j]
+    T = _points(spl, s_end, qq + 0.01) - P
+    T /= np.hypot(T[:, 0], T[:, 1])[:, None]
+    # signed distance: positive to the left of the direction of increasing q
+    d = (py - P[j, 1]) * T[j, 0] - (px - P[j, 0]) * T[j, 1]
+    u = outward * (q - q0)
+    sel = (np.abs(d) <= 3.0 * sigma0) & (u >= -inner) & (u <= outer) & (j > 0) & (j < qq.size - 1)
+    if np.count_nonzero(sel) < 30:
+        return math.nan, math.nan, 0.0
+    v = img[r0:r1, c0:c1].ravel()[sel].astype(float)
+    q, d, u = q[sel], d[sel], u[sel]
+    hinge = np.maximum(u + inner, 0.0)
+
+    def model_basis(qe: float, sg: float, c: float) -> np.ndarray:
+        return np.exp(-0.5 * ((d - c * hinge) / sg) ** 2) * ndtr(outward * (qe - q) / sg)
+
+    def resid(p: np.ndarray) -> np.ndarray:
+        g = model_basis(*p)
+        A = np.stack([g, np.ones_like(g)], -1)
+        coef, *_ = np.linalg.lstsq(A, v, rcond=None)
+        return A @ coef - v
+
+    try:
+        res = least_squares(resid, [q0, sigma0, 0.0],
+                            bounds=([q0 - 4.0, 0.5 * sigma0, -0.2], [q0 + 4.0, 2.0 * sigma0, 0.2]),
+                            x_scale=[1.0, 0.2, 0.01], diff_step=1e-3, xtol=1e-6)
+    except (ValueError, np.linalg.LinAlgError):
+        return math.nan, math.nan, 0.0
+    qe, sg, c = (float(v) for v in res.x)
+    g = model_basis(qe, sg, c)
+    coef, *_ = np.linalg.lstsq(np.stack([g, np.ones_like(g)], -1), v, rcond=None)
+    if not (res.success and coef[0] > 0) or abs(qe - q0) > 3.9:
+        return math.nan, math.nan, 0.0
+    return qe, sg, c
+
+
+def resample(x: np.ndarray, y: np.ndarray, q_a: float, q_b: float, n_points: int,
+             bend: tuple[float, float] = (0.0, 0.0), inner: float = 14.0) -> tuple[np.ndarray, np.ndarray]:
+    """The curve through (x, y) (interpolating spline in arc length, continued by its end
+    tangents) between parameters q_a < q_b, resampled at ``n_points`` equal arc-length steps.
+    ``bend`` (c_a, c_b): each end rotated about the point ``inner`` px from it, the normal
+    displacement growing as c (distance past that point) (the fitted hinge of the end model)."""
+    s, spl = _curve(x, y)
+    L = float(s[-1])
+    qq = np.linspace(q_a, q_b, 8 * n_points)
+    P = _points(spl, L, qq)
+    T = _points(spl, L, qq + 0.01) - P
+    T /= np.hypot(T[:, 0], T[:, 1])[:, None]
+    disp = bend[0] * np.maximum(inner - qq, 0.0) + bend[1] * np.maximum(qq - (L - inner), 0.0)
+    P = P + disp[:, None] * np.stack([-T[:, 1], T[:, 0]], -1)
+    sa = _arclength(P[:, 0], P[:, 1])
+    su = np.linspace(0.0, sa[-1], n_points)
+    return np.interp(su, sa, P[:, 0]), np.interp(su, sa, P[:, 1])
+
+
+def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float = 1.2,
+                inner: float = 14.0, outer: float = 6.0) -> tuple[np.ndarray, np.ndarray, float, float]:
+    """Move both ends of the centreline (x, y) (P,) [px] to the line ends fitted on the raw
+    frame ``img`` (H, W) (end position along the curve and a small rotation of the last
+    ``inner`` px). Returns (x, y) resampled at P equal steps between the refined ends, and
+    the two end corrections along the curve [px] (NaN where a fit failed; that end is then
+    kept)."""
+    n = x.size
+    s, spl = _curve(np.asarray(x, float), np.asarray(y, float))
+    L = float(s[-1])
+    if L < 2 * inner + 4:
+        return np.asarray(x, float), np.asarray(y, float), math.nan, math.nan
+    qa, _, ca = _fit_end(img, spl, L, 0.0, -1, sigma, inner, outer)
+    qb, _, cb = _fit_end(img, spl, L, L, +1, sigma, inner, outer)
+    xa = qa if np.isfinite(qa) else 0.0
+    xb = qb if np.isfinite(qb) else L
+    xo, yo = resample(x, y, xa, xb, n, (ca, cb), inner)
+    return xo, yo, float(-qa), float(qb - L)

@@ -1,0 +1,241 @@
+"""Tracking a movie: per-frame centreline, head and tail kept by temporal continuity, and
+failure flags with their reasons; the result is the analysis' :class:`Track`.
+
+Per frame: :func:`segment` (matched filter, hysteresis) -> :func:`fit_centreline` (skeleton,
+spline, ridge refinement, half-maximum tips) -> :func:`refine_tips` (line-end model fitted to
+the raw pixels). A frame is flagged, never kept, when:
+
+- lost contrast: nothing above the thresholds, or the ridge is below ``min_contrast`` noise
+  standard deviations of the filtered frame (a line at SNR 1 gives about 3);
+- gap: a second piece holds more than ``gap_fraction`` of the light of the largest one, or
+  the ridge breaks along the body;
+- crossing: the body encloses a hole (it loops over itself) or its skeleton branches;
+- out of view: the body touches the edge of the frame or ROI;
+- length: the body length differs from the median of the good frames by more than
+  ``length_tol`` (a partial or merged body);
+- tip not found: the line-end fit failed at an end;
+- jump: the centreline moved more than ``jump_tol`` body lengths since the last good frame,
+  or head and tail cannot be told apart (both assignments about equally close).
+
+Coordinates: x = column, y = row (image axes, y pointing down), pixel centres at integers,
+converted to mm by ``px_per_mm``; times = frame index / fps.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+from scipy import ndimage as ndi
+
+from .._validate import ParameterError, positive, positive_int
+from ..analysis.track import Track
+from .centreline import fit_centreline
+from .io import open_frames
+from .segment import segment
+from .tips import refine_tips
+
+__all__ = ["track", "track_frame", "orient", "failures", "START_ENDS"]
+
+START_ENDS = ("left", "right", "top", "bottom")
+
+
+def _component_light(filtered: np.ndarray, median: float, noise: float, k_high: float,
+                     mask: np.ndarray) -> float:
+    """Light of the brightest piece other than ``mask`` over that of ``mask`` (0: none)."""
+    lab, n = ndi.label(filtered > median + k_high * noise, structure=np.ones((3, 3), bool))
+    if n < 2:
+        return 0.0
+    sums = np.bincount(lab.ravel(), weights=(filtered - median).ravel(), minlength=n + 1)[1:]
+    own = np.unique(lab[mask & (lab > 0)])
+    main = float(sums[own - 1].sum()) if own.size else float(sums.max())
+    others = np.delete(sums, own - 1) if own.size else np.sort(sums)[:-1]
+    return float(others.max()) / main if others.size and main > 0 else 0.0
+
+
+def _has_loop(mask: np.ndarray, min_hole: int = 12) -> bool:
+    rows, cols = np.nonzero(mask)
+    sub = mask[rows.min(): rows.max() + 1, cols.min(): cols.max() + 1]
+    return int(ndi.binary_fill_holes(sub).sum() - sub.sum()) >= min_hole
+
+
+def track_frame(img: np.ndarray, *, n_points: int = 49, sigma: float = 1.2, k_low: float = 2.0,
+                k_high: float = 5.0, min_contrast: float = 4.0, gap_fraction: float = 0.2,
+                max_branch: float = 0.15, refine: bool = True) -> dict[str, Any]:
+    """Centreline of one frame (H, W): dict with x, y (n_points,) [px] (NaN on failure),
+    length [px], contrast (ridge over filtered-noise sd), ok, reason."""
+    nan = np.full(n_points, np.nan)
+    out: dict[str, Any] = {"x": nan, "y": nan, "length": math.nan, "contrast": math.nan, "ok": False,
+                           "reason": ""}
+    seg = segment(img, sigma=sigma, k_low=k_low, k_high=k_high)
+    if not seg.ok:
+        out["reason"] = f"lost contrast: {seg.reason}"
+        return out
+    m = seg.mask
+    H, W = m.shape
+    if m[0].any() or m[-1].any() or m[:, 0].any() or m[:, -1].any():
+        out["reason"] = "out of view: the body touches the edge of the frame"
+        return out
+    c = fit_centreline(seg.filtered, m, n_points=n_points)
+    contrast = c.plateau / seg.noise if seg.noise > 0 and math.isfinite(c.plateau) else math.nan
+    out["contrast"] = contrast
+    if math.isfinite(contrast) and contrast < min_contrast:
+        out["reason"] = f"lost contrast: ridge {contrast:.2g} noise sd, below {min_contrast:g}"
+        return out
+    if not c.ok:
+        why = {"gap in the ridge": "gap: the ridge breaks along the body",
+               "lost ridge": "lost contrast: the ridge is lost"}.get(c.reason, c.reason)
+        out["reason"] = why
+        return out
+    light = _component_light(seg.filtered, seg.median, seg.noise, k_high, m)
+    if light > gap_fraction:
+        out["reason"] = f"gap: a second piece holds {100 * light:.0f}% of the body's light"
+        return out
+    if _has_loop(m):
+        out["reason"] = "crossing: the body loops over itself"
+        return out
+    if c.branch_fraction > max_branch:
+        out["reason"] = f"crossing: {100 * c.branch_fraction:.0f}% of the skeleton branches off"
+        return out
+    x, y = c.x, c.y
+    if refine:
+        x, y, da, db = refine_tips(img, x, y, sigma=sigma)
+        if not (math.isfinite(da) and math.isfinite(db)):
+            out["reason"] = "tip not found: the line-end fit failed"
+            return out
+    out.update(x=x, y=y, length=float(np.sum(np.hypot(np.diff(x), np.diff(y)))), ok=True)
+    return out
+
+
+def _start_score(x: np.ndarray, y: np.ndarray, start_end: str) -> float:
+    """> 0 when the s = 0 end of (x, y) lies on the requested side."""
+    dx, dy = x[-1] - x[0], y[-1] - y[0]
+    return {"left": dx, "right": -dx, "top": dy, "bottom": -dy}[start_end]
+
+
+def orient(x: np.ndarray, y: np.ndarray, ref_x: np.ndarray, ref_y: np.ndarray) -> tuple[bool, float, float]:
+    """Whether to reverse (x, y) to match the reference centreline: (flip, mean point distance
+    of the chosen order, that of the other order)."""
+    d_keep = float(np.mean(np.hypot(x - ref_x, y - ref_y)))
+    d_flip = float(np.mean(np.hypot(x[::-1] - ref_x, y[::-1] - ref_y)))
+    return (d_flip < d_keep), min(d_keep, d_flip), max(d_keep, d_flip)
+
+
+def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any = None,
+          n_points: int = 49, start_end: str = "left", field_angle: float = 0.0, sigma: float = 1.2,
+          min_contrast: float = 4.0, length_tol: float = 0.03, jump_tol: float = 0.25,
+          gap_fraction: float = 0.2, refine: bool = True, t0: float = 0.0, progress: bool = False) -> Track:
+    """Track the filament in a movie and return its :class:`Track` (good frames only, mm, s).
+
+    source: TIFF stack, folder of PNG/TIFF frames, MP4/AVI movie (path), an array (T, H, W)
+    or a rendered :class:`Movie`. px_per_mm: image scale; fps: frame rate (default: the
+    movie's own); roi: (x0, y0, x1, y1) pixels or "x0,y0,x1,y1"; n_points: arc-length samples;
+    start_end: where the s = 0 end lies in the first good frame ("left", "right", "top",
+    "bottom"), later frames follow by continuity; field_angle: field direction [rad] in image
+    axes (0: +x). Per-frame results (all frames, failed ones NaN, with their reasons) are in
+    ``track.meta["frames"]``; see the module docstring for the checks.
+    """
+    px_per_mm = positive("px_per_mm", px_per_mm)
+    n_points = positive_int("n_points", n_points, 5)
+    if start_end not in START_ENDS:
+        raise ParameterError(f"start_end={start_end!r} is not allowed; choose one of {', '.join(START_ENDS)}")
+    frames = open_frames(source, roi)
+    if fps is None:
+        fps = frames.fps
+        if fps is None:
+            raise ParameterError(f"fps was not given and input={frames.source!r} does not record a frame rate; "
+                                 "give fps (frames per second)")
+    fps = positive("fps", fps)
+    T = len(frames)
+    X = np.full((T, n_points), np.nan)
+    Y = np.full((T, n_points), np.nan)
+    length = np.full(T, np.nan)
+    contrast = np.full(T, np.nan)
+    ok = np.zeros(T, bool)
+    reason = [""] * T
+    match = np.full(T, np.nan)
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=T, unit="frame", desc="track", leave=False)
+    tic = time.perf_counter()
+    ref: tuple[np.ndarray, np.ndarray] | None = None
+    try:
+        for i, img in enumerate(frames):
+            r = track_frame(img, n_points=n_points, sigma=sigma, min_contrast=min_contrast,
+                            gap_fraction=gap_fraction, refine=refine)
+            contrast[i] = r["contrast"]
+            if r["ok"]:
+                x, y = r["x"], r["y"]
+                if ref is None:
+                    if _start_score(x, y, start_end) < 0:
+                        x, y = x[::-1], y[::-1]
+                else:
+                    flip, d_best, d_other = orient(x, y, *ref)
+                    if flip:
+                        x, y = x[::-1], y[::-1]
+                    match[i] = d_best
+                    Lr = r["length"]
+                    if d_best > jump_tol * Lr:
+                        r["ok"], r["reason"] = False, (f"jump: the body moved {d_best:.1f} px since the last good "
+                                                       f"frame (> {jump_tol:g} body lengths)")
+                    elif d_other < 2.0 * d_best:
+                        r["ok"], r["reason"] = False, "jump: head and tail cannot be told apart from the last good frame"
+                if r["ok"]:
+                    X[i], Y[i], length[i] = x, y, r["length"]
+                    ref = (x, y)
+            ok[i] = r["ok"]
+            reason[i] = r["reason"]
+            if bar is not None:
+                bar.update(1)
+    finally:
+        if bar is not None:
+            bar.close()
+    wall = time.perf_counter() - tic
+    if np.count_nonzero(ok) >= 1:
+        med = float(np.median(length[ok]))
+        dev = np.abs(length - med) / med
+        bad = ok & (dev > length_tol)
+        for i in np.nonzero(bad)[0]:
+            reason[i] = (f"length: {length[i]:.1f} px differs from the median {med:.1f} px by "
+                         f"{100 * dev[i]:.1f}% (> {100 * length_tol:g}%: a partial or merged body)")
+        ok &= ~bad
+    X[~ok] = np.nan
+    Y[~ok] = np.nan
+    n_ok = int(np.count_nonzero(ok))
+    if n_ok < 2:
+        counts: dict[str, int] = {}
+        for rsn in reason:
+            key = rsn.split(":")[0]
+            counts[key] = counts.get(key, 0) + 1
+        why = ", ".join(f"{k} ({v})" for k, v in counts.items() if k)
+        raise ParameterError(f"input={frames.source!r}: {n_ok} of {T} frames were tracked; at least 2 are required "
+                             f"(failures: {why or 'none'})")
+    Lgood = length[ok]
+    L_px = float(np.median(Lgood))
+    t_all = t0 + np.arange(T) / fps
+    scale = 1.0 / px_per_mm
+    frames_info = {
+        "t": t_all, "x_px": X, "y_px": Y, "length_px": length, "contrast": contrast, "ok": ok,
+        "reason": reason, "match_px": match,
+    }
+    meta = {
+        "source": frames.source, "px_per_mm": px_per_mm, "fps": fps, "roi": frames.roi,
+        "frame_shape": frames.shape, "n_frames": T, "n_failed": T - n_ok,
+        "length_px": L_px, "length_std_px": float(np.std(Lgood, ddof=1)) if n_ok > 1 else 0.0,
+        "length_spread": float((Lgood.max() - Lgood.min()) / L_px), "wall_time_s": wall,
+        "frames": frames_info,
+    }
+    return Track(t=t_all[ok], x=X[ok] * scale, y=Y[ok] * scale, s=np.linspace(0.0, L_px * scale, n_points),
+                 field_angle=field_angle, length=L_px * scale, units="mm", meta=meta)
+
+
+def failures(tr: Track) -> list[tuple[int, float, str]]:
+    """(frame index, time [s], reason) of every failed frame of a tracked movie."""
+    info = tr.meta.get("frames")
+    if info is None:
+        return []
+    return [(i, float(info["t"][i]), info["reason"][i]) for i in np.nonzero(~info["ok"])[0]]
