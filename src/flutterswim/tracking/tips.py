@@ -45,9 +45,6 @@ def _fit_end(img: np.ndarray, spl, s_end: float, q0: float, outward: int, sigma0
              inner: float, outer: float) -> tuple[float, float]:
     """Fitted end parameter q_end (same parametrisation as ``spl``) and sigma; NaN if the
     fit fails. ``outward`` = +1 for the s_end end, -1 for the s = 0 end."""
-    from scipy.optimize import least_squares
-    from scipy.special import ndtr
-
     H, W = img.shape
     # dense polyline of the curve near the end (the inner part and the tangent extension)
     lo, hi = (q0 - inner - 4, q0 + outer + 4) if outward > 0 else (q0 - outer - 4, q0 + inner + 4)
@@ -76,42 +73,82 @@ def _fit_end(img: np.ndarray, spl, s_end: float, q0: float, outward: int, sigma0
     q, d, u = q[sel], d[sel], u[sel]
     hinge = np.maximum(u + inner, 0.0)
 
-    def model_basis(qe: float, sg: float, c: float) -> np.ndarray:
-        return np.exp(-0.5 * ((d - c * hinge) / sg) ** 2) * ndtr(outward * (qe - q) / sg)
+    return _levenberg_marquardt(q, d, hinge, v, q0, sigma0, outward)
 
-    def resid(p: np.ndarray) -> np.ndarray:
-        g = model_basis(*p)
-        A = np.stack([g, np.ones_like(g)], -1)
-        coef, *_ = np.linalg.lstsq(A, v, rcond=None)
-        return A @ coef - v
 
-    try:
-        res = least_squares(resid, [q0, sigma0, 0.0],
-                            bounds=([q0 - 4.0, 0.5 * sigma0, -0.2], [q0 + 4.0, 2.0 * sigma0, 0.2]),
-                            x_scale=[1.0, 0.2, 0.01], diff_step=1e-3, xtol=1e-6)
-    except (ValueError, np.linalg.LinAlgError):
-        return math.nan, math.nan, 0.0
-    qe, sg, c = (float(v) for v in res.x)
-    g = model_basis(qe, sg, c)
-    coef, *_ = np.linalg.lstsq(np.stack([g, np.ones_like(g)], -1), v, rcond=None)
-    if not (res.success and coef[0] > 0) or abs(qe - q0) > 3.9:
+def _levenberg_marquardt(q: np.ndarray, d: np.ndarray, h: np.ndarray, v: np.ndarray, q0: float,
+                         sigma0: float, o: int, iters: int = 30) -> tuple[float, float, float]:
+    """Least squares of v ~ b + A exp(-(d - c h)^2 / 2 sg^2) Phi(o (qe - q) / sg) over
+    (qe, sg, c, A, b) by Levenberg-Marquardt with the analytic Jacobian; returns (qe, sg, c)
+    or NaNs if the fit leaves the trust box (|qe - q0| < 4, sigma0/2 < sg < 2 sigma0)."""
+    from scipy.special import ndtr
+
+    def parts(p):
+        qe, sg, c, A, b = p
+        e = d - c * h
+        E = np.exp(-0.5 * (e / sg) ** 2)
+        z = o * (qe - q) / sg
+        Ph = ndtr(z)
+        ph = np.exp(-0.5 * z * z) / math.sqrt(2 * math.pi)
+        r = b + A * E * Ph - v
+        return e, E, z, Ph, ph, r
+
+    # start: A, b linear at (q0, sigma0, 0)
+    g = np.exp(-0.5 * (d / sigma0) ** 2) * ndtr(o * (q0 - q) / sigma0)
+    (A0, b0), *_ = np.linalg.lstsq(np.stack([g, np.ones_like(g)], -1), v, rcond=None)
+    p = np.array([q0, sigma0, 0.0, A0, b0])
+    e, E, z, Ph, ph, r = parts(p)
+    cost = float(r @ r)
+    lam = 1e-3
+    for _ in range(iters):
+        qe, sg, c, A, b = p
+        J = np.stack([A * E * ph * o / sg,
+                      A * E * (Ph * e * e / sg**3 - ph * z / sg),
+                      A * E * Ph * e * h / sg**2,
+                      E * Ph, np.ones_like(v)], -1)
+        JtJ, Jtr = J.T @ J, J.T @ r
+        improved = False
+        for _ in range(8):
+            M = JtJ + lam * np.diag(np.diag(JtJ) + 1e-12)
+            try:
+                step = -np.linalg.solve(M, Jtr)
+            except np.linalg.LinAlgError:
+                lam *= 10
+                continue
+            pn = p + step
+            if not (abs(pn[0] - q0) < 4.0 and 0.5 * sigma0 < pn[1] < 2.0 * sigma0 and abs(pn[2]) < 0.3):
+                lam *= 10
+                continue
+            parts_n = parts(pn)
+            cn = float(parts_n[-1] @ parts_n[-1])
+            if cn < cost:
+                p, (e, E, z, Ph, ph, r) = pn, parts_n
+                done = abs(cost - cn) <= 1e-10 * cost or np.max(np.abs(step[:3])) < 1e-5
+                cost, lam, improved = cn, max(lam / 10, 1e-9), True
+                break
+            lam *= 10
+        if not improved or done:
+            break
+    qe, sg, c, A, b = (float(t) for t in p)
+    if not (A > 0 and abs(qe - q0) < 3.9):
         return math.nan, math.nan, 0.0
     return qe, sg, c
 
 
 def resample(x: np.ndarray, y: np.ndarray, q_a: float, q_b: float, n_points: int,
-             bend: tuple[float, float] = (0.0, 0.0), inner: float = 14.0) -> tuple[np.ndarray, np.ndarray]:
+             bend: tuple[float, float] = (0.0, 0.0), hinge: tuple[float, float] = (0.0, 0.0)
+             ) -> tuple[np.ndarray, np.ndarray]:
     """The curve through (x, y) (interpolating spline in arc length, continued by its end
     tangents) between parameters q_a < q_b, resampled at ``n_points`` equal arc-length steps.
-    ``bend`` (c_a, c_b): each end rotated about the point ``inner`` px from it, the normal
-    displacement growing as c (distance past that point) (the fitted hinge of the end model)."""
+    ``bend`` (c_a, c_b): each end rotated about its ``hinge`` parameter (h_a, h_b), the normal
+    displacement growing as c (distance past the hinge) (the fitted hinge of the end model)."""
     s, spl = _curve(x, y)
     L = float(s[-1])
     qq = np.linspace(q_a, q_b, 8 * n_points)
     P = _points(spl, L, qq)
     T = _points(spl, L, qq + 0.01) - P
     T /= np.hypot(T[:, 0], T[:, 1])[:, None]
-    disp = bend[0] * np.maximum(inner - qq, 0.0) + bend[1] * np.maximum(qq - (L - inner), 0.0)
+    disp = bend[0] * np.maximum(hinge[0] - qq, 0.0) + bend[1] * np.maximum(qq - hinge[1], 0.0)
     P = P + disp[:, None] * np.stack([-T[:, 1], T[:, 0]], -1)
     sa = _arclength(P[:, 0], P[:, 1])
     su = np.linspace(0.0, sa[-1], n_points)
@@ -119,20 +156,36 @@ def resample(x: np.ndarray, y: np.ndarray, q_a: float, q_b: float, n_points: int
 
 
 def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float = 1.2,
-                inner: float = 14.0, outer: float = 6.0) -> tuple[np.ndarray, np.ndarray, float, float]:
+                inner: float = 14.0, outer: float = 6.0, trim: float = 6.0,
+                hook_deg: float = 25.0) -> tuple[np.ndarray, np.ndarray, float, float]:
     """Move both ends of the centreline (x, y) (P,) [px] to the line ends fitted on the raw
     frame ``img`` (H, W) (end position along the curve and a small rotation of the last
-    ``inner`` px). Returns (x, y) resampled at P equal steps between the refined ends, and
-    the two end corrections along the curve [px] (NaN where a fit failed; that end is then
-    kept)."""
+    ``inner`` px). A hooked end (turning by more than ``hook_deg`` over its last ``trim``
+    px) is first replaced by the tangent line of the rest: a free end carries no bending moment, so the true body is straight there,
+    while a skeleton often hooks at a noisy tip. Returns (x, y) resampled at P equal steps
+    between the refined ends, and the two end corrections along the curve [px] (NaN where a
+    fit failed; that end is then kept)."""
     n = x.size
-    s, spl = _curve(np.asarray(x, float), np.asarray(y, float))
+    x = np.asarray(x, float)
+    y = np.asarray(y, float)
+    L0 = float(np.sum(np.hypot(np.diff(x), np.diff(y))))
+    if L0 < 2 * (inner + trim) + 4:
+        return x, y, math.nan, math.nan
+    s0, spl0 = _curve(x, y)
+    P = spl0(np.array([0.0, trim, 2 * trim, L0 - 2 * trim, L0 - trim, L0]))
+
+    def turn(a, b, c) -> float:
+        u, v = b - a, c - b
+        return abs(math.atan2(u[0] * v[1] - u[1] * v[0], u @ v))
+
+    ta = trim if turn(P[0], P[1], P[2]) > math.radians(hook_deg) else 0.0
+    tb = trim if turn(P[3], P[4], P[5]) > math.radians(hook_deg) else 0.0
+    x2, y2 = resample(x, y, ta, L0 - tb, max(n, int(L0 / 4)))
+    s, spl = _curve(x2, y2)
     L = float(s[-1])
-    if L < 2 * inner + 4:
-        return np.asarray(x, float), np.asarray(y, float), math.nan, math.nan
-    qa, _, ca = _fit_end(img, spl, L, 0.0, -1, sigma, inner, outer)
-    qb, _, cb = _fit_end(img, spl, L, L, +1, sigma, inner, outer)
-    xa = qa if np.isfinite(qa) else 0.0
-    xb = qb if np.isfinite(qb) else L
-    xo, yo = resample(x, y, xa, xb, n, (ca, cb), inner)
-    return xo, yo, float(-qa), float(qb - L)
+    qa, _, ca = _fit_end(img, spl, L, -ta, -1, sigma, inner, outer)
+    qb, _, cb = _fit_end(img, spl, L, L + tb, +1, sigma, inner, outer)
+    xa = qa if np.isfinite(qa) else -ta
+    xb = qb if np.isfinite(qb) else L + tb
+    xo, yo = resample(x2, y2, xa, xb, n, (ca, cb), (-ta + inner, L + tb - inner))
+    return xo, yo, float(-ta - qa), float(qb - L - tb)

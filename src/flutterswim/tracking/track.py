@@ -126,7 +126,8 @@ def orient(x: np.ndarray, y: np.ndarray, ref_x: np.ndarray, ref_y: np.ndarray) -
 def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any = None,
           n_points: int = 49, start_end: str = "left", field_angle: float = 0.0, sigma: float = 1.2,
           min_contrast: float = 4.0, length_tol: float = 0.03, jump_tol: float = 0.25,
-          gap_fraction: float = 0.2, refine: bool = True, t0: float = 0.0, progress: bool = False) -> Track:
+          gap_fraction: float = 0.2, refine: bool = True, window_px: float = 40.0, t0: float = 0.0,
+          progress: bool = False) -> Track:
     """Track the filament in a movie and return its :class:`Track` (good frames only, mm, s).
 
     source: TIFF stack, folder of PNG/TIFF frames, MP4/AVI movie (path), an array (T, H, W)
@@ -134,7 +135,8 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     movie's own); roi: (x0, y0, x1, y1) pixels or "x0,y0,x1,y1"; n_points: arc-length samples;
     start_end: where the s = 0 end lies in the first good frame ("left", "right", "top",
     "bottom"), later frames follow by continuity; field_angle: field direction [rad] in image
-    axes (0: +x). Per-frame results (all frames, failed ones NaN, with their reasons) are in
+    axes (0: +x); window_px: margin of the search window around the last good body (0: whole
+    frames). Per-frame results (all frames, failed ones NaN, with their reasons) are in
     ``track.meta["frames"]``; see the module docstring for the checks.
     """
     px_per_mm = positive("px_per_mm", px_per_mm)
@@ -165,8 +167,25 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     ref: tuple[np.ndarray, np.ndarray] | None = None
     try:
         for i, img in enumerate(frames):
-            r = track_frame(img, n_points=n_points, sigma=sigma, min_contrast=min_contrast,
-                            gap_fraction=gap_fraction, refine=refine)
+            opts = dict(n_points=n_points, sigma=sigma, min_contrast=min_contrast, gap_fraction=gap_fraction,
+                        refine=refine)
+            r = None
+            if ref is not None and window_px > 0:
+                # search window: the last good body's box plus a margin; the full frame if
+                # anything fails there, so no verdict depends on the window
+                Hf, Wf = img.shape
+                c0 = int(max(np.floor(ref[0].min()) - window_px, 0))
+                c1 = int(min(np.ceil(ref[0].max()) + window_px + 1, Wf))
+                r0 = int(max(np.floor(ref[1].min()) - window_px, 0))
+                r1 = int(min(np.ceil(ref[1].max()) + window_px + 1, Hf))
+                if (r1 - r0) * (c1 - c0) < 0.8 * Hf * Wf:
+                    r = track_frame(img[r0:r1, c0:c1], **opts)
+                    if r["ok"]:
+                        r["x"], r["y"] = r["x"] + c0, r["y"] + r0
+                    else:
+                        r = None
+            if r is None:
+                r = track_frame(img, **opts)
             contrast[i] = r["contrast"]
             if r["ok"]:
                 x, y = r["x"], r["y"]
