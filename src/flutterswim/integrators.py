@@ -141,15 +141,26 @@ def _ros34pw3() -> CompiledRosW:
 
 
 @dataclass(frozen=True)
+class CompiledNDF:
+    """Compiled variable-order NDF (:mod:`flutterswim.ndf`, scipy's BDF algorithm): ``order`` is
+    the highest order it uses (each order k = 1..5 converges at order k)."""
+
+    name: str
+    order: int
+    w: bool = True
+
+
+@dataclass(frozen=True)
 class ScipyMethod:
     name: str
     order: int
     scipy_name: str
 
 
-DEFAULT_METHOD = "ros34pw2"
+DEFAULT_METHOD = "ndf"
 
-METHODS: dict[str, RosenbrockW | CompiledRosW | ScipyMethod] = {
+METHODS: dict[str, RosenbrockW | CompiledRosW | CompiledNDF | ScipyMethod] = {
+    "ndf": CompiledNDF("ndf", 5),
     "ros34pw3": _ros34pw3(),
     "ros34pw2": CompiledRosW.from_hairer(ROS34PW2, 2),
     "ros34pw2-wave1": ROS34PW2,
@@ -204,7 +215,7 @@ def integrate(
         raise ParameterError(f"method={method!r} is unknown; choose one of {sorted(METHODS)}")
     if isinstance(scheme, ScipyMethod):
         return _integrate_scipy(fun, jac, t_span, y0, t_eval, scheme, rtol, atol, max_step, check)
-    if isinstance(scheme, CompiledRosW):
+    if isinstance(scheme, (CompiledRosW, CompiledNDF)):
         scheme = ROS34PW2  # a Python right-hand side: the Python-stepped ROS34PW2
     return _integrate_rosw(
         fun, jac, t_span, y0, t_eval, scheme, rtol, atol, max_step, first_step,
@@ -356,6 +367,24 @@ _STATUS = {1: "step size collapsed", 2: "non-finite state", 3: "singular iterati
            4: "maximum number of steps reached"}
 
 
+def _workspace(fil, pieces, y0, t_eval, scale_cap):
+    """State, frames (those at or before the start filled), error-weight caps, W factor storage
+    and counters of the compiled loops."""
+    n = fil.n
+    y = np.array(y0, dtype=float)
+    out = np.full((len(t_eval), y.size), np.nan)
+    t_eval = np.ascontiguousarray(t_eval, dtype=float)
+    t = float(pieces[0][0])
+    i_out = 0
+    while i_out < len(t_eval) and t_eval[i_out] <= t:
+        out[i_out] = y
+        i_out += 1
+    cap = np.full(y.size, np.inf) if scale_cap is None else np.asarray(scale_cap, float)
+    lu, piv = np.zeros((n + 2, n + 2)), np.zeros(n + 2, dtype=np.int64)
+    g0, s0 = np.zeros((n + 2, n + 2)), np.zeros(n + 1)
+    return y, y.size, out, t_eval, t, i_out, cap, lu, piv, g0, s0, np.zeros(5, dtype=np.int64)
+
+
 def integrate_filament(
     fil,
     pieces: list[tuple[float, float, float]],
@@ -382,26 +411,15 @@ def integrate_filament(
     from . import rosw
 
     tab = METHODS[method]
+    if isinstance(tab, CompiledNDF):
+        return _integrate_ndf(fil, pieces, t_end, y0, t_eval, tab, rtol, atol, max_step, fixed_step, check,
+                              max_steps, progress, scale_cap)
     if not isinstance(tab, CompiledRosW):
         raise ValueError(f"{method!r} is not a compiled Rosenbrock-W method")
     k = rosw.kernels()
     wall0 = time.perf_counter()
-    n = fil.n
-    y = np.array(y0, dtype=float)
-    size = y.size
-    out = np.full((len(t_eval), size), np.nan)
-    t_eval = np.ascontiguousarray(t_eval, dtype=float)
-    t = float(pieces[0][0])
-    i_out = 0
-    while i_out < len(t_eval) and t_eval[i_out] <= t:
-        out[i_out] = y
-        i_out += 1
-    cap = np.full(size, np.inf) if scale_cap is None else np.asarray(scale_cap, float)
+    y, size, out, t_eval, t, i_out, cap, lu, piv, g0, s0, stats = _workspace(fil, pieces, y0, t_eval, scale_cap)
     avg, diff, w = fil._avg, fil._diff, fil._weights
-    lu = np.zeros((n + 2, n + 2))
-    piv = np.zeros(n + 2, dtype=np.int64)
-    g0, s0 = np.zeros((n + 2, n + 2)), np.zeros(n + 1)
-    stats = np.zeros(5, dtype=np.int64)
     f = np.empty(size)
     h = np.nan
     status, message = "completed", "reached t_end"
@@ -440,6 +458,82 @@ def integrate_filament(
                 break
         if code:
             status, message = "failed", f"{_STATUS[code]} at t={t:.6g} (h={h:.3g})"
+        if status != "completed":
+            break
+    stats_ = SolverStats(tab.name, tab.order, int(stats[0]), int(stats[1]), int(stats[2]), int(stats[3]),
+                         int(stats[4]), time.perf_counter() - wall0)
+    return Solution(np.asarray(t_eval[:i_out]), out[:i_out], status, message, t, y, stats_)
+
+
+def _integrate_ndf(fil, pieces, t_end, y0, t_eval, tab, rtol, atol, max_step, fixed_step, check, max_steps,
+                   progress, scale_cap, history=None, order=None):
+    """:func:`integrate_filament` with the compiled NDF (:mod:`flutterswim.ndf`). ``history``
+    (order + 1, n): exact values at t0 - order h, ..., t0 (oldest first) for fixed steps h at
+    ``order`` from the start (order tests); otherwise each field piece starts at order 1."""
+    from . import ndf, rosw
+
+    k = ndf.kernels()
+    wall0 = time.perf_counter()
+    y, size, out, t_eval, t, i_out, cap, lu, piv, g0, s0, stats = _workspace(fil, pieces, y0, t_eval, scale_cap)
+    avg, diff, w = fil._avg, fil._diff, fil._weights
+    d = np.zeros((ndf.MAX_ORDER + 3, size))
+    f = np.empty(size)
+    h_abs = np.nan
+    status, message = "completed", "reached t_end"
+    every_frame = check is not None or progress is not None
+    alpha, gamma, econst = ndf.ALPHA, ndf.GAMMA, ndf.ERROR_CONST
+    for p, (_ta, phi, sigma) in enumerate(pieces):
+        tb = pieces[p + 1][0] if p + 1 < len(pieces) else t_end
+        if tb <= t:
+            continue
+        chi_sigma = fil.chi * sigma
+        # the field changes the ODE: restart at order 1 with a fresh Jacobian
+        rosw.rhs(y, avg, diff, w, fil.eta_par, fil.eta_perp, chi_sigma, phi, f)
+        stats[2] += 1
+        if fixed_step > 0.0:
+            h_abs = fixed_step
+        elif not np.isfinite(h_abs):
+            scale = atol + rtol * np.minimum(np.abs(y), cap)
+            h_abs = min(max_step, 0.01 * max(1e-3, 1.0 / max(1e-12, float(np.sqrt(np.mean((f / scale) ** 2))))),
+                        tb - t)
+        d[:] = 0.0
+        d[0] = y
+        d[1] = f * h_abs
+        ord0 = 1
+        if history is not None:  # backward differences of equally spaced exact values
+            ord0 = int(order)
+            back = np.asarray(history, float)[::-1]  # newest first
+            for j in range(ord0 + 1):
+                d[j] = back[0]
+                back = back[:-1] - back[1:] if j < ord0 else back
+        istate = np.array([ord0, 0, 0, 0], dtype=np.int64)
+        fstate = np.array([h_abs, 0.0])
+        yj = y.copy()
+        stats[3] += 1
+        code = 0
+        while True:
+            i_before = i_out
+            t, i_out, code = k.run(y, t, tb, d, istate, fstate, t_eval, out, i_out, rtol, atol, cap, max_step,
+                                   fixed_step, avg, diff, w, fil.eta_par, fil.eta_perp, chi_sigma, phi, max_steps,
+                                   ndf.MAX_ORDER if order is None else int(order),
+                                   20 if fixed_step > 0.0 else ndf.NEWTON_MAXITER, every_frame, lu, piv, g0, s0,
+                                   yj, alpha, gamma, econst, stats)
+            if code not in (0, 5):
+                break
+            for i in range(i_before, i_out) if every_frame else ():  # each new frame, as the Rosenbrock path
+                tf, yf = float(t_eval[i]), out[i]
+                if progress is not None:
+                    progress(tf)
+                reason = check(tf, yf) if check is not None else None
+                if reason is not None:
+                    status, message = "stopped", reason
+                    t, y, i_out = tf, yf.copy(), i + 1
+                    break
+            if code == 0 or status != "completed":
+                break
+        h_abs = float(fstate[0])
+        if code not in (0, 5):
+            status, message = "failed", f"{_STATUS[code]} at t={t:.6g} (h={h_abs:.3g})"
         if status != "completed":
             break
     stats_ = SolverStats(tab.name, tab.order, int(stats[0]), int(stats[1]), int(stats[2]), int(stats[3]),

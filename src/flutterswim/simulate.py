@@ -15,7 +15,7 @@ from ._validate import ParameterError, finite, positive, positive_int
 from .field import Field
 from .filament import Filament, centreline
 from .initial import InitialState
-from .integrators import DEFAULT_METHOD, METHODS, CompiledRosW, integrate, integrate_filament
+from .integrators import DEFAULT_METHOD, METHODS, CompiledNDF, CompiledRosW, integrate, integrate_filament
 from .params import Groups, Parameters
 from .result import SimulationResult
 
@@ -104,7 +104,7 @@ def simulate(
             cap = np.r_[1.0, 1.0, np.full(n, np.pi), np.full(n + 1, np.inf)]
             chk = _check if (stop_on_self_intersection or check is not None) else None
             mstep = np.inf if max_step is None else positive("max_step", max_step) / tau
-            if isinstance(METHODS[method], CompiledRosW) and fld.steady_between_breakpoints:
+            if isinstance(METHODS[method], (CompiledRosW, CompiledNDF)) and fld.steady_between_breakpoints:
                 edges = [t0] + sorted(b for b in fld.breakpoints if t0 < b < t1) + [t1]
                 pieces = [(a, direction(0.5 * (a + b)), strength(0.5 * (a + b))) for a, b in zip(edges[:-1], edges[1:])]
                 sol = integrate_filament(fil, pieces, t1, y0, t_eval, method=method, rtol=rtol, atol=atol,
