@@ -1,0 +1,106 @@
+"""A tracked movie as CF-style NetCDF (units on every variable) and back to a :class:`Track`.
+
+Dimensions: frame (every frame of the movie, failed ones included) and point (arc-length
+samples). Failed frames have NaN coordinates, ``tracked = 0`` and their ``failure_reason``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .._validate import ParameterError
+from ..analysis.track import Track
+
+__all__ = ["save_track", "load_track", "to_xarray"]
+
+
+def to_xarray(tr: Track):
+    """The tracked movie (``tr.meta["frames"]`` from :func:`track`) as an xarray Dataset."""
+    import xarray as xr
+
+    from .. import __version__
+
+    info = tr.meta.get("frames")
+    if info is None:
+        raise ParameterError("track has no per-frame tracking record (meta['frames']); only tracks made by "
+                             "flutterswim.tracking.track can be saved here")
+    mm = 1.0 / tr.meta["px_per_mm"]
+    ok = np.asarray(info["ok"], bool)
+    reason = np.array([str(r) for r in info["reason"]], dtype=object)
+    ds = xr.Dataset(
+        {
+            "x": (("frame", "point"), info["x_px"] * mm, {"units": "mm", "long_name": "centreline x (image column axis)"}),
+            "y": (("frame", "point"), info["y_px"] * mm, {"units": "mm", "long_name": "centreline y (image row axis, downwards)"}),
+            "body_length": ("frame", info["length_px"] * mm, {"units": "mm", "long_name": "tracked body length"}),
+            "contrast": ("frame", info["contrast"], {"units": "1", "long_name": "ridge height over the filtered noise sd"}),
+            "tracked": ("frame", ok.astype(np.int8), {"units": "1", "long_name": "frame tracked (1) or failed (0)",
+                                                       "flag_values": np.array([0, 1], np.int8),
+                                                       "flag_meanings": "failed tracked"}),
+            "failure_reason": ("frame", reason, {"units": "1", "long_name": "why the frame failed (empty if tracked)"}),
+            "match_distance": ("frame", info["match_px"] * mm,
+                               {"units": "mm", "long_name": "mean point distance to the last good frame"}),
+        },
+        coords={
+            "time": ("frame", np.asarray(info["t"], float), {"units": "s", "standard_name": "time", "long_name": "time"}),
+            "frame": ("frame", np.arange(ok.size), {"units": "1", "long_name": "frame index"}),
+            "s": ("point", np.asarray(tr.s, float), {"units": "mm", "long_name": "arc length from the s = 0 end"}),
+        },
+    )
+    m = tr.meta
+    ds.attrs.update({
+        "Conventions": "CF-1.8",
+        "title": "filament tracked from video by flutterswim",
+        "source": f"flutterswim {__version__} tracking of {m.get('source', '?')}",
+        "input": str(m.get("source", "")),
+        "px_per_mm": float(m["px_per_mm"]), "px_per_mm_units": "1/mm",
+        "fps": float(m["fps"]), "fps_units": "1/s",
+        "roi": json.dumps(m.get("roi")),
+        "field_angle": float(np.mean(tr.field_angle)), "field_angle_units": "rad",
+        "body_length": float(tr.length), "body_length_units": "mm",
+        "body_length_std": float(m["length_std_px"]) * mm, "body_length_std_units": "mm",
+        "body_length_spread": float(m["length_spread"]), "body_length_spread_units": "1",
+        "n_frames": int(m["n_frames"]), "n_failed": int(m["n_failed"]),
+    })
+    return ds
+
+
+def save_track(tr: Track, path: str | os.PathLike) -> Path:
+    """Write :func:`to_xarray` to NetCDF atomically (never over a file not ours)."""
+    from .._paths import atomic_path, check_output_file
+
+    p = check_output_file(path, (".nc",), what="out")
+    ds = to_xarray(tr)
+    with atomic_path(p) as tmp:
+        ds.to_netcdf(tmp, engine="h5netcdf")
+    return p
+
+
+def load_track(path: str | os.PathLike) -> Track:
+    """The :class:`Track` (tracked frames only) of a file written by :func:`save_track`."""
+    import xarray as xr
+
+    p = Path(os.fspath(path))
+    if not p.is_file():
+        raise ParameterError(f"track={str(p)!r} is not a file")
+    try:
+        ds = xr.load_dataset(p, engine="h5netcdf")
+    except (OSError, ValueError) as exc:
+        raise ParameterError(f"track={str(p)!r} is not a readable NetCDF file ({exc})") from None
+    if "tracked" not in ds or "px_per_mm" not in ds.attrs:
+        raise ParameterError(f"track={str(p)!r} is not a track written by flutterswim track")
+    ok = ds["tracked"].values.astype(bool)
+    a = ds.attrs
+    frames = {"t": ds["time"].values, "x_px": ds["x"].values * a["px_per_mm"], "y_px": ds["y"].values * a["px_per_mm"],
+              "length_px": ds["body_length"].values * a["px_per_mm"], "contrast": ds["contrast"].values, "ok": ok,
+              "reason": [str(r) for r in ds["failure_reason"].values], "match_px": ds["match_distance"].values * a["px_per_mm"]}
+    meta = {"source": a.get("input", ""), "px_per_mm": float(a["px_per_mm"]), "fps": float(a["fps"]),
+            "roi": json.loads(a.get("roi", "null")), "n_frames": int(a["n_frames"]), "n_failed": int(a["n_failed"]),
+            "length_px": float(a["body_length"]) * a["px_per_mm"],
+            "length_std_px": float(a["body_length_std"]) * a["px_per_mm"],
+            "length_spread": float(a["body_length_spread"]), "frames": frames}
+    return Track(t=ds["time"].values[ok], x=ds["x"].values[ok], y=ds["y"].values[ok], s=ds["s"].values,
+                 field_angle=float(a["field_angle"]), length=float(a["body_length"]), units="mm", meta=meta)
