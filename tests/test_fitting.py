@@ -159,3 +159,57 @@ def test_trials_csv_means_sems_and_cli(tmp_path, model, capsys):
     err = capsys.readouterr().err
     assert "advance_mm" in err and "Traceback" not in err
     assert main(["fit", str(csv), "--voltage", "80", "--out", str(tmp_path / "f3.json")]) == 2
+
+
+def test_profile_interval_is_exact_on_a_parabola_and_open_on_a_flat_side():
+    from flutterswim.fitting.profile import profile_interval
+
+    dv = np.linspace(-0.3, 0.3, 61)
+    lo, hi = profile_interval(dv, 3.0 + (dv / 0.1) ** 2)  # chi2 rises by 1 at +-0.1
+    assert lo == pytest.approx(0.1, abs=2e-3) and hi == pytest.approx(0.1, abs=2e-3)
+    flat = np.where(dv < 0, (dv / 0.1) ** 2, 0.5 * (1 - np.exp(-dv / 0.02)))  # levels off at 0.5 above
+    lo, hi = profile_interval(dv, flat)
+    assert lo == pytest.approx(0.1, abs=2e-3) and hi == math.inf
+    rising = np.where(dv < 0, (dv / 0.1) ** 2, 0.5 * dv / 0.3)  # still rising at the scan's end
+    assert profile_interval(dv, rising)[1] == pytest.approx(0.3)  # a lower bound: the scan
+
+
+def test_calibration_spread_matches_the_reported_sigma():
+    """On a smooth stand-in with the model's scaling structure, 120 noisy refits scatter as the
+    Jacobian 1-sigma says (within 25 %)."""
+    from flutterswim.fitting.calibration import calibrate
+    from flutterswim.fitting.surrogate import ScalingSurrogate
+
+    sur = ScalingSurrogate(BASE)
+    truth = np.array([1.94e-14, 0.375, 19.1e3])
+    y = sur(to_identifiable(BASE, *truth))
+    cal = calibrate(sur, truth, y * np.array([0.0005, 0.0025, 0.0015]), n=120, seed=5)
+    assert cal.n_failed == 0
+    assert np.all(np.abs(cal.spread / cal.reported - 1) < 0.25), (cal.spread, cal.reported)
+
+
+def test_papers_box_reports_an_active_bound():
+    """Data from kappa_E = 1.8 x the guess lie outside the paper's box [0.5, 1.5]: the paper's
+    cost stops on the bound and says so; the default cost (unbounded) recovers the truth."""
+    from flutterswim.fitting.surrogate import ScalingSurrogate
+
+    sur = ScalingSurrogate(BASE)
+    truth = np.array([2e-14, 0.3, 18e3 * 1.8])
+    y = sur(to_identifiable(BASE, *truth))
+    res = fit(y, None, cost="paper", model=sur)
+    assert "kappa_E" in res.at_bound and res.kappa_E == pytest.approx(1.5 * 18e3, rel=1e-5)
+    free = fit(y, y * REL_SEM, model=sur)
+    assert free.at_bound == () and free.kappa_E == pytest.approx(truth[2], rel=1e-6)
+
+
+def test_parallel_finite_differences_give_the_serial_fit():
+    """The difference orbits of each Jacobian computed on a process pool: the same fit as serial."""
+    truth = np.array([1.94e-14, 0.375, 19.1e3]) * np.array((1.1, 0.95, 1.03))
+    m = DescriptorModel(BASE, n_segments=16)
+    y = m(to_identifiable(BASE, *truth))
+    ser = fit(y, y * REL_SEM, model=DescriptorModel(BASE, n_segments=16))
+    par = fit(y, y * REL_SEM, model=DescriptorModel(BASE, n_segments=16), backend="processes", workers=2)
+    assert par.settings["backend"] == "processes"
+    a, b = np.array([ser.B, ser.tau, ser.kappa_E]), np.array([par.B, par.tau, par.kappa_E])
+    assert np.allclose(a, b, rtol=1e-7) and np.allclose(ser.sigma_rel, par.sigma_rel, rtol=1e-5)
+    assert np.allclose(a, truth, rtol=5e-3)

@@ -19,6 +19,9 @@ def register(subparsers) -> None:
     p.add_argument("--profiles", action="store_true", help="also compute profile likelihoods (slower)")
     p.add_argument("--bootstrap", type=int, default=0, help="parametric bootstrap refits (default 0)")
     p.add_argument("--segments", type=int, default=24)
+    p.add_argument("--backend", default=None,
+                   help="compute the finite-difference orbits in parallel: processes, dask-local, dask (default: here)")
+    p.add_argument("--workers", type=int, default=None, help="worker processes for --backend")
     p.add_argument("--out", default="fit.json")
     p.add_argument("--plot", default=None, help="figure of the data (Fig. 3e), the fit and its profiles")
     p.set_defaults(func=_cmd_fit)
@@ -45,7 +48,8 @@ def _cmd_fit(args) -> int:
         raise ParameterError(f"voltage {v:g} V has {int(summary.n[np.isclose(summary.voltage_V, v)][0])} trial(s): "
                              "the SEM needs at least two (or use --paper-cost)")
     res = fit(mean, sem if np.all(np.isfinite(sem)) else None, base=base, cost="paper" if args.paper_cost else "sem",
-              tip=args.tip, profiles=args.profiles, bootstrap=args.bootstrap, n_segments=args.segments)
+              tip=args.tip, profiles=args.profiles, bootstrap=args.bootstrap, n_segments=args.segments,
+              backend=args.backend, workers=args.workers)
     res.save(out)
     s = res.sigma_rel
     print(f"{out}: B = {res.B * 1e6:.4g} N mm^2 (+-{s[0]:.1%}), tau = {res.tau:.4g} s (+-{s[1]:.1%}), "

@@ -15,7 +15,7 @@ from __future__ import annotations
 import json
 import math
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -61,6 +61,9 @@ class FitResult:
     profiles: dict = field(default_factory=dict)
     bootstrap_sigma_rel: np.ndarray | None = None
     settings: dict = field(default_factory=dict)
+    #: parameters held at a bound of the paper's box (``cost="paper"``); their 1-sigma is that of
+    #: the unconstrained local problem (finite, never NaN), and the bound itself is reported
+    at_bound: tuple = ()
 
     def to_dict(self) -> dict[str, Any]:
         def f(v):
@@ -73,6 +76,7 @@ class FitResult:
             "correlation": {f"{a}-{b}": f(self.correlation[i, j]) for i, a in enumerate(NAMES)
                             for j, b in enumerate(NAMES) if j > i},
             "cost": {"kind": self.cost_kind, "value": self.cost, "paper_C": self.paper_cost},
+            "at_bound": list(self.at_bound),
             "convergence": {"converged": self.converged, "message": self.message,
                             "model_evaluations": self.n_model_evaluations, "wall_time_s": self.wall_time_s},
             "data": {"descriptors": ["period_s", "advance_mm", "lateral_mm"],
@@ -89,7 +93,10 @@ class FitResult:
         }
         if self.profiles:
             out["profiles"] = {k: {"values": v["values"].tolist(), "chi2": v["chi2"].tolist(),
-                                   "sigma_rel_profile": f(v["sigma_rel"])} for k, v in self.profiles.items()}
+                                   "sigma_rel_profile": f(v["sigma_rel"]),
+                                   "interval_rel": [f(v.get("lower")), f(v.get("upper"))],
+                                   "note": "null: the profile flattens before rising by 1 (unbounded)"}
+                               for k, v in self.profiles.items()}
         if self.bootstrap_sigma_rel is not None:
             out["bootstrap_sigma_rel"] = dict(zip(NAMES, self.bootstrap_sigma_rel.tolist()))
         return out
@@ -111,13 +118,34 @@ def _weighted(model, x, mean, sem):
 
 def fit(measured, sem=None, *, base: Parameters | None = None, guess=PAPER_GUESS, cost: str = "sem",
         tip: str = "trailing", model=None, profiles: bool = False, bootstrap: int = 0,
-        n_segments: int = 24, seed: int = 0) -> FitResult:
+        n_segments: int = 24, seed: int = 0, backend: str | None = None, workers: int | None = None) -> FitResult:
     """Fit (B, tau, kappa_E) to ``measured`` = (period [s], advance [mm], lateral [mm]) with
     standard errors ``sem`` (same units; required for the default cost and for uncertainties).
 
     ``base``: geometry and viscosity (default: the paper preset); ``guess``: (B, tau, kappa_E)
     to start from (default: the paper's initial guess); ``model``: a descriptor model (default
-    :class:`DescriptorModel` on periodic orbits, N = ``n_segments``)."""
+    :class:`DescriptorModel` on periodic orbits, N = ``n_segments``); ``backend``, ``workers``:
+    a sweep backend (``"processes"``, ``"dask-local"``, ...) on which the finite-difference
+    orbits of each Jacobian are computed in parallel (default: in this process)."""
+    if backend is None or not hasattr(model if model is not None else DescriptorModel, "prefetch"):
+        return _fit(measured, sem, base=base, guess=guess, cost=cost, tip=tip, model=model, profiles=profiles,
+                    bootstrap=bootstrap, n_segments=n_segments, seed=seed)
+    from ..sweep.backends import check_backend, get_backend
+
+    check_backend(backend, workers=workers)
+    base_ = preset("paper") if base is None else base
+    model = DescriptorModel(base_, tip=tip, n_segments=n_segments) if model is None else model
+    with get_backend(backend, workers=workers) as ex:
+        model.executor = ex
+        try:
+            res = _fit(measured, sem, base=base, guess=guess, cost=cost, tip=tip, model=model, profiles=profiles,
+                       bootstrap=bootstrap, n_segments=n_segments, seed=seed)
+        finally:
+            model.executor = None
+    return replace(res, settings={**res.settings, "backend": backend, "workers": workers})
+
+
+def _fit(measured, sem=None, *, base, guess, cost, tip, model, profiles, bootstrap, n_segments, seed) -> FitResult:
     t0 = time.perf_counter()
     base = preset("paper") if base is None else base
     if not isinstance(base, Parameters):
@@ -147,8 +175,10 @@ def fit(measured, sem=None, *, base: Parameters | None = None, guess=PAPER_GUESS
 
         res = least_squares(fun, x0, jac=jac, method="trf", xtol=1e-13, ftol=1e-15, gtol=1e-15, max_nfev=60)
         x, ok, msg = res.x, bool(res.success), str(res.message)
+        at_bound = ()
     else:
         lo = np.log(np.array([0.5, 0.5, 0.5]))
+        hi = math.log(1.5)  # the paper's box: factors in [0.5, 1.5]
         # optimisation variables: log factors (alpha: kappa_E, beta: B, gamma: tau) as in the paper
 
         def x_of(f):
@@ -164,8 +194,11 @@ def fit(measured, sem=None, *, base: Parameters | None = None, guess=PAPER_GUESS
             return np.array([(c_of(f + h * e) - c_of(f - h * e)) / (2 * h) for e in np.eye(3)])
 
         r = minimize(c_of, np.zeros(3), jac=g_of, method="SLSQP",
-                     bounds=[(lo[0], -lo[0])] * 3, options={"ftol": 1e-14, "maxiter": 100})
+                     bounds=[(lo[0], hi)] * 3, options={"ftol": 1e-14, "maxiter": 100})
         x, ok, msg = x_of(r.x), bool(r.success), str(r.message)
+        # (alpha, beta, gamma) = (kappa_E, B, tau); a bound is active within 1e-6 in log
+        at_bound = tuple(n for n, f in zip(("kappa_E", "B", "tau"), r.x)
+                         if f - lo[0] < 1e-6 or hi - f < 1e-6)
     y = model(x)
     B, tau, kE = to_physical(base, x)
     jw = model_jacobian(model, x, y)
@@ -191,7 +224,8 @@ def fit(measured, sem=None, *, base: Parameters | None = None, guess=PAPER_GUESS
                      card, prof, boot,
                      {"tip": tip, "n_segments": n_segments, "guess": list(guess), "cost": cost,
                       "base": {k: float(v) for k, v in asdict(base).items()},
-                      "uncertainty_weights": "sem" if sem_arr is not None else "5% of the measured values"})
+                      "uncertainty_weights": "sem" if sem_arr is not None else "5% of the measured values"},
+                     at_bound)
 
 
 def model_jacobian(model, x: np.ndarray, y: np.ndarray) -> np.ndarray:

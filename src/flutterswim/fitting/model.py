@@ -51,6 +51,7 @@ class DescriptorModel:
     n_segments: int = 24
     steps: int = 24
     n_evaluations: int = 0
+    executor: object = field(default=None, repr=False, compare=False)  # for parallel differences
     _cache: list = field(default_factory=list, repr=False)
     _memo: dict = field(default_factory=dict, repr=False)
 
@@ -69,34 +70,51 @@ class DescriptorModel:
 
     def orbit(self, eta_perp: float, chi: float):
         """The stroke at (eta_perp, chi) as a dimensionless PeriodicOrbit."""
-        from ..orbits import OrbitNotFound, periodic_orbit
-
         if not (eta_perp > 0 and chi > 0 and math.isfinite(eta_perp) and math.isfinite(chi)):
             raise NotSwimming(f"eta_perp={eta_perp!r}, chi={chi!r} are outside the model's range (both > 0)")
         key = np.array([math.log(eta_perp), math.log(abs(chi))])
         for k, o in self._cache:  # an exact repeat (the orbit depends on (eta_perp, chi) only)
             if np.array_equal(k, key):
                 return o
-        guess = None
-        if self._cache:
-            d = [np.sum((k - key) ** 2) for k, _ in self._cache]
-            guess = self._cache[int(np.argmin(d))][1]
         self.n_evaluations += 1
-        try:
-            orb = periodic_orbit(self.groups(eta_perp, chi), guess, n_segments=self.n_segments, steps=self.steps)
-        except OrbitNotFound as exc:
-            if guess is None:
-                raise NotSwimming(str(exc)) from None
-            try:  # a far neighbour: start afresh
-                orb = periodic_orbit(self.groups(eta_perp, chi), n_segments=self.n_segments, steps=self.steps)
-            except OrbitNotFound as exc2:
-                raise NotSwimming(str(exc2)) from None
-        if not orb.stable:
-            raise NotSwimming(f"the stroke at eta_perp={eta_perp:.4g}, chi={chi:.4g} is unstable")
+        out = solve_point((self.groups(eta_perp, chi), self._nearest(key), self.n_segments, self.steps))
+        if isinstance(out, str):
+            raise NotSwimming(out)
+        self._remember(key, out)
+        return out
+
+    def _nearest(self, key: np.ndarray):
+        if not self._cache:
+            return None
+        d = [np.sum((k - key) ** 2) for k, _ in self._cache]
+        return self._cache[int(np.argmin(d))][1]
+
+    def _remember(self, key: np.ndarray, orb) -> None:
         self._cache.append((key, orb))
         if len(self._cache) > 64:
             self._cache.pop(0)
-        return orb
+
+    def prefetch(self, xs, executor) -> None:
+        """Compute the orbits at identifiable points ``xs`` (k, 3) not yet known, in parallel
+        on ``executor`` (a sweep backend's executor: ``imap(fn, ((key, item), ...))``), each
+        from its nearest known neighbour; afterwards calls at these points are cache hits."""
+        todo = {}
+        for x in xs:
+            eta_perp, chi, _ = np.exp(x)  # as __call__ does (np.exp and math.exp may differ by an ulp)
+            if (float(eta_perp), float(chi)) in self._memo or not (math.isfinite(eta_perp) and math.isfinite(chi)):
+                continue
+            key = np.array([math.log(eta_perp), math.log(chi)])
+            if any(np.array_equal(k, key) for k, _ in self._cache):
+                continue
+            todo[(float(eta_perp), float(chi))] = (self.groups(eta_perp, chi), self._nearest(key),
+                                                   self.n_segments, self.steps)
+        if len(todo) < 2:
+            return  # nothing to share out: the serial path computes it
+        for (eta_perp, chi), out in executor.imap(solve_point, list(todo.items())):
+            self.n_evaluations += 1
+            if isinstance(out, str) or not hasattr(out, "theta"):  # NotSwimming reason or WorkerLost
+                continue  # the serial call will recompute it and raise
+            self._remember(np.array([math.log(eta_perp), math.log(chi)]), out)
 
     def dimensionless(self, eta_perp: float, chi: float) -> np.ndarray:
         """(period / tau, advance / l, lateral / l), memoised on (eta_perp, chi)."""
@@ -119,12 +137,43 @@ class DescriptorModel:
 
     def jacobian(self, x: np.ndarray, y0: np.ndarray | None = None, *, step: float = 1e-5) -> np.ndarray:
         """d(descriptors) / dx (3, 3): central differences in log eta_perp and log chi (smooth
-        orbit descriptors), exact in log tau (only the period scales with tau)."""
+        orbit descriptors), exact in log tau (only the period scales with tau). With an
+        ``executor`` set, the four difference orbits are computed in parallel on it."""
+        if self.executor is not None:
+            pts = [x] + [x + sgn * step * np.eye(3)[k] for k in (0, 1) for sgn in (1.0, -1.0)]
+            self.prefetch(pts, self.executor)
         y0 = self(x) if y0 is None else y0
         jac = np.zeros((3, 3))
         for k in (0, 1):
             e = np.zeros(3)
             e[k] = step
-            jac[:, k] = (self(x + e) - self(x - e)) / (2 * step)
+            try:
+                jac[:, k] = (self(x + e) - self(x - e)) / (2 * step)
+            except NotSwimming:  # a neighbour without a stroke (edge of the region): one side
+                try:
+                    jac[:, k] = (self(x + e) - y0) / step
+                except NotSwimming:
+                    jac[:, k] = (y0 - self(x - e)) / step
         jac[0, 2] = y0[0]
         return jac
+
+
+def solve_point(item):
+    """Worker function (module level, so that backends can pickle it): the stable orbit at
+    ``item = (groups, guess or None, n_segments, steps)``, or a string saying why there is none.
+    A failure from a far neighbour is retried from scratch."""
+    from ..orbits import OrbitNotFound, periodic_orbit
+
+    groups, guess, n_segments, steps = item
+    try:
+        orb = periodic_orbit(groups, guess, n_segments=n_segments, steps=steps)
+    except OrbitNotFound as exc:
+        if guess is None:
+            return str(exc)
+        try:
+            orb = periodic_orbit(groups, n_segments=n_segments, steps=steps)
+        except OrbitNotFound as exc2:
+            return str(exc2)
+    if not orb.stable:
+        return f"the stroke at eta_perp={groups.eta_perp:.4g}, chi={groups.chi:.4g} is unstable"
+    return orb

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .model import LOG_MAP, to_physical
 from .uncertainty import NAMES
 
-__all__ = ["profile_likelihood"]
+__all__ = ["profile_likelihood", "profile_interval"]
 
 
 def profile_likelihood(model, base, x_best: np.ndarray, mean: np.ndarray, sem: np.ndarray,
@@ -44,14 +46,41 @@ def profile_likelihood(model, base, x_best: np.ndarray, mean: np.ndarray, sem: n
             r = least_squares(fun, z, jac=jac, method="trf", xtol=1e-12, ftol=1e-14, gtol=1e-14, max_nfev=40)
             chi2.append(float(np.sum(r.fun ** 2)))
         chi2 = np.array(chi2)
-        d = chi2 - chi2.min()
-        # half-width where the profile rises by one, from a parabola through the points
-        c = np.polyfit(vals - y_best[i], d, 2)
-        sig = float(1.0 / np.sqrt(c[0])) if c[0] > 0 else float("nan")
+        lo, hi = profile_interval(vals - y_best[i], chi2)
+        sig = 0.5 * (lo + hi) if math.isfinite(lo + hi) else min(lo, hi)
         phys = []
         for v in vals:
             y = y_best.copy()
             y[i] = v
             phys.append(to_physical(base, minv @ y)[i])
-        out[name] = {"values": np.array(phys), "chi2": chi2, "sigma_rel": sig}
+        out[name] = {"values": np.array(phys), "chi2": chi2, "sigma_rel": sig, "lower": lo, "upper": hi}
     return out
+
+
+def profile_interval(dv: np.ndarray, chi2: np.ndarray) -> tuple[float, float]:
+    """Distances below and above the minimum where the profile ``chi2`` (sampled at offsets
+    ``dv``, increasing) first rises by 1 over its minimum, by linear interpolation between
+    samples; a side that does not rise by 1 within the scan gives the distance to its last
+    sample (a lower bound, never NaN) when it is still rising at its end (end slope at least a
+    quarter of its mean slope), and inf when it has levelled off."""
+    d = np.asarray(chi2, float) - np.min(chi2)
+    k = int(np.argmin(d))
+    out = []
+    for idx in (range(k - 1, -1, -1), range(k + 1, d.size)):
+        prev, width = k, math.inf
+        for j in idx:
+            if d[j] >= 1.0:
+                w = (1.0 - d[prev]) / (d[j] - d[prev])
+                width = abs(dv[prev] + w * (dv[j] - dv[prev]) - dv[k])
+                break
+            prev = j
+        else:
+            last = list(idx)
+            if len(last) >= 2:
+                j1, j0 = last[-1], last[-2]
+                span = abs(dv[j1] - dv[k])
+                end_slope = (d[j1] - d[j0]) / abs(dv[j1] - dv[j0])
+                if d[j1] > 0 and end_slope >= 0.25 * d[j1] / span:  # still rising: at least the scan
+                    width = span
+        out.append(width)
+    return out[0], out[1]
