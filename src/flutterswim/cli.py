@@ -47,10 +47,15 @@ def _simulate(args: argparse.Namespace) -> int:
 
         params = params.replace(kappa_E=params.kappa_E * finite("kappa_E_ratio", args.kappa_E_ratio))
     opts = dict(n_segments=args.segments, rtol=args.rtol, atol=args.atol, progress=not args.quiet)
+    from .steering.schedules import field_from_args
+
+    field = field_from_args(args)
+    if field is not None and args.t_end is None:
+        raise ParameterError("a field schedule (--field-*) needs --t-end: the settle engine runs in a steady field")
     if args.t_end is not None:
         from .simulate import simulate
 
-        run = simulate(params, args.t_end, **opts)
+        run = simulate(params, args.t_end, field=field, **opts)
     else:
         from .limit_cycle import run_to_limit_cycle
 
@@ -151,6 +156,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--atol", type=float, default=defaults.ATOL, help=f"(default {defaults.ATOL:g})")
     p.add_argument("--out", default="run.nc", help="NetCDF file (.nc)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    from .steering.schedules import add_field_options
+
+    add_field_options(p)
     p.set_defaults(func=_simulate)
 
     p = sub.add_parser("describe", help="stroke descriptors of a saved run")

@@ -120,6 +120,14 @@ class Descriptors:
     leading_lateral_p2p_bl: float = math.nan
     trailing_lateral_p2p_mm: float = math.nan
     trailing_lateral_p2p_bl: float = math.nan
+    # a turning field (NaN otherwise): cycle-averaged path, see flutterswim.steering.turning
+    turning_radius_mm: float = math.nan
+    turning_circle_fit_rms_mm: float = math.nan
+    heading_lag_deg: float = math.nan
+    heading_lag_std_deg: float = math.nan
+    field_turn_rate_deg_s: float = math.nan
+    heading_turn_rate_deg_s: float = math.nan
+    turning_speed_mm_s: float = math.nan
     note: str = ""
 
     def to_dict(self) -> dict[str, Any]:
@@ -262,7 +270,17 @@ def describe(
     adv_total = (xc[-1] - xc[0]) * math.cos(float(np.mean(tr.field_angle))) + (yc[-1] - yc[0]) * math.sin(
         float(np.mean(tr.field_angle))
     )
+    from ..steering.turning import turning_summary
+
+    turn = turning_summary(tr.t, tr.x.mean(axis=1), tr.y.mean(axis=1), tr.field_angle, float(np.mean(per)))
     return Descriptors(
+        turning_radius_mm=turn["turning_radius"] * mm,
+        turning_circle_fit_rms_mm=turn["circle_fit_rms"] * mm,
+        heading_lag_deg=math.degrees(turn["heading_lag"]),
+        heading_lag_std_deg=math.degrees(turn["heading_lag_std"]),
+        field_turn_rate_deg_s=math.degrees(turn["field_turn_rate"]),
+        heading_turn_rate_deg_s=math.degrees(turn["heading_turn_rate"]),
+        turning_speed_mm_s=turn["turning_speed"] * mm,
         n_cycles_used=int(idx.size),
         n_cycles_detected=int(K),
         window_start_s=t0,

@@ -117,3 +117,28 @@ def describe_turning(avg: Averaged, t0: float | None = None, t1: float | None = 
     following = abs(hrate - frate) < 0.05 * max(abs(frate), 1e-12)
     return TurningDescriptors(frate, hrate, float(np.mean(lag)), float(np.std(lag)), r, rms,
                               float(np.mean(avg.speed[m])), bool(following))
+
+
+def turning_summary(t: np.ndarray, x: np.ndarray, y: np.ndarray, field: np.ndarray, period: float) -> dict:
+    """For describe: turning radius, heading lag and turn rates, speed while turning over the
+    part of the run where the field turns (from 4 periods after it starts turning); NaN if the
+    field does not turn by at least 5 degrees."""
+    nan = {"turning_radius": math.nan, "heading_lag": math.nan, "heading_lag_std": math.nan,
+           "field_turn_rate": math.nan, "heading_turn_rate": math.nan, "turning_speed": math.nan,
+           "circle_fit_rms": math.nan}
+    f = np.unwrap(field)
+    if f.size < 10 or np.ptp(f) < math.radians(5.0) or not period > 0:
+        return nan
+    moving = np.abs(np.gradient(f, t)) > 1e-9
+    if not moving.any():
+        return nan
+    t_start = t[np.argmax(moving)] + 4 * period
+    t_stop = t[len(moving) - 1 - np.argmax(moving[::-1])] - period
+    try:
+        avg = cycle_average(t, x, y, field, period)
+        d = describe_turning(avg, t_start, t_stop)
+    except ParameterError:
+        return nan
+    return {"turning_radius": d.turning_radius, "heading_lag": d.heading_lag, "heading_lag_std": d.heading_lag_std,
+            "field_turn_rate": d.field_turn_rate, "heading_turn_rate": d.heading_turn_rate,
+            "turning_speed": d.speed_turning, "circle_fit_rms": d.circle_fit_rms}

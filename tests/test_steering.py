@@ -1,0 +1,123 @@
+"""Steering: schedules, turning analysis, the reduced model against the full model, and
+closed-loop path following with tracking noise and delay."""
+
+import math
+
+import numpy as np
+import pytest
+
+import flutterswim as fs
+from flutterswim.steering import cycle_average, fit_circle, identify, rotation
+from flutterswim.steering.path import circle, square
+from flutterswim.steering.reduced import follows, rotating_run
+from flutterswim.steering.steer import steer
+
+P = fs.PAPER
+L = P.l
+
+
+def test_schedules():
+    from flutterswim.steering.schedules import Rotation, ramp, step
+
+    r = Rotation(0.5, start=2.0)
+    assert r(1.0) == 0.0 and r(4.0) == pytest.approx(1.0)
+    assert r.scaled(0.5)(8.0) == pytest.approx(r(4.0))  # seen in units of 0.5 s
+    s = step(0.7, at=3.0).direction
+    assert s(2.9) == 0.0 and s(3.0) == pytest.approx(0.7)
+    m = ramp(1.0, start=1.0, duration=2.0).direction
+    assert m(0.5) == 0.0 and m(2.0) == pytest.approx(0.5) and m(9.0) == pytest.approx(1.0)
+    with pytest.raises(fs.ParameterError, match="seconds_per_turn"):
+        rotation(0.0)
+
+
+def test_csv_schedule(tmp_path):
+    from flutterswim.steering.schedules import from_csv
+
+    f = tmp_path / "field.csv"
+    f.write_text("t,angle_deg,strength\n0,0,1\n10,90,0.5\n")
+    fld = from_csv(f)
+    assert fld.direction(5.0) == pytest.approx(math.radians(45)) and fld.strength(5.0) == pytest.approx(0.75)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t,angle\n0,0\n1,x\n")
+    with pytest.raises(fs.ParameterError, match="line 3"):
+        from_csv(bad)
+
+
+def test_circle_fit_and_cycle_average_are_exact():
+    a = np.linspace(0, 1.5, 50)
+    x, y = 3.0 + 2.0 * np.cos(a), -1.0 + 2.0 * np.sin(a)
+    xc, yc, r, rms = fit_circle(x, y)
+    assert (xc, yc, r) == pytest.approx((3.0, -1.0, 2.0), abs=1e-10) and rms < 1e-10
+    # a straight swim with a periodic wiggle: the cycle average is the straight line
+    t = np.linspace(0, 20, 4001)
+    T = 0.8
+    xs = 0.5 * t + 0.1 * np.sin(2 * np.pi * t / T) + 0.03 * np.cos(4 * np.pi * t / T)
+    ys = 0.2 * np.sin(2 * np.pi * t / T + 0.3)
+    avg = cycle_average(t, xs, ys, np.zeros_like(t), T)
+    assert np.max(np.abs(avg.y)) < 1e-4 and np.max(np.abs(avg.heading)) < 1e-3
+    assert np.allclose(avg.speed, 0.5, rtol=1e-3)
+
+
+@pytest.fixture(scope="module")
+def reduced():
+    return identify(P, n_segments=24)
+
+
+def test_circle_radius_is_U_over_Omega_below_half_the_step_out(reduced):
+    """Rotating fields at 0.2 and 0.45 Omega_max: the cycle-averaged path is a circle of radius
+    U / Omega (U from the periodic orbit) within 3 %."""
+    for frac in (0.2, 0.45):
+        om = frac * reduced.omega_max
+        ok, d = follows(rotating_run(P, om, turns=0.4, period=reduced.period), om, reduced.U, reduced.period, 12.0)
+        assert ok
+        assert d.turning_radius == pytest.approx(reduced.U / om, rel=0.03)
+        assert d.circle_fit_rms < 0.01 * d.turning_radius
+
+
+def test_step_out_is_detected_within_5_percent(reduced):
+    """Bisection brackets the step-out to 2 %; just below it the swimmer follows, 5 % above it
+    it does not (it loses the stroke and turns with the field in place)."""
+    lo, hi = reduced.omega_max_bracket
+    assert hi / lo - 1 < 0.025
+    om = 0.97 * reduced.omega_max
+    assert follows(rotating_run(P, om, period=reduced.period), om, reduced.U, reduced.period, 12.0)[0]
+    om = 1.05 * reduced.omega_max
+    assert not follows(rotating_run(P, om, period=reduced.period), om, reduced.U, reduced.period, 12.0)[0]
+    assert reduced.r_min == pytest.approx(reduced.U / reduced.omega_max)
+
+
+def test_closed_loop_circle_beats_open_loop(reduced):
+    make = lambda p, h: circle(2 * L, p, h)  # noqa: E731
+    closed = steer(P, make, reduced, closed_loop=True, seed=1).metrics
+    opened = steer(P, make, reduced, closed_loop=False, seed=1).metrics
+    assert closed["cross_track_rms_bl"] <= 0.1 and closed["corner_overshoot_bl"] <= 0.3 and not closed["trapped"]
+    assert closed["path_covered_fraction"] > 0.95
+    assert closed["cross_track_rms_bl"] < opened["cross_track_rms_bl"]
+
+
+@pytest.mark.slow
+def test_closed_loop_square(reduced):
+    """A square with 10-body-length sides: RMS <= 0.1 bl, corner overshoot <= 0.3 bl, never
+    trapped; every corner reached; better than the open-loop schedule under the same noise."""
+    make = lambda p, h: square(10 * L, p, h)  # noqa: E731
+    closed = steer(P, make, reduced, closed_loop=True, seed=2).metrics
+    assert closed["cross_track_rms_bl"] <= 0.1, closed
+    assert closed["corner_overshoot_bl"] <= 0.3 and not closed["trapped"]
+    assert all(np.isfinite(closed["waypoint_arrival_s"]))
+    opened = steer(P, make, reduced, closed_loop=False, seed=2).metrics
+    assert closed["cross_track_rms_bl"] < opened["cross_track_rms_bl"]
+
+
+def test_simulate_cli_field_options_and_describe_turning(tmp_path):
+    from flutterswim.cli import main
+
+    out = tmp_path / "rot.nc"
+    assert main(["simulate", "--t-end", "20", "--field-rotate", "60", "--field-start", "8", "--segments", "16",
+                 "--out", str(out), "--quiet"]) == 0
+    run = fs.load(out)
+    assert run.field_angle[-1] == pytest.approx(2 * math.pi * 12 / 60)
+    d = fs.describe(run, n_last=5)
+    orb = fs.periodic_orbit(P, n_segments=16)
+    assert d.turning_radius_mm == pytest.approx(orb.speed / (2 * math.pi / 60) * 1e3, rel=0.03)
+    assert d.field_turn_rate_deg_s == pytest.approx(6.0, rel=1e-6)
+    assert main(["simulate", "--field-rotate", "60", "--out", str(tmp_path / "x.nc")]) == 2
