@@ -132,7 +132,7 @@ def _folder(p: Path) -> Frames:
 def _movie(p: Path) -> Frames:
     import imageio_ffmpeg
 
-    gen = imageio_ffmpeg.read_frames(str(p), pix_fmt="gray")
+    gen = imageio_ffmpeg.read_frames(str(p), pix_fmt="gray", bpp=1)
     meta = gen.__next__()
     gen.close()
     W, H = meta["size"]
@@ -140,7 +140,7 @@ def _movie(p: Path) -> Frames:
     n, _ = imageio_ffmpeg.count_frames_and_secs(str(p))
 
     def it() -> Iterator[np.ndarray]:
-        g = imageio_ffmpeg.read_frames(str(p), pix_fmt="gray")
+        g = imageio_ffmpeg.read_frames(str(p), pix_fmt="gray", bpp=1)
         g.__next__()
         try:
             for buf in g:

@@ -1,0 +1,178 @@
+"""Batch tracking: a folder of trials -> one CSV row of descriptors per trial, in the input
+format of the fitting (``voltage_V, sample, period_s, advance_mm, lateral_mm``, then more
+columns), and the per-voltage mean +- SEM figure (the paper's Fig. 3e, drawn by
+:func:`flutterswim.fitting.data.plot_trials`).
+
+A trial is a TIFF stack or a movie in the folder, or a subfolder of frames. Its voltage and
+sample come from a sidecar JSON (``<trial>.json`` next to it, or ``trial.json`` inside a
+frame folder; keys ``voltage_V``, ``sample`` and optionally ``px_per_mm``, ``fps``, ``roi``,
+``field_angle_deg``, ``start_end``) or else from the file name by a regular expression with
+the named groups ``voltage`` and ``sample`` (default :data:`DEFAULT_PATTERN`, e.g.
+``85V_sample3_trial2.tif``; a ``p`` may stand for the decimal point, ``72p5V``).
+
+Columns (the last, tracked_by, signs the file as ours): advance_mm is the advance per cycle along the field (its magnitude); lateral_mm is
+the lateral peak-to-peak of the trailing end (the fitting's default), leading_lateral_mm that
+of the leading end. A trial that cannot be tracked is left out of the CSV and listed, with
+its reason, in ``<out stem>_failed.csv``.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import os
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from .._validate import ParameterError
+from .io import FRAME_SUFFIXES, MOVIE_SUFFIXES, STACK_SUFFIXES
+
+__all__ = ["DEFAULT_PATTERN", "CSV_COLUMNS", "Trial", "find_trials", "track_batch"]
+
+DEFAULT_PATTERN = r"(?P<voltage>\d+(?:[.p]\d+)?)\s*V.*?sample[-_ ]?(?P<sample>[A-Za-z0-9]+)"
+CSV_COLUMNS = ("voltage_V", "sample", "period_s", "advance_mm", "lateral_mm", "leading_lateral_mm",
+               "period_std_s", "advance_std_mm", "n_cycles", "body_length_mm", "body_length_spread",
+               "n_frames", "n_failed_frames", "trial", "tracked_by")
+
+
+@dataclass(frozen=True)
+class Trial:
+    path: Path
+    voltage_V: float
+    sample: str
+    options: dict
+
+
+def _is_trial(p: Path) -> bool:
+    if p.name.startswith("."):
+        return False
+    if p.is_dir():
+        return any(f.suffix.lower() in FRAME_SUFFIXES for f in p.iterdir() if f.is_file())
+    return p.suffix.lower() in STACK_SUFFIXES + MOVIE_SUFFIXES
+
+
+def _sidecar(p: Path) -> dict | None:
+    for cand in ([p / "trial.json"] if p.is_dir() else []) + [p.with_suffix(".json") if p.is_file() else p.parent / f"{p.name}.json"]:
+        if cand.is_file():
+            try:
+                return json.loads(cand.read_text())
+            except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+                raise ParameterError(f"sidecar={str(cand)!r} is not valid JSON ({exc})") from None
+    return None
+
+
+def find_trials(folder: str | os.PathLike, pattern: str = DEFAULT_PATTERN) -> list[Trial]:
+    """Trials of ``folder`` (sorted by name) with their voltage and sample."""
+    root = Path(os.fspath(folder))
+    if not root.is_dir():
+        raise ParameterError(f"folder={str(root)!r} is not a directory")
+    try:
+        rx = re.compile(pattern, re.IGNORECASE)
+    except re.error as exc:
+        raise ParameterError(f"pattern={pattern!r} is not a regular expression ({exc})") from None
+    if not {"voltage", "sample"} <= set(rx.groupindex):
+        raise ParameterError(f"pattern={pattern!r} must have the named groups (?P<voltage>...) and (?P<sample>...)")
+    out = []
+    for p in sorted(root.iterdir()):
+        if not _is_trial(p):
+            continue
+        meta = _sidecar(p)
+        if meta is not None:
+            v = meta.get("voltage_V", meta.get("voltage"))
+            smp = meta.get("sample")
+            if v is None or smp is None:
+                raise ParameterError(f"the sidecar of trial {str(p)!r} needs the keys voltage_V and sample")
+            opts = {k: meta[k] for k in ("px_per_mm", "fps", "roi", "field_angle_deg", "start_end") if k in meta}
+        else:
+            m = rx.search(p.stem if p.is_file() else p.name)
+            if m is None:
+                raise ParameterError(f"trial {str(p)!r} has no sidecar JSON and its name does not match "
+                                     f"pattern={pattern!r}; add {p.stem}.json with voltage_V and sample, or give a pattern")
+            v, smp, opts = m.group("voltage").replace("p", ".").replace("P", "."), m.group("sample"), {}
+        try:
+            v = float(v)
+        except (TypeError, ValueError):
+            raise ParameterError(f"trial {str(p)!r}: voltage {v!r} is not a number") from None
+        out.append(Trial(p, v, str(smp), opts))
+    if not out:
+        raise ParameterError(f"folder={str(root)!r} holds no trials (TIFF stacks, movies or folders of frames)")
+    return out
+
+
+def _fmt(v: Any) -> str:
+    if isinstance(v, float):
+        return "" if not math.isfinite(v) else f"{v:.8g}"
+    return str(v)
+
+
+def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm: float | None = None,
+                fps: float | None = None, pattern: str = DEFAULT_PATTERN, n_last: int = 5, plot: str | None = None,
+                progress: bool = False, **track_kwargs: Any) -> tuple[Path, list[dict], list[tuple[str, str]]]:
+    """Track every trial of ``folder`` and write the CSV ``out`` (and the Fig. 3e figure
+    ``plot``). A sidecar's px_per_mm / fps override the arguments. Returns (CSV path, rows,
+    failures [(trial, reason)])."""
+    from .. import __version__
+    from .._paths import atomic_write_text, check_output_file
+    from ..analysis.descriptors import describe
+    from .track import track
+
+    out_p = check_output_file(out, (".csv",), what="out")
+    if plot is not None:
+        check_output_file(plot, (".png", ".pdf", ".svg"), what="plot")
+    failed_p = out_p.with_name(out_p.stem + "_failed.csv")
+    trials = find_trials(folder, pattern)
+    rows: list[dict] = []
+    failed: list[tuple[str, str]] = []
+    it = trials
+    if progress:
+        from tqdm.auto import tqdm
+
+        it = tqdm(trials, unit="trial", desc="track-batch")
+    for tr_ in it:
+        o = dict(tr_.options)
+        ppm = o.pop("px_per_mm", px_per_mm)
+        f = o.pop("fps", fps)
+        if ppm is None:
+            raise ParameterError(f"px_per_mm is needed for trial {str(tr_.path)!r}: give --px-per-mm or put it in the sidecar")
+        kw = dict(track_kwargs)
+        if "field_angle_deg" in o:
+            kw["field_angle"] = math.radians(float(o.pop("field_angle_deg")))
+        kw.update(o)
+        try:
+            tk = track(tr_.path, px_per_mm=ppm, fps=f, **kw)
+            d = describe(tk, n_last=n_last)
+        except ParameterError as exc:
+            failed.append((str(tr_.path), " ".join(str(exc).split())))
+            continue
+        m = tk.meta
+        rows.append({
+            "voltage_V": tr_.voltage_V, "sample": tr_.sample, "period_s": d.period_s,
+            "advance_mm": abs(d.advance_per_cycle_mm), "lateral_mm": d.trailing_lateral_p2p_mm,
+            "leading_lateral_mm": d.leading_lateral_p2p_mm, "period_std_s": d.period_std_s,
+            "advance_std_mm": d.advance_per_cycle_std_mm, "n_cycles": d.n_cycles_used,
+            "body_length_mm": tk.length, "body_length_spread": m["length_spread"], "n_frames": m["n_frames"],
+            "n_failed_frames": m["n_failed"], "trial": str(tr_.path), "tracked_by": f"flutterswim {__version__}",
+        })
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(CSV_COLUMNS)
+    for r in rows:
+        w.writerow([_fmt(r[c]) for c in CSV_COLUMNS])
+    atomic_write_text(out_p, buf.getvalue())
+    if failed:
+        check_output_file(failed_p, (".csv",), what="failures file")
+        fb = io.StringIO()
+        fw = csv.writer(fb, lineterminator="\n")
+        fw.writerow(("trial", "reason", "tracked_by"))
+        fw.writerows([(a, b, f"flutterswim {__version__}") for a, b in failed])
+        atomic_write_text(failed_p, fb.getvalue())
+    if plot is not None and rows:
+        from ..fitting.data import plot_trials, read_trials, summarise
+
+        trials_data = read_trials(out_p)
+        plot_trials(summarise(trials_data), plot, trials=trials_data)
+    return out_p, rows, failed

@@ -1,0 +1,90 @@
+"""CLI: ``flutterswim track INPUT --px-per-mm X --fps 50 --out track.nc [--roi x0,y0,x1,y1]``
+and ``flutterswim track-batch FOLDER --px-per-mm X --fps 50 --out trials.csv [--plot fig3e.png]``."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+
+__all__ = ["register"]
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "track", help="track a filament in a movie (TIFF stack, folder of frames, MP4/AVI) and save NetCDF",
+        description="Segment the filament in every frame, fit a sub-pixel centreline with its tips, keep head "
+                    "and tail by continuity, flag failing frames with their reason, and save a CF NetCDF.")
+    p.add_argument("input", help="TIFF stack, folder of PNG/TIFF frames, or MP4/AVI movie")
+    p.add_argument("--px-per-mm", type=float, required=True, help="image scale [pixels per mm]")
+    p.add_argument("--fps", type=float, default=None, help="frame rate [1/s] (default: the movie's own)")
+    p.add_argument("--out", default="track.nc", help="NetCDF file (.nc)")
+    p.add_argument("--roi", default=None, help="region of interest x0,y0,x1,y1 [pixels]")
+    p.add_argument("--points", type=int, default=49, help="arc-length samples along the body (default 49)")
+    p.add_argument("--start-end", choices=("left", "right", "top", "bottom"), default="left",
+                   help="side of the s = 0 end in the first tracked frame (default left)")
+    p.add_argument("--field-angle-deg", type=float, default=0.0,
+                   help="field direction in the image [deg] from +x towards +y (rows down); default 0")
+    p.add_argument("--kymograph", default=None, help="also draw the raw-frame kymographs (Fig. 3c) to this PNG")
+    p.add_argument("--json", action="store_true", help="print the descriptors (as flutterswim describe --json)")
+    p.add_argument("--last", type=int, default=5, help="descriptors over the last N cycles (default 5)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_track)
+
+    q = subparsers.add_parser(
+        "track-batch", help="track a folder of trials -> CSV of descriptors per trial (+ Fig. 3e)",
+        description="Track every trial (TIFF stack, movie or folder of frames) of FOLDER; voltage and sample "
+                    "from a sidecar <trial>.json or the file name (--pattern). Writes the fitting's CSV.")
+    q.add_argument("folder")
+    q.add_argument("--px-per-mm", type=float, default=None, help="image scale (unless in the sidecars)")
+    q.add_argument("--fps", type=float, default=None, help="frame rate (unless in the sidecars or the movies)")
+    q.add_argument("--out", default="trials.csv", help="CSV file")
+    q.add_argument("--pattern", default=None, help="regular expression with groups (?P<voltage>) and (?P<sample>)")
+    q.add_argument("--plot", default=None, help="per-voltage mean +- SEM figure (Fig. 3e) to this PNG")
+    q.add_argument("--last", type=int, default=5, help="descriptors over the last N cycles (default 5)")
+    q.add_argument("--quiet", action="store_true", help="no progress bar")
+    q.set_defaults(func=_cmd_batch)
+
+
+def _cmd_track(args) -> int:
+    from .._paths import check_output_file
+    from .netcdf import save_track
+    from .track import failures, track
+
+    out = check_output_file(args.out, (".nc",), what="--out")
+    if args.kymograph:
+        check_output_file(args.kymograph, (".png", ".pdf", ".svg"), what="--kymograph")
+    tr = track(args.input, px_per_mm=args.px_per_mm, fps=args.fps, roi=args.roi, n_points=args.points,
+               start_end=args.start_end, field_angle=math.radians(args.field_angle_deg), progress=not args.quiet)
+    save_track(tr, out)
+    m = tr.meta
+    fails = failures(tr)
+    counts: dict[str, int] = {}
+    for _, _, why in fails:
+        counts[why.split(":")[0]] = counts.get(why.split(":")[0], 0) + 1
+    note = "; failed: " + ", ".join(f"{k} {v}" for k, v in counts.items()) if counts else ""
+    print(f"tracked {m['n_frames'] - m['n_failed']} of {m['n_frames']} frames in {m['wall_time_s']:.2f} s; body length "
+          f"{tr.length:.4g} mm, spread {100 * m['length_spread']:.2g}% (sd {m['length_std_px'] / m['px_per_mm']:.2g} mm)"
+          f"{note}; wrote {out}", file=sys.stderr if args.json else sys.stdout)
+    if args.kymograph:
+        from .kymograph import plot_raw_kymographs, raw_kymographs
+
+        plot_raw_kymographs(raw_kymographs(args.input, tr), args.kymograph, tr=tr)
+        print(f"wrote {args.kymograph}", file=sys.stderr if args.json else sys.stdout)
+    if args.json:
+        from ..analysis.descriptors import describe
+
+        print(json.dumps(describe(tr, n_last=args.last).to_dict(), indent=2))
+    return 0
+
+
+def _cmd_batch(args) -> int:
+    from .batch import DEFAULT_PATTERN, track_batch
+
+    out, rows, failed = track_batch(args.folder, args.out, px_per_mm=args.px_per_mm, fps=args.fps,
+                                    pattern=args.pattern or DEFAULT_PATTERN, n_last=args.last, plot=args.plot,
+                                    progress=not args.quiet)
+    for trial, why in failed:
+        print(f"flutterswim track-batch: {trial}: {why}", file=sys.stderr)
+    print(f"tracked {len(rows)} of {len(rows) + len(failed)} trials; wrote {out}" + (f" and {args.plot}" if args.plot and rows else ""))
+    return 0 if rows else 1
