@@ -121,3 +121,35 @@ def test_simulate_cli_field_options_and_describe_turning(tmp_path):
     assert d.turning_radius_mm == pytest.approx(orb.speed / (2 * math.pi / 60) * 1e3, rel=0.03)
     assert d.field_turn_rate_deg_s == pytest.approx(6.0, rel=1e-6)
     assert main(["simulate", "--field-rotate", "60", "--out", str(tmp_path / "x.nc")]) == 2
+
+
+def test_lengths_in_body_lengths_or_with_units():
+    from flutterswim.steering.cli import length
+
+    assert length("--side", "10", L) == pytest.approx(10 * L)
+    assert length("--side", "2bl", L) == pytest.approx(2 * L)
+    assert length("--side", "37mm", L) == pytest.approx(0.037)
+    assert length("--radius", "0.5 cm", L) == pytest.approx(0.005)
+    for bad in ("x", "-2", "3 furlongs", "nan"):
+        with pytest.raises(fs.ParameterError, match="--side"):
+            length("--side", bad, L)
+
+
+def test_the_trap_is_the_bent_equilibrium_family():
+    """From a large tilt the filament stops in a bent equilibrium: a moment-free shape on the
+    family kappa = -chi sin(theta), reached to a discretisation error that halves with h; a
+    small tilt swims."""
+    from flutterswim.initial import InitialState
+    from flutterswim.settle import settle
+    from flutterswim.steering.trap import tilt_basin
+
+    chi, res = P.groups.chi, []
+    for n in (24, 48):
+        st = settle(P, initial=InitialState.straight(8.0), n_segments=n, frames_per_tau=25, n_cycles=3,
+                    refine=False, t_max=60 * P.tau)
+        assert st.outcome == "bent_equilibrium"
+        th, k = st.run.theta[-1], st.run.kappa[-1] * P.l
+        assert np.ptp(th) > 1.0  # bent, not straight
+        res.append(np.max(np.abs(k[1:-1] + chi * np.sin(0.5 * (th[1:] + th[:-1])))) / chi)
+    assert res[1] < 0.6 * res[0], res
+    assert tilt_basin(P, [0.5]).all()

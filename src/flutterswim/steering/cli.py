@@ -12,9 +12,9 @@ def register(subparsers) -> None:
                                           "delay (or by a pre-planned schedule with --open-loop).")
     p.add_argument("--preset", default="paper")
     p.add_argument("--path", choices=("square", "circle", "figure8", "waypoints"), default="square")
-    p.add_argument("--side", type=float, default=10.0, help="square side [body lengths] (default 10)")
-    p.add_argument("--radius", type=float, default=2.0, help="circle radius [body lengths] (default 2)")
-    p.add_argument("--size", type=float, default=10.0, help="figure-eight length [body lengths]")
+    p.add_argument("--side", default="10", help="square side: body lengths, or with a unit (37mm, 3.7cm, 2bl); default 10")
+    p.add_argument("--radius", default="2", help="circle radius: body lengths or with a unit (default 2)")
+    p.add_argument("--size", default="10", help="figure-eight length: body lengths or with a unit (default 10)")
     p.add_argument("--waypoints", default=None, help="CSV of x, y [body lengths] for --path waypoints")
     p.add_argument("--open-loop", action="store_true", help="pre-planned field schedule instead of feedback")
     p.add_argument("--noise-px", type=float, default=0.2)
@@ -24,15 +24,39 @@ def register(subparsers) -> None:
     p.add_argument("--out", default="steer.nc")
     p.add_argument("--metrics", default="steer.json")
     p.add_argument("--plot", default=None, help="figure of the path, the trajectory and the commanded field")
+    p.add_argument("--animate", default=None, help="animation (.mp4 or .gif) with the rotating field arrow")
     p.add_argument("--quiet", action="store_true")
     p.set_defaults(func=_cmd_steer)
+
+
+_UNITS = {"bl": None, "m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "µm": 1e-6}
+
+
+def length(name: str, text, body_length: float) -> float:
+    """A length in metres from ``text``: a number of body lengths, or a number with a unit
+    (bl, m, cm, mm, um)."""
+    import math
+    import re
+
+    from .._validate import ParameterError
+
+    m = re.fullmatch(r"\s*([-+0-9.eE]+)\s*([a-zµ]*)\s*", str(text))
+    unit = (m.group(2) or "bl") if m else None
+    try:
+        value = float(m.group(1)) if m else math.nan
+    except ValueError:
+        value = math.nan
+    if unit not in _UNITS or not (math.isfinite(value) and value > 0):
+        raise ParameterError(f"{name}={text!r} must be a length > 0: a number of body lengths, or with a unit "
+                             f"({', '.join(_UNITS)})")
+    return value * (body_length if _UNITS[unit] is None else _UNITS[unit])
 
 
 def _cmd_steer(args) -> int:
     import json
 
     from .._paths import atomic_write_text, check_output_file
-    from .._validate import ParameterError, positive
+    from .._validate import ParameterError
     from ..params import preset
     from . import path as paths
     from .reduced import identify
@@ -42,16 +66,18 @@ def _cmd_steer(args) -> int:
     met = check_output_file(args.metrics, (".json",), what="--metrics")
     if args.plot:
         check_output_file(args.plot, (".png", ".pdf", ".svg"), what="--plot")
+    if args.animate:
+        check_output_file(args.animate, (".mp4", ".gif"), what="--animate")
     params = preset(args.preset)
     L = params.l
     if args.path == "square":
-        side = positive("--side", args.side) * L
+        side = length("--side", args.side, L)
         factory = lambda p, h: paths.square(side, p, h)  # noqa: E731
     elif args.path == "circle":
-        r = positive("--radius", args.radius) * L
+        r = length("--radius", args.radius, L)
         factory = lambda p, h: paths.circle(r, p, h)  # noqa: E731
     elif args.path == "figure8":
-        size = positive("--size", args.size) * L
+        size = length("--size", args.size, L)
         factory = lambda p, h: paths.figure8(size, p, h)  # noqa: E731
     else:
         if not args.waypoints:
@@ -64,7 +90,7 @@ def _cmd_steer(args) -> int:
     m = dict(res.metrics)
     m["reduced_model"] = {"U_mm_s": reduced.U * 1e3, "period_s": reduced.period, "k_per_s": reduced.k,
                           "omega_max_rad_s": reduced.omega_max, "r_min_mm": reduced.r_min * 1e3}
-    atomic_write_text(met, json.dumps(m, indent=2))
+    atomic_write_text(met, json.dumps(_nulls(m), indent=2, allow_nan=False))
     print(f"{out}: {res.path.name}, {'closed' if res.closed_loop else 'open'} loop: cross-track RMS "
           f"{m['cross_track_rms_bl']:.3f} body lengths (max {m['cross_track_max_bl']:.3f}), corner overshoot "
           f"{m['corner_overshoot_bl']:.3f}, trapped: {m['trapped']}; metrics in {met}")
@@ -73,4 +99,20 @@ def _cmd_steer(args) -> int:
 
         plot_steer(res, args.plot)
         print(f"figure: {args.plot}")
+    if args.animate:
+        from ..plotting.animation import animate
+
+        animate(res.run, args.animate, speed=8.0, max_frames=600, progress=not args.quiet)
+        print(f"animation: {args.animate}")
     return 1 if m["trapped"] else 0
+
+
+def _nulls(v):
+    """NaN -> null (strict JSON): a corner never reacquired, a waypoint never reached."""
+    import math
+
+    if isinstance(v, dict):
+        return {k: _nulls(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_nulls(x) for x in v]
+    return None if isinstance(v, float) and not math.isfinite(v) else v

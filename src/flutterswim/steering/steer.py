@@ -140,7 +140,8 @@ def _open_loop_plan(path: RefPath, reduced: ReducedModel, t0: float):
 def metrics(run, path: RefPath, reduced: ReducedModel, t0: float, body_length: float) -> dict:
     """Cross-track error of the true cycle-averaged centroid after control starts (RMS, max;
     mm and body lengths), corner overshoot (largest outward excursion near a corner), time to
-    reacquire (|error| < 0.1 body length) after each corner, waypoint arrivals, trapped."""
+    reacquire (|error| < 0.1 body length until 1.5 body lengths before the next corner) after each
+    corner (NaN: not reacquired), waypoint arrivals, trapped."""
     from .turning import _moving_average
 
     cx, cy = _centroid(run)
@@ -164,8 +165,9 @@ def metrics(run, path: RefPath, reduced: ReducedModel, t0: float, body_length: f
         if not w.any():
             continue
         over.append(float(max(0.0, -e[w].min())))  # left turns: outward is to the right
-        # time from passing the vertex until the error stays below 0.1 body length (to the next vertex)
-        after = np.nonzero((path.s[idx] > path.s[c]) & (path.s[idx] < s_next))[0]
+        # time from passing the vertex until the error stays below 0.1 body length, up to where
+        # the next corner's zone begins (there the swimmer cuts that corner, on purpose)
+        after = np.nonzero((path.s[idx] > path.s[c]) & (path.s[idx] < s_next - 1.5 * bl))[0]
         if after.size:
             bad = np.nonzero(np.abs(e[after]) >= 0.1 * bl)[0]
             if bad.size == 0:

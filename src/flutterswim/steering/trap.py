@@ -16,11 +16,18 @@ __all__ = ["TrapMap", "tilt_basin", "turn_basin", "plot_trap"]
 
 @dataclass(frozen=True)
 class TrapMap:
+    """Swims (True) or trapped against the initial tilt, and against the size and rate of a
+    field turn started at ``turn_time_s`` (during the onset) and at ``late_turn_time_s`` (once
+    the stroke is established; optional)."""
+
     tilts_deg: np.ndarray
     tilt_swims: np.ndarray  # (n_tilt,) bool
     turn_angles_deg: np.ndarray
     turn_rates_deg_s: np.ndarray
     turn_swims: np.ndarray  # (n_angle, n_rate) bool
+    late_turn_swims: np.ndarray | None = None
+    turn_time_s: float = math.nan
+    late_turn_time_s: float = math.nan
 
 
 def tilt_basin(params: Parameters, tilts_deg, *, n_segments: int = 24) -> np.ndarray:
@@ -44,8 +51,9 @@ def _oscillates(run) -> bool:
 
 
 def turn_basin(params: Parameters, angles_deg, rates_deg_s, *, onset: float = 10.0, n_segments: int = 24) -> np.ndarray:
-    """Swims or not after turning the field by each angle at each rate, from the established
-    stroke (field along e1 until ``onset`` s)."""
+    """Swims or not after turning the field by each angle at each rate, starting at ``onset``
+    s from the paper's 0.01 degree tilt (field along e1 until then): during the onset when
+    ``onset`` is a few tau, from the established stroke when it is ~30 tau."""
     from ..simulate import simulate
     from .schedules import ramp
 
@@ -68,19 +76,24 @@ def plot_trap(tm: TrapMap, path=None):
         matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(9, 3.6), constrained_layout=True)
+    late = tm.late_turn_swims is not None
+    fig, axes = plt.subplots(1, 3 if late else 2, figsize=(13 if late else 9, 3.6), constrained_layout=True)
+    a1 = axes[0]
     a1.plot(tm.tilts_deg, tm.tilt_swims.astype(int), "o-", color="k")
-    a1.set_xlabel("initial tilt [deg]")
+    a1.set_xlabel("initial tilt of the straight state [deg]")
     a1.set_yticks([0, 1], ["trapped /\nno stroke", "swims"])
     a1.set_title("basin against the initial tilt", fontsize=9)
-    a2.pcolormesh(tm.turn_rates_deg_s, tm.turn_angles_deg, tm.turn_swims.astype(float), cmap="RdYlGn", vmin=0, vmax=1,
-                  shading="nearest")
-    if tm.turn_swims.any() and (~tm.turn_swims).any():
-        a2.contour(tm.turn_rates_deg_s, tm.turn_angles_deg, tm.turn_swims.astype(float), levels=[0.5], colors="k")
-    a2.set_xscale("log")
-    a2.set_xlabel("field turn rate [deg/s]")
-    a2.set_ylabel("field turn [deg]")
-    a2.set_title("after a field turn (green: swims, red: trapped; line: boundary)", fontsize=9)
+    panels = [(axes[1], tm.turn_swims, tm.turn_time_s)] + ([(axes[2], tm.late_turn_swims, tm.late_turn_time_s)] if late else [])
+    for a2, z, t_turn in panels:
+        a2.pcolormesh(tm.turn_rates_deg_s, tm.turn_angles_deg, z.astype(float), cmap="RdYlGn", vmin=0, vmax=1,
+                      shading="nearest")
+        if z.any() and (~z).any():
+            a2.contour(tm.turn_rates_deg_s, tm.turn_angles_deg, z.astype(float), levels=[0.5], colors="k")
+        a2.set_xscale("log")
+        a2.set_yscale("log")
+        a2.set_xlabel("field turn rate [deg/s]")
+        a2.set_ylabel("field turn [deg]")
+        a2.set_title(f"field turned from t = {t_turn:.3g} s (green: swims, red: trapped; line: boundary)", fontsize=8)
     if path is not None:
         from pathlib import Path
 
