@@ -194,9 +194,10 @@ def detect_cycles(
     K = max(starts.size - 1, 0)
     periods = np.diff(starts)
     amps = np.empty(K)
+    lo = np.searchsorted(t, starts[:-1], side="left")  # frames of cycle k: starts[k] <= t <= starts[k+1]
+    hi = np.searchsorted(t, starts[1:], side="right")
     for k in range(K):
-        m = (t >= starts[k]) & (t <= starts[k + 1])
-        seg = d[m] if np.any(m) else np.zeros(1)
+        seg = d[lo[k] : hi[k]] if hi[k] > lo[k] else np.zeros(1)
         amps[k] = 0.5 * (seg.max() - seg.min())
     # shapes: tangent angle minus mean along s, sampled at n_shape phases
     _, th = tr.tangent_angle()

@@ -68,26 +68,45 @@ def estimate_period(t: np.ndarray, u: np.ndarray) -> float:
 
 
 def _local_root(t: np.ndarray, d: np.ndarray, m: int, half_window: float, deg: int) -> float:
-    """Root of d near the bracket (t[m], t[m+1]) from a local least-squares polynomial."""
+    """Root of d near the bracket (t[m], t[m+1]) from a local least-squares polynomial of
+    degree ``deg`` (normal equations on the scaled abscissa, Newton from the linear root;
+    the root must stay inside the fitted span with the polynomial rising, else the linear
+    root is returned)."""
     t0, t1, d0, d1 = t[m], t[m + 1], d[m], d[m + 1]
     tlin = t0 - d0 * (t1 - t0) / (d1 - d0) if d1 != d0 else 0.5 * (t0 + t1)
-    lo = np.searchsorted(t, tlin - half_window, side="left")
-    hi = np.searchsorted(t, tlin + half_window, side="right")
+    lo = int(np.searchsorted(t, tlin - half_window, side="left"))
+    hi = int(np.searchsorted(t, tlin + half_window, side="right"))
     lo, hi = min(lo, m), max(hi, m + 2)
     if hi - lo < deg + 2:
         return float(tlin)
     tt = t[lo:hi] - tlin
-    sc = max(np.max(np.abs(tt)), 1e-300)
-    coef = np.polyfit(tt / sc, d[lo:hi], deg)
-    roots = np.roots(coef)
-    roots = roots[np.abs(roots.imag) < 1e-9].real * sc
-    # keep roots inside the fitted span where the polynomial rises
-    dcoef = np.polyder(coef)
-    good = [r for r in roots if abs(r) <= half_window and np.polyval(dcoef, r / sc) > 0]
-    if not good:
+    sc = max(float(np.max(np.abs(tt))), 1e-300)
+    v = np.vander(tt / sc, deg + 1, increasing=True)
+    try:
+        coef = np.linalg.solve(v.T @ v, v.T @ d[lo:hi])
+    except np.linalg.LinAlgError:
         return float(tlin)
-    r = min(good, key=abs)
-    return float(tlin + r)
+    dcoef = coef[1:] * np.arange(1, deg + 1)
+    x = 0.0
+    for _ in range(30):
+        p = coef[-1]
+        for c in coef[-2::-1]:
+            p = p * x + c
+        dp = dcoef[-1]
+        for c in dcoef[-2::-1]:
+            dp = dp * x + c
+        if dp <= 0.0:
+            return float(tlin)
+        step = p / dp
+        x -= step
+        if abs(x) * sc > half_window:
+            return float(tlin)
+        if abs(step) < 1e-14:
+            break
+    dp = dcoef[-1]
+    for c in dcoef[-2::-1]:
+        dp = dp * x + c
+    return float(tlin + x * sc) if dp > 0.0 else float(tlin)
 
 
 def upward_crossings(
@@ -119,7 +138,11 @@ def upward_crossings(
         if cand.size == 0:
             continue
         m = ilow + int(cand[-1])
-        out.append(_local_root(t, d, m, half_window, deg))
+        if half_window > 0.0:
+            out.append(_local_root(t, d, m, half_window, deg))
+        else:  # linear interpolation (what _local_root falls back to without a window)
+            t0, t1, d0, d1 = t[m], t[m + 1], d[m], d[m + 1]
+            out.append(float(t0 - d0 * (t1 - t0) / (d1 - d0)) if d1 != d0 else float(0.5 * (t0 + t1)))
     return np.asarray(out, float)
 
 
@@ -155,11 +178,14 @@ def section_crossings(
         raise ParameterError(f"period={period!r} must be a finite number > 0")
     cross = np.empty(0)
     d = u - u.mean()
-    for it in range(max(1, iterations + 1)):
+    # the period is refined on linearly interpolated crossings; the final crossings are
+    # located by the local polynomial (one pass of it: linear in the record's length)
+    final = False
+    for it in range(max(1, iterations + 1) + 1):
         d = u - running_mean(t, u, W)
         amp = np.sqrt(2.0 * np.maximum(running_mean(t, d * d, W), 0.0))
         h = np.maximum(hysteresis * amp, noise_factor * _noise_sigma(t, u, W))
-        cross = upward_crossings(t, d, h, half_window=W / 12.0)
+        cross = upward_crossings(t, d, h, half_window=W / 12.0 if final else 0.0)
         # drop crossings closer than half a period to the previous one (harmonics)
         if cross.size > 1:
             keep = [0]
@@ -167,12 +193,16 @@ def section_crossings(
                 if cross[i] - cross[keep[-1]] >= 0.5 * W:
                     keep.append(i)
             cross = cross[keep]
-        if cross.size < 3 or it == iterations or period is not None and it == 0 and iterations == 0:
+        if final:
             break
+        if cross.size < 3 or it >= iterations or period is not None and it == 0 and iterations == 0:
+            final = True
+            continue
         # refine with the period of the well-developed (later) cycles
         dif = np.diff(cross)
         W_new = float(np.median(dif[len(dif) // 2 :]))
         if abs(W_new - W) < 1e-12 * W:
-            break
+            final = True
+            continue
         W = W_new
     return cross, d, W
