@@ -156,36 +156,48 @@ def resample(x: np.ndarray, y: np.ndarray, q_a: float, q_b: float, n_points: int
 
 
 def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float = 1.2,
-                inner: float = 14.0, outer: float = 6.0, trim: float = 6.0,
-                hook_deg: float = 25.0) -> tuple[np.ndarray, np.ndarray, float, float]:
+                inner: float = 14.0, outer: float = 6.0, trim: float = 4.0,
+                span: float = 16.0, hook: float = 6.0, hook_deg: float = 25.0) -> tuple[np.ndarray, np.ndarray, float, float]:
     """Move both ends of the centreline (x, y) (P,) [px] to the line ends fitted on the raw
     frame ``img`` (H, W) (end position along the curve and a small rotation of the last
-    ``inner`` px). A hooked end (turning by more than ``hook_deg`` over its last ``trim``
-    px) is first replaced by the tangent line of the rest: a free end carries no bending moment, so the true body is straight there,
-    while a skeleton often hooks at a noisy tip. Returns (x, y) resampled at P equal steps
+    ``inner`` px). The last ``trim`` px at each end (twice that for an end hooked by more
+    than ``hook_deg`` over its last ``hook`` px) are first rebuilt by the quadratic fitted
+    over the next ``span`` px: a skeleton spline is least certain, and often hooked, at a
+    noisy tip. Returns (x, y) resampled at P equal steps
     between the refined ends, and the two end corrections along the curve [px] (NaN where a
     fit failed; that end is then kept)."""
     n = x.size
     x = np.asarray(x, float)
     y = np.asarray(y, float)
     L0 = float(np.sum(np.hypot(np.diff(x), np.diff(y))))
-    if L0 < 2 * (inner + trim) + 4:
+    if L0 < 2 * (inner + 2 * trim + span) + 4:
         return x, y, math.nan, math.nan
     s0, spl0 = _curve(x, y)
-    P = spl0(np.array([0.0, trim, 2 * trim, L0 - 2 * trim, L0 - trim, L0]))
+    P = spl0(np.array([0.0, hook, 2 * hook, L0 - 2 * hook, L0 - hook, L0]))
 
     def turn(a, b, c) -> float:
         u, v = b - a, c - b
         return abs(math.atan2(u[0] * v[1] - u[1] * v[0], u @ v))
 
-    ta = trim if turn(P[0], P[1], P[2]) > math.radians(hook_deg) else 0.0
-    tb = trim if turn(P[3], P[4], P[5]) > math.radians(hook_deg) else 0.0
-    x2, y2 = resample(x, y, ta, L0 - tb, max(n, int(L0 / 4)))
+    # the last few px of a skeleton spline are its least certain part: rebuild each end by
+    # a quadratic in arc length fitted over [trim, trim + span] from the end, extrapolated
+    ta = 2 * trim if turn(P[0], P[1], P[2]) > math.radians(hook_deg) else trim
+    tb = 2 * trim if turn(P[3], P[4], P[5]) > math.radians(hook_deg) else trim
+    q = np.arange(0.0, L0 + 1e-9, 1.0)
+    D = spl0(q)
+    for t_, end in ((ta, 0), (tb, 1)):
+        u = q if end == 0 else L0 - q
+        fit = (u >= t_) & (u <= t_ + span)
+        cx = np.polyfit(u[fit], D[fit, 0], 2)
+        cy = np.polyfit(u[fit], D[fit, 1], 2)
+        rep = u < t_
+        D[rep, 0], D[rep, 1] = np.polyval(cx, u[rep]), np.polyval(cy, u[rep])
+    x2, y2 = D[:, 0], D[:, 1]
     s, spl = _curve(x2, y2)
     L = float(s[-1])
-    qa, _, ca = _fit_end(img, spl, L, -ta, -1, sigma, inner, outer)
-    qb, _, cb = _fit_end(img, spl, L, L + tb, +1, sigma, inner, outer)
-    xa = qa if np.isfinite(qa) else -ta
-    xb = qb if np.isfinite(qb) else L + tb
-    xo, yo = resample(x2, y2, xa, xb, n, (ca, cb), (-ta + inner, L + tb - inner))
-    return xo, yo, float(-ta - qa), float(qb - L - tb)
+    qa, _, ca = _fit_end(img, spl, L, 0.0, -1, sigma, inner, outer)
+    qb, _, cb = _fit_end(img, spl, L, L, +1, sigma, inner, outer)
+    xa = qa if np.isfinite(qa) else 0.0
+    xb = qb if np.isfinite(qb) else L
+    xo, yo = resample(x2, y2, xa, xb, n, (ca, cb), (inner, L - inner))
+    return xo, yo, float(-qa), float(qb - L)
