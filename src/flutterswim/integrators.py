@@ -1,12 +1,16 @@
 """Time integrators for the stiff filament ODE y' = f(t, y).
 
+``ndf`` (default): the compiled variable-order NDF (:mod:`flutterswim.ndf`, scipy's BDF
+algorithm, orders 1-5) with the W-Jacobian kept until Newton fails and the structured LU
+until the step or order changes; ``order`` 5, its highest (each order fitted).
+
 Compiled Rosenbrock-W methods (:mod:`flutterswim.rosw`: the whole step loop in one numba
 kernel, the filament's right-hand side and structured linear algebra inlined, Jacobian and
 LU reused across steps), used by :func:`integrate_filament`:
 
 ``ros34pw3``: ROS34PW3 of Rang & Angermann (BIT 45, 2005), 4 stages, order 4 with
 the exact Jacobian, order 3 as a W-method, embedded order 3; A-stable.
-``ros34pw2`` (default): ROS34PW2 (same paper), order 3 as a W-method, embedded order 2, L-stable and
+``ros34pw2`` (the default before ``ndf``): ROS34PW2 (same paper), order 3 as a W-method, embedded order 2, L-stable and
 stiffly accurate.
 
 ``ros34pw2-wave1``: ROS34PW2 stepped in Python with a fresh Jacobian and a full (2N+3)-square
