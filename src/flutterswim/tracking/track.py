@@ -126,7 +126,8 @@ def orient(x: np.ndarray, y: np.ndarray, ref_x: np.ndarray, ref_y: np.ndarray) -
 def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any = None,
           n_points: int = 49, start_end: str = "left", field_angle: float = 0.0, sigma: float = 1.2,
           min_contrast: float = 4.0, length_tol: float = 0.03, jump_tol: float = 0.25,
-          gap_fraction: float = 0.2, refine: bool = True, window_px: float = 40.0, t0: float = 0.0,
+          gap_fraction: float = 0.2, refine: bool = True, window_px: float = 40.0,
+          fixed_length: bool = True, t0: float = 0.0,
           progress: bool = False) -> Track:
     """Track the filament in a movie and return its :class:`Track` (good frames only, mm, s).
 
@@ -136,7 +137,8 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     start_end: where the s = 0 end lies in the first good frame ("left", "right", "top",
     "bottom"), later frames follow by continuity; field_angle: field direction [rad] in image
     axes (0: +x); window_px: margin of the search window around the last good body (0: whole
-    frames). Per-frame results (all frames, failed ones NaN, with their reasons) are in
+    frames); fixed_length: place each frame's ends so the body has the median length
+    (inextensible; the measured lengths stay in the record). Per-frame results (all frames, failed ones NaN, with their reasons) are in
     ``track.meta["frames"]``; see the module docstring for the checks.
     """
     px_per_mm = positive("px_per_mm", px_per_mm)
@@ -224,6 +226,16 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         ok &= ~bad
     X[~ok] = np.nan
     Y[~ok] = np.nan
+    if fixed_length and np.count_nonzero(ok) >= 3:
+        # the body is inextensible: slide each frame's ends along the curve so its length is
+        # the median; the two ends' errors along the body are independent, so their mean
+        # error is sqrt(2) smaller (the measured lengths stay in length_px)
+        from .tips import resample
+
+        med = float(np.median(length[ok]))
+        for i in np.nonzero(ok)[0]:
+            h = 0.5 * (length[i] - med)
+            X[i], Y[i] = resample(X[i], Y[i], h, length[i] - h, n_points)
     n_ok = int(np.count_nonzero(ok))
     if n_ok < 2:
         counts: dict[str, int] = {}
