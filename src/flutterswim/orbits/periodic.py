@@ -170,7 +170,10 @@ def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: in
     fl = warm
     for it in range(1, max_newton + 1):
         try:
-            fl = flow(system, u, T, steps, variational=True, warm=fl, derivative_tol=1e-6)
+            # stages solved to a fraction of the last residual (exactly once it is small), the
+            # derivative from the reused step matrices unless the stages moved by > 1e-2
+            stage_tol = min(1e-6, max(1e-13, 1e-4 * res)) if math.isfinite(res) else 1e-6
+            fl = flow(system, u, T, steps, variational=True, warm=fl, derivative_tol=1e-3, stage_tol=stage_tol)
         except StepFailure as exc:  # the iterate left the region where the steps converge
             raise OrbitNotFound(f"Newton iteration {it}: {exc}") from None
         r = fl.y[-1, 2:] - u

@@ -19,7 +19,7 @@ quadrature, r_{n+1} = r_n + h sum_j b_j U0(Y_j).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as sla
@@ -43,13 +43,16 @@ ORDER = 5
 class Flow:
     """States at the M+1 step times (M+1, 2N+3) (position and shape), the full rhs there,
     the converged stage increments (M, 3, 2N+1) (a warm start for the next call), and the
-    monodromy of the shape part (2N+1, 2N+1) or None."""
+    monodromy of the shape part (2N+1, 2N+1) or None. ``matrices``: per step, the stage
+    Jacobians, the LU of the step matrix and the stage points where they were formed (reused
+    by the next call that starts from this flow, as a simplified Newton iteration)."""
 
     t: np.ndarray
     y: np.ndarray
     f: np.ndarray
     stages: np.ndarray
     monodromy: np.ndarray | None
+    matrices: tuple = field(default=(), repr=False, compare=False)
 
 
 class StepFailure(FloatingPointError):
@@ -61,11 +64,14 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
          stage_tol: float = 1e-13, max_iter: int = 12, derivative_tol: float = 1e-10) -> Flow:
     """Integrate the shape from u0 over ``period`` in ``steps`` equal Radau IIA steps.
 
-    Stage equations by Newton's method with the step matrix P formed once per step, at the
-    warm start (or the explicit predictor), and refreshed if the iteration stalls. With
-    ``variational``, the step's derivative needs P at the converged stages: P is formed
-    again there unless the stages moved by less than ``derivative_tol`` from where it was
-    formed (then the derivative is exact to that size)."""
+    Stage equations by a simplified Newton iteration: the step matrix P of the warm flow
+    (formed at its stages) when there is one, else P formed at the explicit predictor; a
+    fresh P at the current iterate when the iteration stalls. With ``variational``, the
+    step's derivative uses P and the stage Jacobians at the converged stages: they are
+    formed again there unless the stage points differ by less than ``derivative_tol``
+    (relative) from where they were formed, so the derivative is exact to that size (Newton
+    shooting needs it only to the size of its correction; the Floquet multipliers of the
+    converged orbit need it exact: the default)."""
     a = RADAU_A
     h = period / steps
     u = np.array(u0, float)
@@ -74,26 +80,29 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
     ys = np.empty((steps + 1, m + 2))
     fs = np.empty((steps + 1, m + 2))
     zs = np.empty((steps, 3, m))
+    mats = []
     ys[0, :2], ys[0, 2:] = r, u
     fs[0] = system.rhs_full(ys[0])
     smat = np.eye(m) if variational else None
     eye3 = np.eye(3 * m)
+    have_warm = warm is not None and warm.stages.shape == zs.shape
+    warm_mats = have_warm and len(warm.matrices) == steps
 
     def step_matrix(z):
-        jac = np.array([system.jac_full(system.full(u + z[i]))[2:, 2:] for i in range(3)])
+        yst = u + z
+        jac = np.array([system.jac_full(system.full(yst[i]))[2:, 2:] for i in range(3)])
         # block (i, j) of P is delta_ij I - h A_ij J_j
         blocks = (h * a)[:, :, None, None] * jac[None, :, :, :]
         p = eye3 - blocks.transpose(0, 2, 1, 3).reshape(3 * m, 3 * m)
-        return jac, sla.lu_factor(p, overwrite_a=True, check_finite=False)
+        return jac, sla.lu_factor(p, overwrite_a=True, check_finite=False), yst
 
     for step in range(steps):
-        if warm is not None and warm.stages.shape == zs.shape:
+        if have_warm:
             z = warm.stages[step].copy()
         else:
             z = np.outer(RADAU_C * h, fs[step, 2:])  # explicit predictor
         scale = 1.0 + np.max(np.abs(u))
-        z_lu = z.copy()
-        jac, lu = step_matrix(z)
+        jac, lu, y_lu = warm.matrices[step] if warm_mats else step_matrix(z)
         last = np.inf
         for it in range(max_iter + 1):
             fz = np.array([system.rhs_full(system.full(u + z[i])) for i in range(3)])
@@ -106,22 +115,22 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
             if size < stage_tol * scale:
                 break
             if size > 0.1 * last and it >= 1:  # slow: a fresh matrix at the current iterate
-                z_lu = z.copy()
-                jac, lu = step_matrix(z)
+                jac, lu, y_lu = step_matrix(z)
             last = size
         else:
             raise StepFailure(f"stage equations did not converge at step {step} of {steps} (h={h:.3g})")
         if variational:
-            if np.max(np.abs(z - z_lu)) > derivative_tol * scale:
-                jac, lu = step_matrix(z)
+            if np.max(np.abs(u + z - y_lu)) > derivative_tol * scale:
+                jac, lu, y_lu = step_matrix(z)
             # P dZ/du = h [sum_j A_ij J_j]_i at the converged stages
             rhs = (h * np.tensordot(a, jac, axes=1)).reshape(3 * m, m)
             dzdu = sla.lu_solve(lu, rhs, check_finite=False)[2 * m:]
             smat = smat + dzdu @ smat
+        mats.append((jac, lu, y_lu))
         # (fz is from the last iterate, within stage_tol of z: no new evaluation)
         r = r + h * (RADAU_B @ fz[:, :2])
         u = u + z[2]
         zs[step] = z
         ys[step + 1, :2], ys[step + 1, 2:] = r, u
         fs[step + 1] = fz[2]
-    return Flow(np.linspace(0.0, period, steps + 1), ys, fs, zs, smat)
+    return Flow(np.linspace(0.0, period, steps + 1), ys, fs, zs, smat, tuple(mats))
