@@ -58,3 +58,15 @@ def test_local_root_of_a_cubic():
     m = int(np.searchsorted(t, r)) - 1
     assert _local_root(t, d, m, 0.05, 3) == pytest.approx(r, abs=1e-12)
     assert math.isfinite(_local_root(t, d, m, 0.0, 3))  # no window: the linear root
+
+
+def test_batched_roots_equal_one_by_one():
+    """The batched sub-frame roots of section crossings equal the scalar fits."""
+    from flutterswim.analysis.section import _local_roots
+
+    rng = np.random.default_rng(5)
+    t = np.sort(rng.uniform(0.0, 10.0, 600))
+    d = np.sin(2.0 * np.pi * t / 1.3) + 0.01 * rng.normal(size=t.size)
+    ms = np.nonzero((d[:-1] <= 0) & (d[1:] > 0))[0]
+    one = np.array([_local_root(t, d, int(m), 0.1, 3) for m in ms])
+    assert np.allclose(_local_roots(t, d, ms, 0.1, 3), one, rtol=0, atol=1e-12)

@@ -202,7 +202,12 @@ def detect_cycles(
     # shapes: tangent angle minus mean along s, sampled at n_shape phases
     _, th = tr.tangent_angle()
     th = th - th.mean(axis=1, keepdims=True)
-    shapes = [sample_cycle(t, th, starts[k], periods[k], n_shape) for k in range(K)]
+    # all cycles at once (sample_cycle's interpolation on the stacked phases)
+    tq = (starts[:-1, None] + periods[:, None] * (np.arange(n_shape) / n_shape)[None, :]).ravel()
+    j = np.clip(np.searchsorted(t, tq) - 1, 0, t.size - 2)
+    wq = np.clip((tq - t[j]) / (t[j + 1] - t[j]), 0.0, 1.0)[:, None]
+    stacked = ((1 - wq) * th[j] + wq * th[j + 1]).reshape(K, n_shape, -1)
+    shapes = list(stacked)
     if K >= 2 and n_shape_modes:
         # compare strokes in the space of the leading principal shape modes (filters noise)
         allsh = np.concatenate(shapes, axis=0)

@@ -200,8 +200,7 @@ def per_cycle(obj: Any, cycles: Cycles | None = None, *, tip: int | str = "end",
     p2p = _lateral_p2p(tr, st, i_end, ang, harmonics)
     nrec = np.full(K, np.nan)
     if K:
-        coef, _, _, _ = shape_modes(tr, st[0], st[-1])
-        tw = tr.window(st[0], st[-1]).t
+        coef, _, _, tw = shape_modes(tr, st[0], st[-1])
         for k in range(K):
             a = sample_cycle(tw, coef, st[k], st[k + 1] - st[k], 64)
             nrec[k] = stroke_area(a[:, 0], a[:, 1]) if a.shape[1] >= 2 else 0.0
@@ -280,7 +279,7 @@ def describe(
     p2p = pc["tip_p2p"]
     dirs = np.arctan2(pc["dy"], pc["dx"])
     dir_spread = float(np.degrees(np.sqrt(max(0.0, -2 * math.log(max(1e-300, abs(np.mean(np.exp(1j * dirs))))))))) if dirs.size > 1 else 0.0
-    fa = float(np.angle(np.mean(np.exp(1j * tr.window(t0, t1).field_angle))))
+    fa = float(np.angle(np.mean(np.exp(1j * w.field_angle))))
     rel = math.atan2(math.sin(swim - fa), math.cos(swim - fa))
     # leading end: the end whose position lies ahead along the swimming direction
     e = np.array([math.cos(swim), math.sin(swim)])

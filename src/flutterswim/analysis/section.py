@@ -109,6 +109,52 @@ def _local_root(t: np.ndarray, d: np.ndarray, m: int, half_window: float, deg: i
     return float(tlin + x * sc) if dp > 0.0 else float(tlin)
 
 
+def _local_roots(t: np.ndarray, d: np.ndarray, ms: np.ndarray, half_window: float, deg: int) -> np.ndarray:
+    """:func:`_local_root` for many brackets at once (the same fits and Newton iterations,
+    batched: padded windows with zero weights)."""
+    ms = np.asarray(ms, int)
+    t0, t1, d0, d1 = t[ms], t[ms + 1], d[ms], d[ms + 1]
+    same = d1 == d0
+    tlin = np.where(same, 0.5 * (t0 + t1), t0 - d0 * (t1 - t0) / np.where(same, 1.0, d1 - d0))
+    lo = np.minimum(np.searchsorted(t, tlin - half_window, side="left"), ms)
+    hi = np.maximum(np.searchsorted(t, tlin + half_window, side="right"), ms + 2)
+    out = tlin.copy()
+    if half_window <= 0.0:
+        return out
+    ok = hi - lo >= deg + 2
+    if not np.any(ok):
+        return out
+    width = int(np.max(hi[ok] - lo[ok]))
+    idx = lo[:, None] + np.arange(width)[None, :]
+    valid = (idx < hi[:, None]) & ok[:, None]
+    idx = np.minimum(idx, t.size - 1)
+    tt = np.where(valid, t[idx] - tlin[:, None], 0.0)
+    sc = np.maximum(np.max(np.abs(tt), axis=1), 1e-300)
+    v = (tt / sc[:, None])[:, :, None] ** np.arange(deg + 1)[None, None, :] * valid[:, :, None]
+    a = np.einsum("cki,ckj->cij", v, v)
+    b = np.einsum("cki,ck->ci", v, np.where(valid, d[idx], 0.0))
+    a[~ok] = np.eye(deg + 1)
+    try:
+        coef = np.linalg.solve(a, b[:, :, None])[:, :, 0]
+    except np.linalg.LinAlgError:
+        return np.array([_local_root(t, d, int(m), half_window, deg) for m in ms])
+    dcoef = coef[:, 1:] * np.arange(1, deg + 1)
+    x = np.zeros(ms.size)
+    good = ok.copy()
+    for _ in range(30):
+        p = np.polynomial.polynomial.polyval(x, coef.T, tensor=False)
+        dp = np.polynomial.polynomial.polyval(x, dcoef.T, tensor=False)
+        good &= dp > 0.0
+        step = np.where(good, p / np.where(dp > 0.0, dp, 1.0), 0.0)
+        x = x - step
+        good &= np.abs(x) * sc <= half_window
+        if np.all(np.abs(step[good]) < 1e-14):
+            break
+    dp = np.polynomial.polynomial.polyval(x, dcoef.T, tensor=False)
+    good &= dp > 0.0
+    return np.where(good, tlin + x * sc, tlin)
+
+
 def upward_crossings(
     t: np.ndarray,
     d: np.ndarray,
@@ -130,20 +176,17 @@ def upward_crossings(
     state = np.where(last >= 0, mark[np.maximum(last, 0)], 0)
     # upward transition: state goes from -1 to +1 at j
     js = np.nonzero((state[1:] == 1) & (state[:-1] == -1))[0] + 1
-    out = []
+    ms = []
     for j in js:
         ilow = last[j - 1]  # last index that was below -h
         seg = d[ilow : j + 1]
         cand = np.nonzero((seg[:-1] <= 0) & (seg[1:] > 0))[0]
-        if cand.size == 0:
-            continue
-        m = ilow + int(cand[-1])
-        if half_window > 0.0:
-            out.append(_local_root(t, d, m, half_window, deg))
-        else:  # linear interpolation (what _local_root falls back to without a window)
-            t0, t1, d0, d1 = t[m], t[m + 1], d[m], d[m + 1]
-            out.append(float(t0 - d0 * (t1 - t0) / (d1 - d0)) if d1 != d0 else float(0.5 * (t0 + t1)))
-    return np.asarray(out, float)
+        if cand.size:
+            ms.append(ilow + int(cand[-1]))
+    if not ms:
+        return np.empty(0)
+    # without a window: linear interpolation (what _local_root falls back to)
+    return _local_roots(t, d, np.array(ms), half_window, deg)
 
 
 def _noise_sigma(t: np.ndarray, u: np.ndarray, window: float) -> np.ndarray:
