@@ -156,14 +156,15 @@ def resample(x: np.ndarray, y: np.ndarray, q_a: float, q_b: float, n_points: int
 
 
 def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float = 1.2,
-                inner: float = 14.0, outer: float = 6.0, trim: float = 4.0,
-                span: float = 16.0, hook: float = 6.0, hook_deg: float = 25.0) -> tuple[np.ndarray, np.ndarray, float, float]:
+                inner: float = 14.0, outer: float = 6.0, trim: float = 5.0,
+                span: float = 30.0, hook: float = 6.0, hook_deg: float = 25.0, degree: int = 3) -> tuple[np.ndarray, np.ndarray, float, float]:
     """Move both ends of the centreline (x, y) (P,) [px] to the line ends fitted on the raw
     frame ``img`` (H, W) (end position along the curve and a small rotation of the last
     ``inner`` px). The last ``trim`` px at each end (twice that for an end hooked by more
-    than ``hook_deg`` over its last ``hook`` px) are first rebuilt by the quadratic fitted
-    over the next ``span`` px: a skeleton spline is least certain, and often hooked, at a
-    noisy tip. Returns (x, y) resampled at P equal steps
+    than ``hook_deg`` over its last ``hook`` px) are first rebuilt by the polynomial of
+    ``degree`` in arc length fitted over the next ``span`` px: a skeleton spline is least
+    certain, and often hooked, at a noisy tip. Cubic, because the curvature of a free end
+    falls linearly to zero (no bending moment there); a quadratic overshoots the excursions. Returns (x, y) resampled at P equal steps
     between the refined ends, and the two end corrections along the curve [px] (NaN where a
     fit failed; that end is then kept)."""
     n = x.size
@@ -180,7 +181,7 @@ def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float =
         return abs(math.atan2(u[0] * v[1] - u[1] * v[0], u @ v))
 
     # the last few px of a skeleton spline are its least certain part: rebuild each end by
-    # a quadratic in arc length fitted over [trim, trim + span] from the end, extrapolated
+    # a polynomial in arc length fitted over [trim, trim + span] from the end, extrapolated
     ta = 2 * trim if turn(P[0], P[1], P[2]) > math.radians(hook_deg) else trim
     tb = 2 * trim if turn(P[3], P[4], P[5]) > math.radians(hook_deg) else trim
     q = np.arange(0.0, L0 + 1e-9, 1.0)
@@ -188,8 +189,8 @@ def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float =
     for t_, end in ((ta, 0), (tb, 1)):
         u = q if end == 0 else L0 - q
         fit = (u >= t_) & (u <= t_ + span)
-        cx = np.polyfit(u[fit], D[fit, 0], 2)
-        cy = np.polyfit(u[fit], D[fit, 1], 2)
+        cx = np.polyfit(u[fit], D[fit, 0], degree)
+        cy = np.polyfit(u[fit], D[fit, 1], degree)
         rep = u < t_
         D[rep, 0], D[rep, 1] = np.polyval(cx, u[rep]), np.polyval(cy, u[rep])
     x2, y2 = D[:, 0], D[:, 1]
