@@ -186,11 +186,15 @@ def detect_cycles(
         W0 = float(period) if period is not None else estimate_period(t, u)
         u, ax_angle = lateral_signal(tr, tip=itip, axis_angle=local_axis_angle(tr, W0))
         period = W0
-    starts, d, W = section_crossings(t, u, period=period, hysteresis=hysteresis)
-    if axis == "local" and starts.size >= 3 and abs(W - period) > 1e-9 * W:
-        # redo with the axis averaged over the refined period
-        u, ax_angle = lateral_signal(tr, tip=itip, axis_angle=local_axis_angle(tr, W))
-        starts, d, W = section_crossings(t, u, period=W, hysteresis=hysteresis)
+    if axis == "local":
+        # the period refined on linear crossings; then, with the axis averaged over it, the
+        # one final pass that locates the crossings
+        starts, d, W = section_crossings(t, u, period=period, hysteresis=hysteresis, locate=False)
+        if starts.size >= 3 and abs(W - period) > 1e-9 * W:
+            u, ax_angle = lateral_signal(tr, tip=itip, axis_angle=local_axis_angle(tr, W))
+        starts, d, W = section_crossings(t, u, period=W, hysteresis=hysteresis, iterations=0)
+    else:
+        starts, d, W = section_crossings(t, u, period=period, hysteresis=hysteresis)
     K = max(starts.size - 1, 0)
     periods = np.diff(starts)
     amps = np.empty(K)

@@ -205,12 +205,15 @@ def section_crossings(
     hysteresis: float = 0.25,
     noise_factor: float = 4.0,
     iterations: int = 2,
+    locate: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, float]:
     """Upward crossings of u through its running mean over one period.
 
     Returns (crossing times, detrended signal d = u - running mean, period used for the
     running mean). The period is estimated from the spectrum unless given, then refined from
-    the median spacing of the crossings ``iterations`` times.
+    the median spacing of the crossings ``iterations`` times. ``locate=False``: the crossings
+    linearly interpolated (the period is refined on those anyway), without the final pass that
+    locates them by local polynomials.
     """
     t = np.asarray(t, float)
     u = np.asarray(u, float)
@@ -223,7 +226,7 @@ def section_crossings(
     d = u - u.mean()
     # the period is refined on linearly interpolated crossings; the final crossings are
     # located by the local polynomial (one pass of it: linear in the record's length)
-    final = False
+    final = locate and iterations <= 0 and period is not None  # a given period, not refined: the final pass only
     for it in range(max(1, iterations + 1) + 1):
         d = u - running_mean(t, u, W)
         amp = np.sqrt(2.0 * np.maximum(running_mean(t, d * d, W), 0.0))
@@ -239,12 +242,16 @@ def section_crossings(
         if final:
             break
         if cross.size < 3 or it >= iterations or period is not None and it == 0 and iterations == 0:
+            if not locate:
+                break
             final = True
             continue
         # refine with the period of the well-developed (later) cycles
         dif = np.diff(cross)
         W_new = float(np.median(dif[len(dif) // 2 :]))
         if abs(W_new - W) < 1e-12 * W:
+            if not locate:
+                break
             final = True
             continue
         W = W_new
