@@ -80,7 +80,7 @@ def _levenberg_marquardt(q: np.ndarray, d: np.ndarray, h: np.ndarray, v: np.ndar
                          sigma0: float, o: int, iters: int = 30) -> tuple[float, float, float]:
     """Least squares of v ~ b + A exp(-(d - c h)^2 / 2 sg^2) Phi(o (qe - q) / sg) over
     (qe, sg, c, A, b) by Levenberg-Marquardt with the analytic Jacobian; returns (qe, sg, c)
-    or NaNs if the fit leaves the trust box (|qe - q0| < 4, sigma0/2 < sg < 2 sigma0)."""
+    or NaNs if the fit ends on the edge of the trust box (|qe - q0| < 6, sigma0/2 < sg < 2 sigma0)."""
     from scipy.special import ndtr
 
     def parts(p):
@@ -116,7 +116,7 @@ def _levenberg_marquardt(q: np.ndarray, d: np.ndarray, h: np.ndarray, v: np.ndar
                 lam *= 10
                 continue
             pn = p + step
-            if not (abs(pn[0] - q0) < 4.0 and 0.5 * sigma0 < pn[1] < 2.0 * sigma0 and abs(pn[2]) < 0.3):
+            if not (abs(pn[0] - q0) < 6.0 and 0.5 * sigma0 < pn[1] < 2.0 * sigma0 and abs(pn[2]) < 0.3):
                 lam *= 10
                 continue
             parts_n = parts(pn)
@@ -130,7 +130,7 @@ def _levenberg_marquardt(q: np.ndarray, d: np.ndarray, h: np.ndarray, v: np.ndar
         if not improved or done:
             break
     qe, sg, c, A, b = (float(t) for t in p)
-    if not (A > 0 and abs(qe - q0) < 3.99):
+    if not (A > 0 and abs(qe - q0) < 5.99):
         return math.nan, math.nan, 0.0
     return qe, sg, c
 

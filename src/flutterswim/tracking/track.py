@@ -78,7 +78,8 @@ def track_frame(img: np.ndarray, *, n_points: int = 49, sigma: float = 1.2, k_lo
     if m[0].any() or m[-1].any() or m[:, 0].any() or m[:, -1].any():
         out["reason"] = "out of view: the body touches the edge of the frame"
         return out
-    c = fit_centreline(seg.filtered, m, n_points=n_points)
+    with np.errstate(over="ignore"):  # a flat log-profile fit overflows exp; that point is dropped
+        c = fit_centreline(seg.filtered, m, n_points=n_points)
     contrast = c.plateau / seg.noise if seg.noise > 0 and math.isfinite(c.plateau) else math.nan
     out["contrast"] = contrast
     if math.isfinite(contrast) and contrast < min_contrast:
