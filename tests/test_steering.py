@@ -152,4 +152,4 @@ def test_the_trap_is_the_bent_equilibrium_family():
         assert np.ptp(th) > 1.0  # bent, not straight
         res.append(np.max(np.abs(k[1:-1] + chi * np.sin(0.5 * (th[1:] + th[:-1])))) / chi)
     assert res[1] < 0.6 * res[0], res
-    assert tilt_basin(P, [0.5]).all()
+    assert list(tilt_basin(P, [0.5, 8.0])) == ["limit_cycle", "bent_equilibrium"]

@@ -91,22 +91,32 @@ def identify(params: Parameters, *, n_segments: int = 24, onset: float = 12.0, r
     return ReducedModel(U, T, k, om, (lo, hi), U / om, onset)
 
 
-def plot_radius(model: ReducedModel, omegas, radii, path=None):
-    """Turning radius against the rotation rate: measured points and U / Omega."""
+def plot_radius(model: ReducedModel, omegas, radii, path=None, *, lost=()):
+    """Turning radius against the rotation rate: measured points (circle fits of the full
+    model), U / Omega, the step-out rate; ``lost``: rates at which the swimmer did not follow."""
     import matplotlib
 
     if path is not None:
         matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter
 
     fig, ax = plt.subplots(figsize=(5, 3.6), constrained_layout=True)
-    w = np.geomspace(min(omegas) * 0.8, model.omega_max * 1.2, 100)
-    ax.loglog(w, model.U / w * 1e3, "-", color="0.4", label=r"$U/\Omega$")
+    w = np.geomspace(min(omegas) * 0.8, model.omega_max * 1.3, 100)
+    ax.loglog(w, model.U / w * 1e3, "-", color="0.4", label=r"$U/\Omega$ (U from the periodic orbit)")
     ax.loglog(omegas, np.asarray(radii) * 1e3, "o", color="tab:red", label="full model (circle fit)")
-    ax.axvline(model.omega_max, color="tab:blue", ls="--", lw=1, label=r"step-out $\Omega_{max}$")
+    ax.axvspan(model.omega_max, w[-1], color="tab:blue", alpha=0.12, lw=0)
+    ax.axvline(model.omega_max, color="tab:blue", ls="--", lw=1,
+               label=rf"step-out $\Omega_{{max}}$ = {model.omega_max:.3f} rad/s")
+    for k, om in enumerate(lost):
+        ax.plot([om], [model.U / om * 1e3], "x", color="tab:blue", ms=8, label="does not follow" if k == 0 else None)
+    for axis in (ax.xaxis, ax.yaxis):
+        axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+        axis.set_major_formatter(FormatStrFormatter("%g"))
+        axis.set_minor_formatter(NullFormatter())
     ax.set_xlabel(r"field rotation rate $\Omega$ [rad/s]")
     ax.set_ylabel("turning radius [mm]")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7)
     if path is not None:
         from pathlib import Path
 
