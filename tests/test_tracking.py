@@ -195,7 +195,7 @@ def test_tiff_stack_png_folder_and_roi_agree(sim, tmp_path):
     sub = SimpleNamespace(t=sim.t[:12], x=sim.x[:12], y=sim.y[:12])
     mv = render(sub, um_per_px=UM_PER_PX, snr=6.0, seed=5, dtype="uint16")
     ref = track(mv.frames, px_per_mm=mv.px_per_mm, fps=FPS)
-    tifffile.imwrite(tmp_path / "stack.tif", mv.frames)
+    tifffile.imwrite(tmp_path / "stack.tif", mv.frames, photometric="minisblack")
     (tmp_path / "frames").mkdir()
     for i, f in enumerate(mv.frames):
         iio.imwrite(tmp_path / "frames" / f"f{i}.png", f)  # natural order: f2 before f10

@@ -1,0 +1,164 @@
+"""Tracking: NetCDF round trip with units, the CLI, raw-frame kymographs against the
+simulated crossings, and batch CSV / Fig. 3e from a folder of trials."""
+
+from __future__ import annotations
+
+import json
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+pytest.importorskip("skimage")
+tifffile = pytest.importorskip("tifffile")
+
+import flutterswim as fs  # noqa: E402
+from flutterswim.analysis.descriptors import describe  # noqa: E402
+from flutterswim.analysis.kymograph import line_kymograph  # noqa: E402
+from flutterswim.analysis.track import Track  # noqa: E402
+from flutterswim.cli import main  # noqa: E402
+from flutterswim.tracking import (load_track, raw_kymographs, plot_raw_kymographs, render,  # noqa: E402
+                                  save_track, track, track_batch)
+
+FPS = 50.0
+
+
+@pytest.fixture(scope="module")
+def movie():
+    """2.4 cycles of the settled stroke (45 frames), SNR 5."""
+    r = fs.simulate(fs.PAPER, 10.0, n_segments=24, frame_dt=1.0 / FPS)
+    sl = slice(r.t.size - 45, r.t.size)
+    sub = SimpleNamespace(t=r.t[sl], x=r.x[sl], y=r.y[sl])
+    return render(sub, um_per_px=14.0, snr=5.0, seed=7, dtype="uint16")
+
+
+@pytest.fixture(scope="module")
+def tracked(movie):
+    return track(movie, px_per_mm=movie.px_per_mm, fps=FPS)
+
+
+def truth(mv) -> Track:
+    mm = mv.um_per_px / 1000.0
+    return Track(t=mv.t - mv.t[0], x=mv.x_px * mm, y=mv.y_px * mm, units="mm", length=3.7)
+
+
+def test_netcdf_round_trip_with_units(tracked, tmp_path):
+    import xarray as xr
+
+    p = save_track(tracked, tmp_path / "t.nc")
+    with xr.open_dataset(p, engine="h5netcdf") as ds:
+        for name in list(ds.data_vars) + list(ds.coords):
+            assert "units" in ds[name].attrs, name
+        assert ds.attrs["Conventions"].startswith("CF")
+        assert ds.sizes["frame"] == tracked.meta["n_frames"]
+        assert ds["body_length"].attrs["units"] == "mm"
+    back = load_track(p)
+    np.testing.assert_array_equal(back.x, tracked.x)
+    np.testing.assert_array_equal(back.t, tracked.t)
+    assert back.length == tracked.length
+    assert describe(back).to_dict() == describe(tracked).to_dict()
+    save_track(tracked, p)  # our own file: replaced
+    foreign = tmp_path / "foreign.nc"
+    foreign.write_bytes(b"not ours")
+    with pytest.raises(fs.ParameterError, match="not written by flutterswim"):
+        save_track(tracked, foreign)
+
+
+def test_cli_track_json_and_errors(movie, tmp_path, capsys):
+    tifffile.imwrite(tmp_path / "stack.tif", movie.frames, photometric="minisblack")
+    out = tmp_path / "track.nc"
+    rc = main(["track", str(tmp_path / "stack.tif"), "--px-per-mm", str(movie.px_per_mm), "--fps", "50",
+               "--out", str(out), "--quiet", "--json"])
+    cap = capsys.readouterr()
+    assert rc == 0, cap.err
+    d = json.loads(cap.out)
+    assert set(d) == set(describe(truth(movie)).to_dict())
+    assert d["period_s"] == pytest.approx(describe(truth(movie)).period_s, rel=0.01)
+    assert "tracked 45 of 45 frames" in cap.err
+    assert load_track(out).n_frames == 45
+    rc = main(["track", str(tmp_path / "stack.tif"), "--px-per-mm", "70", "--fps", "50", "--out",
+               str(tmp_path / "b.nc"), "--roi", "0,0,5000,10", "--quiet"])
+    cap = capsys.readouterr()
+    assert rc == 2 and "roi" in cap.err and len(cap.err.strip().splitlines()) == 1
+    rc = main(["track", str(tmp_path / "missing.tif"), "--px-per-mm", "70", "--fps", "50", "--out",
+               str(tmp_path / "c.nc"), "--quiet"])
+    assert rc == 2
+
+
+def test_raw_kymographs_follow_the_simulated_crossings(movie, tracked, tmp_path):
+    k = raw_kymographs(movie, tracked)
+    ppm = movie.px_per_mm
+    T, W = k.horizontal.shape
+    assert (T, W) == (movie.frames.shape[0], movie.frames.shape[2])
+    # the bright pixels of the horizontal kymograph sit where the true body crosses the row
+    lk = line_kymograph(truth(movie), "horizontal", level=k.row / ppm)
+    bg = np.median(k.horizontal)
+    amp = movie.meta["amplitude"]
+    on, n = [], 0
+    for i in range(T):
+        for xc in lk.positions[i][np.isfinite(lk.positions[i])]:
+            on.append(k.horizontal[i, int(round(xc * ppm))] - bg)
+            n += 1
+    assert n > T  # the body crosses the row at least once a frame
+    assert np.median(on) > 0.5 * amp
+    # vertical line, same test
+    lv = line_kymograph(truth(movie), "vertical", level=k.col / ppm)
+    bgv = np.median(k.vertical)
+    onv = [k.vertical[i, int(round(yc * ppm))] - bgv for i in range(T)
+           for yc in lv.positions[i][np.isfinite(lv.positions[i])]]
+    assert np.median(onv) > 0.5 * amp
+    # the average-velocity line: the least-squares centroid velocity of the simulation
+    xc, _ = truth(movie).centroid()
+    vx = np.polyfit(movie.t, xc, 1)[0]
+    assert k.velocity[0] == pytest.approx(vx, rel=0.02)
+    # intensity along the tracked body: on the ridge, so about the line's amplitude
+    assert np.nanmedian(k.body) - bg > 0.7 * amp
+    p = tmp_path / "kym.png"
+    plot_raw_kymographs(k, p, tr=tracked)
+    import matplotlib.image as mpimg
+
+    img = mpimg.imread(p)
+    assert np.unique(img.reshape(-1, img.shape[-1]), axis=0).shape[0] > 50
+
+
+def test_batch_csv_sidecar_pattern_failures_and_figure(movie, tmp_path):
+    from flutterswim.fitting.data import read_trials
+
+    folder = tmp_path / "trials"
+    folder.mkdir()
+    tifffile.imwrite(folder / "85V_sample1_trial1.tif", movie.frames, photometric="minisblack")
+    tifffile.imwrite(folder / "72p5V_sample2.tif", movie.frames[5:], photometric="minisblack")
+    tifffile.imwrite(folder / "b.tif", movie.frames, photometric="minisblack")
+    (folder / "b.json").write_text(json.dumps({"voltage_V": 60, "sample": "s7", "fps": 50}))
+    noise = np.random.default_rng(0).poisson(100, movie.frames.shape).astype(np.uint16)
+    tifffile.imwrite(folder / "90V_sample9.tif", noise, photometric="minisblack")
+    out = tmp_path / "trials.csv"
+    fig = tmp_path / "fig3e.png"
+    p, rows, failed = track_batch(folder, out, px_per_mm=movie.px_per_mm, fps=FPS, plot=str(fig))
+    assert len(rows) == 3 and len(failed) == 1 and "90V_sample9" in failed[0][0]
+    assert "lost contrast" in failed[0][1]
+    tr = read_trials(p)
+    assert sorted(tr.voltage_V.tolist()) == [60.0, 72.5, 85.0]
+    assert sorted(tr.sample.tolist()) == ["1", "2", "s7"]
+    dt = describe(truth(movie))
+    np.testing.assert_allclose(tr.values[:, 0], dt.period_s, rtol=0.01)
+    np.testing.assert_allclose(tr.values[:, 2], dt.trailing_lateral_p2p_mm, rtol=0.01)
+    assert (tmp_path / "trials_failed.csv").read_text().count("\n") == 2
+    assert fig.stat().st_size > 10_000
+    # rerun over our own CSV is allowed; the CLI gives the same table
+    rc = main(["track-batch", str(folder), "--px-per-mm", str(movie.px_per_mm), "--fps", "50", "--out", str(out),
+               "--quiet"])
+    assert rc == 0
+    assert read_trials(out).values == pytest.approx(tr.values)
+
+
+def test_batch_needs_voltage_and_sample(tmp_path, movie):
+    folder = tmp_path / "t"
+    folder.mkdir()
+    tifffile.imwrite(folder / "whatever.tif", movie.frames[:4], photometric="minisblack")
+    with pytest.raises(fs.ParameterError, match="sidecar"):
+        track_batch(folder, tmp_path / "x.csv", px_per_mm=70, fps=50)
+    with pytest.raises(fs.ParameterError, match="named groups"):
+        track_batch(folder, tmp_path / "x.csv", px_per_mm=70, fps=50, pattern=r"(\d+)V")
+    assert math.isfinite(movie.px_per_mm)
