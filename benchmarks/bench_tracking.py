@@ -1,0 +1,177 @@
+"""Tracking benchmarks (not a test): speed per 512 x 512 frame and per 5-cycle movie, and the
+accuracy on movies rendered from the paper's settled stroke (50 fps, 14 um/px).
+
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_tracking.py [--repeat 5] [--seeds 4] [--json out.json]
+
+Speed: one core; min and median over repeats. ``scratch``: one frame tracked with no previous
+frame (coarse 4x-reduced localisation, then the window around it); ``whole frame``: the
+segmentation of the whole 512 x 512 frame (the fallback); ``in a movie``: per frame of a 100-frame 512 x
+512 movie (after the first frame, the search window follows the body; the whole frame is
+searched again whenever a frame fails in the window). Accuracy: per SNR and noise seed,
+centreline RMS distance to the true curve and tip RMS error [px], and the relative error of
+the descriptors of :func:`describe` against those of the simulated centrelines on the same
+frames.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import statistics
+import sys
+import time
+from types import SimpleNamespace
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(__file__))
+from bench_sweep import machine  # noqa: E402  (same folder: the one description of the machine)
+
+FPS = 50.0
+KEYS = ("period_s", "advance_per_cycle_mm", "leading_lateral_p2p_mm", "trailing_lateral_p2p_mm")
+
+
+def stroke(n_frames: int = 101):
+    import flutterswim as fs
+
+    r = fs.simulate(fs.PAPER, 10.0, n_segments=24, frame_dt=1.0 / FPS)
+    sl = slice(r.t.size - n_frames, r.t.size)
+    return SimpleNamespace(t=r.t[sl], x=r.x[sl], y=r.y[sl])
+
+
+def pixel_errors(tr, mv):
+    from scipy.interpolate import CubicSpline
+
+    info = tr.meta["frames"]
+    idx = np.nonzero(info["ok"])[0]
+    X, Y = info["x_px"], info["y_px"]
+    i0 = idx[0]
+    if math.hypot(X[i0, 0] - mv.x_px[i0, 0], Y[i0, 0] - mv.y_px[i0, 0]) > math.hypot(
+            X[i0, 0] - mv.x_px[i0, -1], Y[i0, 0] - mv.y_px[i0, -1]):
+        X, Y = X[:, ::-1], Y[:, ::-1]
+    D, E = [], []
+    for i in idx:
+        x, y = mv.x_px[i], mv.y_px[i]
+        s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
+        q = np.linspace(0.0, s[-1], 8000)
+        xs, ys = CubicSpline(s, x)(q), CubicSpline(s, y)(q)
+        D.append(np.min(np.hypot(X[i][:, None] - xs[None], Y[i][:, None] - ys[None]), axis=1))
+        E.append([math.hypot(X[i, 0] - x[0], Y[i, 0] - y[0]), math.hypot(X[i, -1] - x[-1], Y[i, -1] - y[-1])])
+    return np.array(D), np.array(E)
+
+
+def speed(sim, repeat: int) -> dict:
+    from importlib import import_module
+
+    from flutterswim.tracking import render, track
+
+    mod = import_module("flutterswim.tracking.track")
+    big = render(sim, um_per_px=14.0, snr=3.0, shape=(512, 512), margin_px=60, seed=0)
+    single, whole = [], []
+    for _ in range(repeat):
+        for f in big.frames[:20]:
+            t = time.perf_counter()
+            mod.track_image(f, None, 40.0)
+            single.append(time.perf_counter() - t)
+            t = time.perf_counter()
+            mod.track_frame(f)
+            whole.append(time.perf_counter() - t)
+    movie512, per_frame = [], []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        tr = track(big.frames[:100], px_per_mm=big.px_per_mm, fps=FPS)
+        dt = time.perf_counter() - t
+        movie512.append(dt)
+        per_frame.append(dt / 100)
+    small = render(sim, um_per_px=14.0, snr=3.0, seed=0)
+    movie = []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        tr = track(small.frames[:100], px_per_mm=small.px_per_mm, fps=FPS)
+        movie.append(time.perf_counter() - t)
+    stat = lambda v: {"min": min(v), "median": statistics.median(v)}  # noqa: E731
+    return {"frame_512_scratch_s": stat(single), "frame_512_whole_frame_s": stat(whole),
+            "frame_512_in_movie_s": stat(per_frame),
+            "movie_512_100_frames_s": stat(movie512), "movie_100_frames_s": stat(movie),
+            "movie_shape": list(small.frames.shape), "n_failed_512": int(tr.meta["n_failed"])}
+
+
+def accuracy(sim, seeds: int) -> list[dict]:
+    from flutterswim.analysis.descriptors import describe
+    from flutterswim.analysis.track import Track
+    from flutterswim.tracking import render, track
+
+    rows = []
+    for snr in (math.inf, 10.0, 5.0, 3.0):
+        for seed in range(1 if math.isinf(snr) else seeds):
+            mv = render(sim, um_per_px=14.0, snr=snr, seed=seed)
+            tr = track(mv, px_per_mm=mv.px_per_mm, fps=FPS, t0=float(mv.t[0]))
+            D, E = pixel_errors(tr, mv)
+            mm = mv.um_per_px / 1000
+            truth = Track(t=mv.t, x=mv.x_px * mm, y=mv.y_px * mm, units="mm", length=3.7)
+            dt, dm = describe(truth), describe(tr)
+            row = {"snr": snr, "seed": seed, "failed": int(tr.meta["n_failed"]),
+                   "centreline_rms_px": float(np.sqrt(np.mean(D**2))),
+                   "worst_frame_rms_px": float(np.sqrt(np.mean(D**2, axis=1)).max()),
+                   "tip_rms_px": float(np.sqrt(np.mean(E**2))), "tip_max_px": float(E.max()),
+                   "length_spread": tr.meta["length_spread"], "cycles": dm.n_cycles_used}
+            for k in KEYS:
+                row[k + "_rel_err_pct"] = 100 * (getattr(dm, k) - getattr(dt, k)) / getattr(dt, k)
+            rows.append(row)
+            print(json.dumps(row), flush=True)
+    return rows
+
+
+def failures_and_mp4(sim) -> dict:
+    import imageio_ffmpeg
+
+    from flutterswim.analysis.descriptors import describe
+    from flutterswim.tracking import failures, render, track
+
+    out = {}
+    for snr in (0.5, 0.7, 0.9):
+        bad = render(sim, um_per_px=14.0, snr=snr, seed=3)
+        try:
+            tr = track(bad.frames[:50], px_per_mm=bad.px_per_mm, fps=FPS)
+            out[f"snr_{snr}_flagged"] = f"{len(failures(tr))} of 50"
+        except Exception as exc:  # noqa: BLE001 - every frame failed: reported by the error
+            out[f"snr_{snr}_flagged"] = f"50 of 50 ({str(exc)[:80]}...)"
+    mv = render(sim, um_per_px=14.0, snr=3.0, seed=0)
+    ref = describe(track(mv, px_per_mm=mv.px_per_mm, fps=FPS))
+    lo, hi = np.percentile(mv.frames, [0.1, 99.99])
+    f8 = np.clip((mv.frames - lo) / (hi - lo) * 255, 0, 255).astype(np.uint8)
+    f8 = f8[:, : f8.shape[1] // 2 * 2, : f8.shape[2] // 2 * 2]
+    path = "/tmp/bench_tracking.mp4"
+    w = imageio_ffmpeg.write_frames(path, (f8.shape[2], f8.shape[1]), pix_fmt_in="gray", fps=FPS, quality=8,
+                                    macro_block_size=1)
+    w.send(None)
+    for f in f8:
+        w.send(np.ascontiguousarray(f))
+    w.close()
+    d = describe(track(path, px_per_mm=mv.px_per_mm))
+    out["mp4_vs_lossless_rel_err_pct"] = {k: 100 * (getattr(d, k) - getattr(ref, k)) / getattr(ref, k) for k in KEYS}
+    os.remove(path)
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--seeds", type=int, default=4)
+    ap.add_argument("--json", default=None)
+    args = ap.parse_args()
+    sim = stroke()
+    res = {"machine": machine(), "speed": speed(sim, args.repeat)}
+    print(json.dumps(res, indent=1), flush=True)
+    res["accuracy"] = accuracy(sim, args.seeds)
+    res["failures_and_mp4"] = failures_and_mp4(sim)
+    print(json.dumps(res["failures_and_mp4"], indent=1))
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(res, f, indent=1)
+
+
+if __name__ == "__main__":
+    main()
