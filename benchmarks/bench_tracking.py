@@ -41,27 +41,6 @@ def stroke(n_frames: int = 101):
     return SimpleNamespace(t=r.t[sl], x=r.x[sl], y=r.y[sl])
 
 
-def pixel_errors(tr, mv):
-    from scipy.interpolate import CubicSpline
-
-    info = tr.meta["frames"]
-    idx = np.nonzero(info["ok"])[0]
-    X, Y = info["x_px"], info["y_px"]
-    i0 = idx[0]
-    if math.hypot(X[i0, 0] - mv.x_px[i0, 0], Y[i0, 0] - mv.y_px[i0, 0]) > math.hypot(
-            X[i0, 0] - mv.x_px[i0, -1], Y[i0, 0] - mv.y_px[i0, -1]):
-        X, Y = X[:, ::-1], Y[:, ::-1]
-    D, E = [], []
-    for i in idx:
-        x, y = mv.x_px[i], mv.y_px[i]
-        s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
-        q = np.linspace(0.0, s[-1], 8000)
-        xs, ys = CubicSpline(s, x)(q), CubicSpline(s, y)(q)
-        D.append(np.min(np.hypot(X[i][:, None] - xs[None], Y[i][:, None] - ys[None]), axis=1))
-        E.append([math.hypot(X[i, 0] - x[0], Y[i, 0] - y[0]), math.hypot(X[i, -1] - x[-1], Y[i, -1] - y[-1])])
-    return np.array(D), np.array(E)
-
-
 def speed(sim, repeat: int) -> dict:
     from importlib import import_module
 
@@ -100,17 +79,16 @@ def speed(sim, repeat: int) -> dict:
 
 def accuracy(sim, seeds: int) -> list[dict]:
     from flutterswim.analysis.descriptors import describe
-    from flutterswim.analysis.track import Track
     from flutterswim.tracking import render, track
+    from flutterswim.tracking.evaluate import pixel_errors, truth_track
 
     rows = []
     for snr in (math.inf, 10.0, 5.0, 3.0):
         for seed in range(1 if math.isinf(snr) else seeds):
             mv = render(sim, um_per_px=14.0, snr=snr, seed=seed)
             tr = track(mv, px_per_mm=mv.px_per_mm, fps=FPS, t0=float(mv.t[0]))
-            D, E = pixel_errors(tr, mv)
-            mm = mv.um_per_px / 1000
-            truth = Track(t=mv.t, x=mv.x_px * mm, y=mv.y_px * mm, units="mm", length=3.7)
+            D, E, _ = pixel_errors(tr, mv)
+            truth = truth_track(mv, 3.7)
             dt, dm = describe(truth), describe(tr)
             row = {"snr": snr, "seed": seed, "failed": int(tr.meta["n_failed"]),
                    "centreline_rms_px": float(np.sqrt(np.mean(D**2))),

@@ -19,6 +19,8 @@ from flutterswim._validate import ParameterError  # noqa: E402
 from flutterswim.analysis.descriptors import describe  # noqa: E402
 from flutterswim.analysis.track import Track  # noqa: E402
 from flutterswim.tracking import failures, render, track  # noqa: E402
+from flutterswim.tracking.evaluate import pixel_errors  # noqa: E402
+from flutterswim.tracking.evaluate import truth_track as _truth  # noqa: E402
 from flutterswim.tracking.render import line_image  # noqa: E402
 
 UM_PER_PX = 14.0
@@ -36,31 +38,7 @@ def sim():
 
 def truth_track(mv) -> Track:
     """The simulated centrelines in the movie's image frame, mm."""
-    mm = mv.um_per_px / 1000.0
-    return Track(t=mv.t, x=mv.x_px * mm, y=mv.y_px * mm, units="mm", length=3.7)
-
-
-def pixel_errors(tr: Track, mv) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per tracked frame: distances [px] of the tracked points to the true curve (T, P), and
-    the two tip errors [px] (T, 2), matched to the true s = 0 / s = l ends by frame 0; and
-    the indices of the tracked frames."""
-    info = tr.meta["frames"]
-    idx = np.nonzero(info["ok"])[0]
-    X, Y = info["x_px"], info["y_px"]
-    i0 = idx[0]
-    flip = math.hypot(X[i0, 0] - mv.x_px[i0, 0], Y[i0, 0] - mv.y_px[i0, 0]) > math.hypot(
-        X[i0, 0] - mv.x_px[i0, -1], Y[i0, 0] - mv.y_px[i0, -1])
-    if flip:
-        X, Y = X[:, ::-1], Y[:, ::-1]
-    D, E = [], []
-    for i in idx:
-        x, y = mv.x_px[i], mv.y_px[i]
-        s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
-        q = np.linspace(0.0, s[-1], 8000)
-        xs, ys = CubicSpline(s, x)(q), CubicSpline(s, y)(q)
-        D.append(np.min(np.hypot(X[i][:, None] - xs[None], Y[i][:, None] - ys[None]), axis=1))
-        E.append([math.hypot(X[i, 0] - x[0], Y[i, 0] - y[0]), math.hypot(X[i, -1] - x[-1], Y[i, -1] - y[-1])])
-    return np.array(D), np.array(E), idx
+    return _truth(mv, 3.7)
 
 
 @pytest.fixture(scope="module")
