@@ -79,7 +79,7 @@ def track_frame(img: np.ndarray, *, n_points: int = 49, sigma: float = 1.2, k_lo
         out["reason"] = "out of view: the body touches the edge of the frame"
         return out
     with np.errstate(over="ignore"):  # a flat log-profile fit overflows exp; that point is dropped
-        c = fit_centreline(seg.filtered, m, n_points=n_points)
+        c = fit_centreline(seg.filtered, m, n_points=n_points, half_width=max(3.0, 2.5 * sigma))
     contrast = c.plateau / seg.noise if seg.noise > 0 and math.isfinite(c.plateau) else math.nan
     out["contrast"] = contrast
     if math.isfinite(contrast) and contrast < min_contrast:
@@ -108,6 +108,43 @@ def track_frame(img: np.ndarray, *, n_points: int = 49, sigma: float = 1.2, k_lo
             return out
     out.update(x=x, y=y, length=float(np.sum(np.hypot(np.diff(x), np.diff(y)))), ok=True)
     return out
+
+
+def estimate_blur(img: np.ndarray, x: np.ndarray, y: np.ndarray, sigma_filter: float = 1.2) -> float:
+    """Gaussian sigma [px] of the line's cross profile (PSF and defocus together): the profiles
+    across the middle 80 % of the centreline (x, y), every px, of the frame smoothed by
+    ``sigma_filter``, each less its own baseline (its outer samples), are averaged and fitted
+    by b + A exp(-(d - m)^2 / 2 w^2); then sigma^2 = w^2 - sigma_filter^2."""
+    from scipy.optimize import curve_fit
+
+    from .tips import resample
+
+    L = float(np.sum(np.hypot(np.diff(x), np.diff(y))))
+    n = max(int(0.8 * L), 8)
+    xs, ys = resample(x, y, 0.1 * L, 0.9 * L, n)
+    tx, ty = np.gradient(xs), np.gradient(ys)
+    nn = np.hypot(tx, ty)
+    nn[nn == 0] = 1.0
+    nx, ny = -ty / nn, tx / nn
+    hw = max(8.0, 6.0 * sigma_filter)
+    d = np.arange(-hw, hw + 1e-9, 0.25)
+    f = ndi.gaussian_filter(np.asarray(img, np.float64), sigma_filter, mode="nearest")
+    P = ndi.map_coordinates(f, [(ys[:, None] + d * ny[:, None]).ravel(), (xs[:, None] + d * nx[:, None]).ravel()],
+                            order=1, mode="nearest").reshape(n, d.size)
+    outer = np.abs(d) >= hw - 2.0
+    prof = np.mean(P - np.median(P[:, outer], axis=1, keepdims=True), axis=0)
+
+    def g(u, A, m, w, b):
+        return b + A * np.exp(-0.5 * ((u - m) / w) ** 2)
+
+    try:
+        (A, m, w, b), _ = curve_fit(g, d, prof, p0=[float(prof.max()), 0.0, 1.7, 0.0], maxfev=2000)
+    except (RuntimeError, ValueError):
+        return math.nan
+    w = abs(float(w))
+    if not (A > 0 and w > sigma_filter):
+        return math.nan
+    return math.sqrt(max(w * w - sigma_filter**2, 0.25))
 
 
 def coarse_box(img: np.ndarray, k: int = 4) -> tuple[np.ndarray, np.ndarray] | None:
@@ -167,7 +204,7 @@ def orient(x: np.ndarray, y: np.ndarray, ref_x: np.ndarray, ref_y: np.ndarray) -
 
 
 def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any = None,
-          n_points: int = 49, start_end: str = "left", field_angle: float = 0.0, sigma: float = 1.2,
+          n_points: int = 49, start_end: str = "left", field_angle: float = 0.0, sigma: float | None = None,
           min_contrast: float = 4.0, length_tol: float = 0.03, jump_tol: float = 0.25,
           gap_fraction: float = 0.2, refine: bool = True, window_px: float = 40.0,
           fixed_length: bool = True, t0: float = 0.0,
@@ -179,7 +216,8 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     movie's own); roi: (x0, y0, x1, y1) pixels or "x0,y0,x1,y1"; n_points: arc-length samples;
     start_end: where the s = 0 end lies in the first good frame ("left", "right", "top",
     "bottom"), later frames follow by continuity; field_angle: field direction [rad] in image
-    axes (0: +x); window_px: margin of the search window around the last good body (0: whole
+    axes (0: +x); sigma: Gaussian sigma of the line's blur [px] (None: measured on the first
+    good frame, PSF and defocus together); window_px: margin of the search window around the last good body (0: whole
     frames); fixed_length: place each frame's ends so the body has the median length
     (inextensible; the measured lengths stay in the record). Per-frame results (all frames, failed ones NaN, with their reasons) are in
     ``track.meta["frames"]``; see the module docstring for the checks.
@@ -210,10 +248,21 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         bar = tqdm(total=T, unit="frame", desc="track", leave=False)
     tic = time.perf_counter()
     ref: tuple[np.ndarray, np.ndarray] | None = None
+    sig = 1.2 if sigma is None else positive("sigma", sigma)
+    blur_known = sigma is not None
     try:
         for i, img in enumerate(frames):
-            r = track_image(img, ref, window_px, n_points=n_points, sigma=sigma, min_contrast=min_contrast,
+            r = track_image(img, ref, window_px, n_points=n_points, sigma=sig, min_contrast=min_contrast,
                             gap_fraction=gap_fraction, refine=refine)
+            if sigma is None and not blur_known and r["ok"]:
+                # the blur of this movie, from its first good frame; that frame again if it is
+                # more than 15 % off the default
+                est = estimate_blur(img, r["x"], r["y"], sig)
+                blur_known = True
+                if math.isfinite(est) and abs(est - sig) > 0.15 * sig:
+                    sig = float(np.clip(est, 0.6, 6.0))
+                    r = track_image(img, None, window_px, n_points=n_points, sigma=sig, min_contrast=min_contrast,
+                                    gap_fraction=gap_fraction, refine=refine)
             contrast[i] = r["contrast"]
             if r["ok"]:
                 x, y = r["x"], r["y"]
@@ -281,7 +330,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     }
     meta = {
         "source": frames.source, "px_per_mm": px_per_mm, "fps": fps, "roi": frames.roi,
-        "frame_shape": frames.shape, "n_frames": T, "n_failed": T - n_ok,
+        "frame_shape": frames.shape, "n_frames": T, "psf_sigma_px": sig, "n_failed": T - n_ok,
         "length_px": L_px, "length_std_px": float(np.std(Lgood, ddof=1)) if n_ok > 1 else 0.0,
         "length_spread": float((Lgood.max() - Lgood.min()) / L_px), "wall_time_s": wall,
         "frames": frames_info,
