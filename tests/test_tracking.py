@@ -262,3 +262,22 @@ def test_snr3_all_descriptors_within_half_percent_over_15_cycles(long_sim):
 @pytest.mark.parametrize("snr,seed", [(3.0, 0), (3.0, 2), (5.0, 0), (10.0, 0)])
 def test_descriptors_within_half_percent_over_15_cycles_more_seeds(long_sim, snr, seed):
     _long_descriptors_within(long_sim, snr, seed, 0.005)
+
+
+def test_a_body_looping_over_itself_is_a_crossing():
+    from importlib import import_module
+
+    track_frame = import_module("flutterswim.tracking.track").track_frame
+    rng = np.random.default_rng(0)
+    s = np.linspace(0, 150, 151)
+    th = np.linspace(0, 1.9 * np.pi, 120)[1:]
+    # a straight body whose end curls back across it (loop of radius 20 px)
+    x = np.r_[30 + s, 180 + 20 * np.sin(th)]
+    y = np.r_[80 + 0 * s, 60 + 20 * np.cos(th)]
+    img = rng.poisson(100 + 40 * line_image(x, y, (140, 260), 1.2)).astype(np.float32)
+    r = track_frame(img)
+    assert not r["ok"] and r["reason"].startswith("crossing")
+    # the same body without the curl is tracked, with its length
+    img = rng.poisson(100 + 40 * line_image(30 + s, 80 + 0 * s, (140, 260), 1.2)).astype(np.float32)
+    r = track_frame(img)
+    assert r["ok"] and r["length"] == pytest.approx(150, abs=1.0)
