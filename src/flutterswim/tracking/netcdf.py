@@ -45,7 +45,7 @@ def to_xarray(tr: Track):
                                {"units": "mm", "long_name": "mean point distance to the last good frame"}),
         },
         coords={
-            "time": ("frame", np.asarray(info["t"], float), {"units": "s", "standard_name": "time", "long_name": "time"}),
+            "time": ("frame", np.asarray(info["t"], float), {"units": "s", "long_name": "time of the frame (index / fps)"}),
             "frame": ("frame", np.arange(ok.size), {"units": "1", "long_name": "frame index"}),
             "s": ("point", np.asarray(tr.s, float), {"units": "mm", "long_name": "arc length from the s = 0 end"}),
         },
