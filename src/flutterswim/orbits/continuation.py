@@ -33,6 +33,8 @@ N_MULTIPLIERS = 6
 #: Radau steps per period along a branch. Against 48 steps at kappa_E ratio 1.5 (N = 24):
 #: period 1.2e-6 and advance 3.6e-5 relative, far below the N = 24 space errors (1.7e-3, 1.4e-2).
 BRANCH_STEPS = 24
+#: Largest amplitude (along the unit Hopf eigenvector) of the branch's first orbit
+START_AMPLITUDE_CAP = 6.0
 
 
 @dataclass(frozen=True)
@@ -159,19 +161,18 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     length_p = abs(to - hopf.value)
     # the shape moves along the orbit as well as in amplitude: a few times the amplitude range
     length_u = 3.0 * math.sqrt(nf.amplitude2_slope * length_p)
-    # first orbit from the normal form, a small distance into the branch
+    # first orbit a small distance into the branch: its amplitude along the Hopf eigenvector
+    # from the normal form at 0.2 % (or 1 % of the range) past the Hopf point, capped where the
+    # first Lyapunov coefficient nearly vanishes (a degenerate Hopf point: the amplitude law
+    # there is no longer a square root); solved with the amplitude fixed and the parameter free
     d1 = side * min(0.01 * length_p, 0.002 * abs(hopf.value) if hopf.value != 0 else 0.01 * length_p)
-    amp = math.sqrt(nf.amplitude2_slope * abs(d1))
-    sysm = _systems(axis, hopf.value + d1, n_segments)
-    u_guess = sysm.straight() + amp * hopf.q.real
-    T_guess = 2 * math.pi / hopf.omega
+    amp = min(math.sqrt(nf.amplitude2_slope * abs(d1)), START_AMPLITUDE_CAP)
+    d1 = side * amp * amp / nf.amplitude2_slope
+    sysm, u, T, fl, res, it, p1 = _amplitude_start(axis, n_segments, steps, hopf, amp, hopf.value + d1, tol,
+                                                   2 * max_newton)
     orbits: list[PeriodicOrbit] = []
-    values: list[float] = []
-    from .periodic import solve_orbit
-
-    u, T, fl, res, it = solve_orbit(sysm, u_guess, T_guess, steps=steps, tol=tol, max_newton=2 * max_newton)
-    values.append(hopf.value + d1)
-    orbits.append(orbit_from_flow(axis.at(values[-1]), sysm, fl, res, it, steps))
+    values: list[float] = [p1]
+    orbits.append(orbit_from_flow(axis.at(p1), sysm, fl, res, it, steps))
     X = [np.concatenate((u, [T, values[-1]]))]
     fls = [fl]
     w = _weights(u.size, length_u, length_p)
@@ -185,9 +186,10 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
             break
         xk = X[-1]
         if len(X) == 1:
+            # along the amplitude: du/da = (u - u_s)/a, dp/da = 2 a / slope (square-root law)
             tangent = np.zeros_like(xk)
-            tangent[-1] = side
-            tangent[:-2] = (u - sysm.straight()) / (2 * abs(d1)) * side  # d(amp)/dp of the sqrt law
+            tangent[:-2] = (u - sysm.straight()) / amp
+            tangent[-1] = side * 2 * amp / nf.amplitude2_slope
         else:
             tangent = X[-1] - X[-2]
         tangent = tangent / math.sqrt(np.sum((tangent * w) ** 2))
@@ -222,6 +224,44 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
         bar.close()
     return Branch(axis, np.array(values), orbits, hopf.value, hopf.omega, nf.lyapunov_coefficient,
                   nf.amplitude2_slope, n_segments, steps, time.perf_counter() - t_start, message)
+
+
+def _amplitude_start(axis, n, steps, hopf, amp, p_guess, tol, max_newton):
+    """The orbit of amplitude ``amp`` along the Hopf eigenvector q: Newton on (u, T, p) with
+    the phase condition (u - u_s).q_i = 0 and the amplitude condition (u - u_s).q_r = amp |q_r|^2
+    (q_r, q_i: real and imaginary parts of q, q_i orthogonalised). Well posed however flat the
+    amplitude law is at the Hopf point."""
+    qr = hopf.q.real.copy()
+    qi = hopf.q.imag - (hopf.q.imag @ qr) / (qr @ qr) * qr
+    qi /= np.linalg.norm(qi)
+    us = _systems(axis, hopf.value, n).straight()
+    m = us.size
+    x = np.concatenate((us + amp * qr, [2 * math.pi / hopf.omega, p_guess]))
+    fl, dphi_dp, res = None, None, math.inf
+    for it in range(1, max_newton + 1):
+        u, T, p = x[:m], x[m], x[-1]
+        sysm, fl = _closing(axis, n, steps, u, T, p, fl, True, derivative_tol=1e-6)
+        r = fl.y[-1, 2:] - u
+        res = float(np.max(np.abs(r)))
+        cond = np.array([qi @ (u - us), qr @ (u - us) - amp * (qr @ qr)])
+        if res < tol and np.max(np.abs(cond)) < 1e-10 * (1.0 + amp):
+            _, final = _closing(axis, n, steps, u, T, p, fl, True)
+            return sysm, u, T, final, float(np.max(np.abs(final.y[-1, 2:] - u))), it, float(p)
+        if dphi_dp is None:
+            dp = 1e-6 * abs(p) if p != 0 else 1e-6
+            _, fl_p = _closing(axis, n, steps, u, T, p + dp, fl, False)
+            dphi_dp = (fl_p.y[-1, 2:] - fl.y[-1, 2:]) / dp
+        a = np.zeros((m + 2, m + 2))
+        a[:m, :m] = fl.monodromy - np.eye(m)
+        a[:m, m] = fl.f[-1, 2:]
+        a[:m, m + 1] = dphi_dp
+        a[m, :m] = qi
+        a[m + 1, :m] = qr
+        x = x + np.linalg.solve(a, -np.concatenate((r, cond)))
+        if not (np.all(np.isfinite(x)) and x[m] > 0):
+            raise OrbitNotFound(f"the start from the Hopf point left the admissible region at iteration {it}")
+    raise OrbitNotFound(f"the start from the Hopf point did not converge in {max_newton} iterations "
+                        f"(residual {res:.3g})")
 
 
 def _hopf_bracket(axis: Axis, n: int, base: float, to: float) -> tuple[float, float] | None:
