@@ -74,11 +74,28 @@ def _simulate(args: argparse.Namespace) -> int:
     return 0 if run.ok else 1
 
 
-def _describe(args: argparse.Namespace) -> int:
-    from .analysis.descriptors import describe
+def _load_run_or_track(path: str):
+    """A simulated run, or a movie tracked by ``flutterswim track`` (same analysis)."""
+    from ._validate import ParameterError
     from .result import load
 
-    desc = describe(load(args.run), n_last=args.last)
+    try:
+        return load(path)
+    except ParameterError as exc:
+        if "not a flutterswim run" not in str(exc):
+            raise
+        from .tracking.netcdf import load_track
+
+        try:
+            return load_track(path)
+        except ParameterError:
+            raise exc from None
+
+
+def _describe(args: argparse.Namespace) -> int:
+    from .analysis.descriptors import describe
+
+    desc = describe(_load_run_or_track(args.run), n_last=args.last)
     d = desc.to_dict()
     if args.json:
         print(json.dumps(d, indent=2))
@@ -103,9 +120,8 @@ def _plot(args: argparse.Namespace) -> int:
     out = args.out or str(Path(args.run).with_suffix("")) + f"_{args.kind}.png"
     check_output_file(out, FIGURE_SUFFIXES, what="--out")
     from .plotting import figures
-    from .result import load
 
-    run = load(args.run)
+    run = _load_run_or_track(args.run)
     func = {"ghosts": figures.plot_ghosts, "swimmer": figures.plot_swimmer,
             "kymograph": figures.plot_kymographs, "descriptors": figures.plot_descriptors,
             "summary": figures.plot_summary}[args.kind]
