@@ -179,7 +179,10 @@ def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: in
         r = fl.y[-1, 2:] - u
         res = float(np.max(np.abs(r)))
         if res < tol:
-            final = flow(system, u, T, steps, variational=True, warm=fl)
+            try:
+                final = flow(system, u, T, steps, variational=True, warm=fl)
+            except StepFailure as exc:
+                raise OrbitNotFound(f"the final pass at the converged orbit failed: {exc}") from None
             return u, T, final, float(np.max(np.abs(final.y[-1, 2:] - u))), it
         a = np.zeros((m + 1, m + 1))
         a[:m, :m] = fl.monodromy - np.eye(m)

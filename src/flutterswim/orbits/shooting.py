@@ -114,6 +114,8 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
                 raise StepFailure(f"non-finite stage values at step {step} of {steps}")
             if size < stage_tol * scale:
                 break
+            if size < 1e3 * stage_tol * scale and size >= 0.5 * last:
+                break  # at the rounding floor: the corrections no longer shrink
             if size > 0.1 * last and it >= 1:  # slow: a fresh matrix at the current iterate
                 jac, lu, y_lu = step_matrix(z)
             last = size
