@@ -153,3 +153,32 @@ def test_the_trap_is_the_bent_equilibrium_family():
         res.append(np.max(np.abs(k[1:-1] + chi * np.sin(0.5 * (th[1:] + th[:-1])))) / chi)
     assert res[1] < 0.6 * res[0], res
     assert list(tilt_basin(P, [0.5, 8.0])) == ["limit_cycle", "bent_equilibrium"]
+
+
+@pytest.mark.parametrize("seconds_per_turn", [60.0, 30.0])
+def test_turning_does_not_bias_the_lateral_amplitudes(seconds_per_turn):
+    """A settled straight stroke turned rigidly (each frame rotated about its centroid at a
+    constant rate, the centroid path bent to match) has the same body-frame stroke: describe
+    reads both ends' lateral peak-to-peak as for the straight run, within 1 % (it read 3-12 %
+    low when measuring across fixed per-cycle directions)."""
+    from scipy.integrate import cumulative_trapezoid
+
+    from flutterswim.analysis.track import Track
+
+    r = fs.simulate(P, 30.0, n_segments=24, frame_dt=0.02)
+    d0 = fs.describe(r, n_last=10)
+    m = r.t > 10.0
+    t = r.t[m]
+    a = 2 * math.pi / seconds_per_turn * (t - 10.0)
+    xc, yc = r.x[m].mean(axis=1), r.y[m].mean(axis=1)
+    c, s = np.cos(a), np.sin(a)
+    vx, vy = np.gradient(xc, t), np.gradient(yc, t)
+    X = cumulative_trapezoid(c * vx - s * vy, t, initial=0)[:, None]
+    Y = cumulative_trapezoid(s * vx + c * vy, t, initial=0)[:, None]
+    dx, dy = r.x[m] - xc[:, None], r.y[m] - yc[:, None]
+    turned = Track(t=t, x=X + c[:, None] * dx - s[:, None] * dy, y=Y + s[:, None] * dx + c[:, None] * dy,
+                   field_angle=a, units="m")
+    d = fs.describe(turned, n_last=10)
+    assert d.trailing_lateral_p2p_mm == pytest.approx(d0.trailing_lateral_p2p_mm, rel=0.01)
+    assert d.leading_lateral_p2p_mm == pytest.approx(d0.leading_lateral_p2p_mm, rel=0.01)
+    assert d.period_s == pytest.approx(d0.period_s, rel=1e-3)

@@ -51,15 +51,32 @@ def _fourier_p2p(phase: np.ndarray, q: np.ndarray, harmonics: int) -> float:
 
 
 def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmonics: int) -> np.ndarray:
-    """Per cycle: peak-to-peak of point ``i_end`` across direction ang[k] (Fourier fit)."""
+    """Per cycle: peak-to-peak of point ``i_end`` across direction ang[k] (Fourier fit).
+
+    When the directions differ between cycles (a turning swimmer) the measuring frame turns
+    with the swimmer: across a direction turning at the cycles' rate (from the directions of
+    the neighbouring cycles) and relative to the cycle's mean centroid path (a linear fit over
+    the cycle), so the body's own turn within a cycle is not read as lateral motion."""
     K = st.size - 1
     p2p = np.full(K, np.nan)
     lo = np.searchsorted(tr.t, st[:-1], side="left")
     hi = np.searchsorted(tr.t, st[1:], side="left")  # frames with st[k] <= t < st[k+1]
+    turning = K >= 2 and float(np.ptp(ang)) > 0.0
+    if turning:
+        tm = 0.5 * (st[:-1] + st[1:])
+        omega = np.gradient(np.unwrap(ang), tm)
+        xc, yc = tr.centroid()
     for k in range(K):
         if hi[k] - lo[k] >= 4:
             sl = slice(lo[k], hi[k])
-            q = -tr.x[sl, i_end] * math.sin(ang[k]) + tr.y[sl, i_end] * math.cos(ang[k])
+            if turning:
+                dt = tr.t[sl] - tm[k]
+                a = ang[k] + omega[k] * dt
+                bx, by = np.polyfit(dt, xc[sl], 1), np.polyfit(dt, yc[sl], 1)  # mean centroid path
+                q = (-(tr.x[sl, i_end] - np.polyval(bx, dt)) * np.sin(a)
+                     + (tr.y[sl, i_end] - np.polyval(by, dt)) * np.cos(a))
+            else:
+                q = -tr.x[sl, i_end] * math.sin(ang[k]) + tr.y[sl, i_end] * math.cos(ang[k])
             p2p[k] = _fourier_p2p((tr.t[sl] - st[k]) / (st[k + 1] - st[k]), q, harmonics)
     return p2p
 
