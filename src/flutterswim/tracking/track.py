@@ -15,7 +15,10 @@ the raw pixels). A frame is flagged, never kept, when:
   ``length_tol`` (a partial or merged body);
 - tip not found: the line-end fit failed at an end;
 - jump: the centreline moved more than ``jump_tol`` body lengths since the last good frame,
-  or head and tail cannot be told apart (both assignments about equally close).
+  or head and tail cannot be told apart (both assignments about equally close);
+- tip outlier: an end leaves the path of its neighbouring frames (across the body, by more
+  than ``tip_k`` robust standard deviations and ``tip_floor_px``), see
+  :mod:`flutterswim.tracking.temporal`.
 
 Coordinates: x = column, y = row (image axes, y pointing down), pixel centres at integers,
 converted to mm by ``px_per_mm``; times = frame index / fps.
@@ -207,8 +210,8 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
           n_points: int = 49, start_end: str = "left", field_angle: float = 0.0, sigma: float | None = None,
           min_contrast: float = 4.0, length_tol: float = 0.03, jump_tol: float = 0.25,
           gap_fraction: float = 0.2, refine: bool = True, window_px: float = 40.0,
-          fixed_length: bool = True, t0: float = 0.0,
-          progress: bool = False) -> Track:
+          fixed_length: bool = True, tip_check: bool = True, tip_k: float = 6.0, tip_floor_px: float = 2.0,
+          smooth_frames: int = 7, t0: float = 0.0, progress: bool = False) -> Track:
     """Track the filament in a movie and return its :class:`Track` (good frames only, mm, s).
 
     source: TIFF stack, folder of PNG/TIFF frames, MP4/AVI movie (path), an array (T, H, W)
@@ -219,11 +222,21 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     axes (0: +x); sigma: Gaussian sigma of the line's blur [px] (None: measured on the first
     good frame, PSF and defocus together); window_px: margin of the search window around the last good body (0: whole
     frames); fixed_length: place each frame's ends so the body has the median length
-    (inextensible; the measured lengths stay in the record). Per-frame results (all frames, failed ones NaN, with their reasons) are in
+    (inextensible; the measured lengths stay in the record); tip_check: flag a frame whose
+    end leaves the path of its neighbouring frames by more than tip_k robust standard
+    deviations and tip_floor_px (:func:`flutterswim.tracking.temporal.tip_outliers`);
+    smooth_frames: window [frames] of the along-body position of the ends, smoothed in time
+    through the middle of the body (:func:`~flutterswim.tracking.temporal.smooth_offsets`;
+    0: off; the ends' paths are never smoothed). Per-frame results (all frames, failed ones NaN, with their reasons) are in
     ``track.meta["frames"]``; see the module docstring for the checks.
     """
     px_per_mm = positive("px_per_mm", px_per_mm)
     n_points = positive_int("n_points", n_points, 5)
+    tip_k = positive("tip_k", tip_k)
+    tip_floor_px = positive("tip_floor_px", tip_floor_px)
+    if smooth_frames != 0 and not (isinstance(smooth_frames, (int, np.integer)) and smooth_frames >= 7):
+        raise ParameterError(f"smooth_frames={smooth_frames!r} is not allowed; give 0 (off) or a whole number "
+                             "of frames >= 7 (the window of a quartic in time)")
     if start_end not in START_ENDS:
         raise ParameterError(f"start_end={start_end!r} is not allowed; choose one of {', '.join(START_ENDS)}")
     frames = open_frames(source, roi)
@@ -301,6 +314,24 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         ok &= ~bad
     X[~ok] = np.nan
     Y[~ok] = np.nan
+    from .temporal import frames_per_stroke, smoothing_allowed
+
+    per_stroke = frames_per_stroke(X, Y, ok)
+    temporal = {"frames_per_stroke": per_stroke, "tip_check": "off", "smoothing": "off"}
+    if tip_check and not per_stroke >= 12:
+        temporal["tip_check"] = f"not done: {per_stroke:.1f} frames per stroke (needs >= 12)"
+    elif tip_check:
+        from .temporal import tip_outliers
+
+        temporal["tip_check"] = f"done (k = {tip_k:g}, floor {tip_floor_px:g} px)"
+        for i, e, res, z in tip_outliers(X, Y, ok, k=tip_k, floor_px=tip_floor_px):
+            if ok[i]:
+                ok[i] = False
+                reason[i] = (f"tip outlier: the {'s = l' if e else 's = 0'} end is {abs(res):.1f} px "
+                             f"({z:.1f} robust SD, > {tip_k:g} and > {tip_floor_px:g} px) off the path of "
+                             "its neighbouring frames")
+        X[~ok] = np.nan
+        Y[~ok] = np.nan
     if fixed_length and np.count_nonzero(ok) >= 3:
         # the body is inextensible: slide each frame's ends along the curve so its length is
         # the median; the two ends' errors along the body are independent, so their mean
@@ -311,6 +342,16 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         for i in np.nonzero(ok)[0]:
             h = 0.5 * (length[i] - med)
             X[i], Y[i] = resample(X[i], Y[i], h, length[i] - h, n_points)
+    if smooth_frames:
+        from .temporal import smooth_offsets
+
+        w = int(smooth_frames) | 1
+        if smoothing_allowed(w, 4, per_stroke):
+            X, Y, _ = smooth_offsets(X, Y, ok, window=w, degree=4)
+            temporal["smoothing"] = f"end offsets along the body, window {w} frames, quartic"
+        else:
+            temporal["smoothing"] = (f"not done: {per_stroke:.1f} frames per stroke, too few for a quartic over "
+                                     f"{w} frames")
     n_ok = int(np.count_nonzero(ok))
     if n_ok < 2:
         counts: dict[str, int] = {}
@@ -333,7 +374,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         "frame_shape": frames.shape, "n_frames": T, "psf_sigma_px": sig, "n_failed": T - n_ok,
         "length_px": L_px, "length_std_px": float(np.std(Lgood, ddof=1)) if n_ok > 1 else 0.0,
         "length_spread": float((Lgood.max() - Lgood.min()) / L_px), "wall_time_s": wall,
-        "frames": frames_info,
+        "frames": frames_info, "temporal": temporal,
     }
     return Track(t=t_all[ok], x=X[ok] * scale, y=Y[ok] * scale, s=np.linspace(0.0, L_px * scale, n_points),
                  field_angle=field_angle, length=L_px * scale, units="mm", meta=meta)
