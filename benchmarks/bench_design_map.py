@@ -5,17 +5,20 @@ Axes: the activity kappa_E / kappa_E(paper) (0.5 to 2) and the viscosity mu / mu
 (0.5 to 2, logarithmic), paper preset otherwise, N = 24 (the sweeps' resolution,
 ``flutterswim.defaults.SWEEP_N_SEGMENTS``), field along e1.
 
-Each point: the straight state's leading eigenvalue (:func:`flutterswim.orbits.leading_pair`)
-says whether the filament flutters (growth > 0); if not, the point is ``straight`` (the Hopf
-bifurcation is supercritical here, so no stroke coexists). A fluttering point is time-stepped
-with the compiled NDF (the default integrator) in chunks of 10 linear periods, each row from
-the strongest activity down, each point started from its neighbour's final state (the first
-from the paper's 0.01 degree tilt); after each chunk :func:`detect_cycles` judges the chunk's
-cycles, and the point is ``settled`` when the last 3 cycles agree in period, amplitude and
-shape to 1 % (``limit_cycle``); then :func:`describe` of the last 5 cycles gives the stroke's
-descriptors. At most 8 chunks (``unsettled`` after that, descriptors of the last chunk kept).
-Periodic-orbit continuation was timed as the alternative: 0.3-0.35 s an orbit from a neighbour
-at N = 24 (5 Newton steps) against ~30 ms here, and Newton fails in part of the map.
+Every stroke on the map is a periodic orbit (Newton shooting, stable Floquet multipliers), not
+a time-stepped state that merely looks periodic. Each row (one viscosity) runs from the
+strongest activity down:
+- the stroke of the previous point is the guess, and its flow (stages, step matrices) the warm
+  start, of Newton shooting at this point (natural continuation along the row);
+- if there is no previous stroke, or shooting fails, or the orbit found is unstable, the point
+  goes to the settle engine (:func:`flutterswim.settle.settle`: time stepping from the
+  neighbour's state, or from the paper's tilt, until the oscillation is steady, then Newton
+  shooting on it); its outcome is recorded (``limit_cycle``, ``straight``, ``bent_equilibrium``,
+  ``not_periodic``, ...);
+- a point whose straight state is linearly stable and where no stroke continues from the
+  neighbour is ``straight`` (linear theory, :func:`flutterswim.orbits.leading_pair`).
+Going down in activity, a stroke that survives below the Hopf curve shows a subcritical region
+(bistability); the figure says the direction.
 
 Rows are spread over 2 worker processes (one BLAS thread each).
 
@@ -37,11 +40,20 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 N_SEG = 24
-CHUNK_PERIODS = 10
-MAX_CHUNKS = 8
-FIELDS = ("period_s", "advance_per_cycle_mm", "speed_mm_s", "tip_lateral_p2p_mm", "nonreciprocity",
-          "self_intersecting")
-OUTCOMES = ("straight", "settled", "unsettled", "failed")
+STEPS = 24  # Radau steps per period, as the branches (orbits.continuation.BRANCH_STEPS)
+FIELDS = ("period_s", "advance_per_cycle_mm", "advance_along_field_mm", "speed_mm_s", "lateral_trailing_mm", "lateral_leading_mm",
+          "nonreciprocity", "self_intersecting", "max_multiplier")
+OUTCOMES = ("straight", "orbit", "not_periodic", "bent_equilibrium", "failed")
+
+
+def _record(out: dict, i: int, orb) -> None:
+    vals = {"period_s": orb.period, "advance_per_cycle_mm": orb.advance * 1e3,
+            "advance_along_field_mm": orb.advance * math.cos(orb.swim_direction) * 1e3, "speed_mm_s": orb.speed * 1e3,
+            "lateral_trailing_mm": orb.lateral_trailing * 1e3, "lateral_leading_mm": orb.lateral_leading * 1e3,
+            "nonreciprocity": orb.nonreciprocity, "self_intersecting": float(orb.self_intersecting),
+            "max_multiplier": orb.max_multiplier}
+    for k in FIELDS:
+        out[k][i] = float(vals[k])
 
 
 def row(args: tuple[float, np.ndarray]) -> dict:
@@ -49,52 +61,61 @@ def row(args: tuple[float, np.ndarray]) -> dict:
     mu_f, ratios = args
     import flutterswim as fs
     from flutterswim._validate import ParameterError
-    from flutterswim.analysis.cycles import detect_cycles
-    from flutterswim.analysis.descriptors import describe
     from flutterswim.initial import InitialState
-    from flutterswim.orbits import leading_pair
+    from flutterswim.orbits import OrbitNotFound, leading_pair
+    from flutterswim.orbits.periodic import orbit_from_flow, solve_orbit
+    from flutterswim.orbits.system import ShapeSystem
+    from flutterswim.settle import settle
 
     P = fs.PAPER
     t0 = time.perf_counter()
     out = {k: [math.nan] * len(ratios) for k in FIELDS}
     out["outcome"] = ["straight"] * len(ratios)
-    out["chunks"] = [0] * len(ratios)
-    out["steps"] = [0] * len(ratios)
-    state = None
+    out["how"] = [""] * len(ratios)
+    prev = older = None  # (u0, T, flow) of the previous point's stroke, and of the one before
+    state = None  # the previous point's final simulated state
     for i in np.argsort(ratios)[::-1]:
         p = P.replace(mu=P.mu * mu_f, kappa_E=P.kappa_E * ratios[i])
-        try:
-            lam = leading_pair(p.groups, N_SEG)
-        except ParameterError:
-            lam = complex(-1.0, 0.0)
-        if lam.real <= 0:
-            state = None  # below onset: the next (weaker) points start from the tilt again
-            continue
-        chunk = CHUNK_PERIODS * 2 * math.pi / lam.imag * p.tau
-        init = InitialState.straight() if state is None else InitialState.from_state(state, N_SEG)
-        t = 0.0
-        try:
-            for c in range(MAX_CHUNKS):
-                r = fs.simulate(p, t + chunk, t_start=t, initial=init, n_segments=N_SEG)
-                out["steps"][i] += r.stats.n_steps
-                out["chunks"][i] = c + 1
-                t = r.t_final
-                state = r.state_final
-                init = InitialState.from_state(state, N_SEG)
-                try:
-                    settled = detect_cycles(r).limit_cycle
-                except ParameterError:
-                    settled = False
-                if settled or c == MAX_CHUNKS - 1:
-                    d = describe(r, n_last=5)
-                    for k in FIELDS:
-                        out[k][i] = float(getattr(d, k))
-                    out["outcome"][i] = "settled" if settled else "unsettled"
-                    break
-        except (ParameterError, RuntimeError, FloatingPointError) as exc:
-            out["outcome"][i] = "failed"
-            out.setdefault("errors", []).append(f"ratio {ratios[i]:.4g}: {exc}")
-            state = None
+        sysm = ShapeSystem.of(p, N_SEG)
+        orb = None
+        if prev is not None:
+            # secant predictor from the two previous strokes of the row (equal spacing)
+            u0, T0 = (2 * prev[0] - older[0], 2 * prev[1] - older[1]) if older is not None else prev[:2]
+            try:
+                u, T, fl, res, it = solve_orbit(sysm, u0, T0, steps=STEPS, warm=prev[2], max_newton=8,
+                                                exact_multipliers=False)
+                cand = orbit_from_flow(p, sysm, fl, res, it, STEPS)
+                if cand.stable:
+                    orb, older, prev = cand, prev, (u, T, fl)
+                    out["how"][i] = "continued"
+            except (OrbitNotFound, FloatingPointError, np.linalg.LinAlgError):
+                pass  # (StepFailure is a FloatingPointError)
+        if orb is None:
+            prev = older = None
+            try:
+                lam = leading_pair(p.groups, N_SEG)
+            except ParameterError:
+                lam = complex(-1.0, 0.0)
+            if lam.real <= 0:
+                state = None  # linearly stable and no stroke continues here: straight
+                continue
+            init = InitialState.straight() if state is None else InitialState.from_state(state, N_SEG)
+            try:
+                st = settle(p, initial=init, n_segments=N_SEG, n_cycles=3, frames_per_tau=25, steps=STEPS)
+            except (ParameterError, RuntimeError, FloatingPointError) as exc:
+                out["outcome"][i] = "failed"
+                out.setdefault("errors", []).append(f"ratio {ratios[i]:.4g}: {exc}")
+                state = None
+                continue
+            state = np.asarray(st.run.state_final, float)
+            out["how"][i] = "settled"
+            if st.outcome != "limit_cycle" or st.orbit is None:
+                out["outcome"][i] = st.outcome if st.outcome in OUTCOMES else "not_periodic"
+                continue
+            orb = st.orbit
+            prev = (orb.u0, orb.period_dimensionless, None)
+        out["outcome"][i] = "orbit"
+        _record(out, i, orb)
     out["wall_s"] = time.perf_counter() - t0
     out["mu_factor"] = float(mu_f)
     return out
@@ -121,18 +142,23 @@ def plot(res: dict, path: Path) -> None:
     rows = res["rows"]
     oc = np.array([[OUTCOMES.index(o) for o in r["outcome"]] for r in rows])
     fig, axes = plt.subplots(2, 3, figsize=(14, 8), constrained_layout=True)
-    panels = (("advance_per_cycle_mm", "advance per cycle [mm]"), ("speed_mm_s", "speed [mm/s]"),
-              ("period_s", "period [s]"), ("tip_lateral_p2p_mm", "tip lateral peak-to-peak [mm]"),
+    panels = (("advance_along_field_mm", "advance per cycle along the field [mm]"), ("speed_mm_s", "speed [mm/s]"),
+              ("period_s", "period [s]"), ("lateral_trailing_mm", "trailing end lateral peak-to-peak [mm]"),
               ("nonreciprocity", "nonreciprocity (stroke area)"))
     for ax, (key, label) in zip(axes.flat, panels):
         z = np.array([r[key] for r in rows], float)
-        z = np.where(oc == OUTCOMES.index("settled"), z, np.nan)
-        m = ax.pcolormesh(x, y, z, shading="nearest")
+        z = np.where(oc == OUTCOMES.index("orbit"), z, np.nan)
+        if key == "advance_along_field_mm":  # signed: towards the field (red) or against it (blue)
+            v = float(np.nanmax(np.abs(z)))
+            m = ax.pcolormesh(x, y, z, shading="nearest", cmap="RdBu_r", vmin=-v, vmax=v)
+        else:
+            m = ax.pcolormesh(x, y, z, shading="nearest")
         fig.colorbar(m, ax=ax, label=label)
     ax = axes.flat[5]
     from matplotlib.colors import ListedColormap
 
-    m = ax.pcolormesh(x, y, oc, shading="nearest", cmap=ListedColormap(["0.85", "tab:green", "tab:orange", "tab:red"]),
+    m = ax.pcolormesh(x, y, oc, shading="nearest",
+                      cmap=ListedColormap(["0.85", "tab:green", "tab:orange", "tab:purple", "tab:red"]),
                       vmin=-0.5, vmax=len(OUTCOMES) - 0.5)
     cb = fig.colorbar(m, ax=ax, ticks=range(len(OUTCOMES)))
     cb.ax.set_yticklabels(OUTCOMES)
@@ -144,8 +170,9 @@ def plot(res: dict, path: Path) -> None:
         ax.set_xlabel("kappa_E / kappa_E(paper)")
         ax.set_ylabel("mu / mu(paper)")
     n = len(x) * len(y)
-    fig.suptitle(f"Design map, {len(x)} x {len(y)} points, N = {N_SEG}: each point time-stepped to a settled stroke "
-                 f"(white: straight or not settled); {res['wall_s']:.0f} s on {res['workers']} cores ({n} points)")
+    fig.suptitle(f"Design map, {len(x)} x {len(y)} points, N = {N_SEG}: every stroke a stable periodic orbit (Newton "
+                 f"shooting),\nrows continued from high to low activity; white: no stroke; "
+                 f"{res['wall_s']:.0f} s on {res['workers']} cores ({n} points)")
     tmp = path.with_suffix(".tmp.png")
     fig.savefig(tmp, dpi=100)
     os.replace(tmp, path)
@@ -162,9 +189,10 @@ def main() -> None:
     res = run_map(args.size, args.workers)
     oc = [o for r in res["rows"] for o in r["outcome"]]
     counts = {o: oc.count(o) for o in OUTCOMES}
-    steps = sum(sum(r["steps"]) for r in res["rows"])
+    how = [h for r in res["rows"] for h in r["how"]]
     print(f"{args.size}x{args.size} map on {args.workers} workers: {res['wall_s']:.1f} s; outcomes {counts}; "
-          f"{steps} steps; load average {os.getloadavg()}", flush=True)
+          f"{how.count('continued')} continued, {how.count('settled')} settled; load average {os.getloadavg()}",
+          flush=True)
     res["counts"] = counts
     res["load_average"] = os.getloadavg()
     suffix = "" if args.size == 64 else f"_{args.size}"
