@@ -171,26 +171,31 @@ def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: in
     m = u.size
     res = math.inf
     fl = warm
+    mono, chord = None, False
     for it in range(1, max_newton + 1):
         try:
             # stages solved to a fraction of the last residual (exactly once it is small), the
-            # derivative from the reused step matrices unless the stages moved by > 1e-2
+            # derivative from the reused step matrices unless the stages moved by > 1e-3; once
+            # the residual is small and falling fast, the last monodromy is kept (chord steps)
             stage_tol = min(1e-6, max(1e-13, 1e-4 * res)) if math.isfinite(res) else 1e-6
-            fl = flow(system, u, T, steps, variational=True, warm=fl, derivative_tol=1e-3, stage_tol=stage_tol)
+            fl = flow(system, u, T, steps, variational=not chord, warm=fl, derivative_tol=1e-3, stage_tol=stage_tol)
         except StepFailure as exc:  # the iterate left the region where the steps converge
             raise OrbitNotFound(f"Newton iteration {it}: {exc}") from None
         r = fl.y[-1, 2:] - u
-        res = float(np.max(np.abs(r)))
+        res_before, res = res, float(np.max(np.abs(r)))
+        if fl.monodromy is not None:
+            mono = fl.monodromy
         if res < tol:
             if not exact_multipliers:
-                return u, T, fl, res, it
+                return u, T, replace(fl, monodromy=mono), res, it
             try:
                 final = flow(system, u, T, steps, variational=True, warm=fl)
             except StepFailure as exc:
                 raise OrbitNotFound(f"the final pass at the converged orbit failed: {exc}") from None
             return u, T, final, float(np.max(np.abs(final.y[-1, 2:] - u))), it
+        chord = res < 1e-6 and res < 0.01 * res_before
         a = np.zeros((m + 1, m + 1))
-        a[:m, :m] = fl.monodromy - np.eye(m)
+        a[:m, :m] = mono - np.eye(m)
         a[:m, m] = fl.f[-1, 2:]
         a[m, :m] = normal
         rhs = np.concatenate((-r, [-(normal @ (u - u_ref))]))
