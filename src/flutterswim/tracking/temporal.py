@@ -82,24 +82,33 @@ def _leave_one_out(v: np.ndarray, ok: np.ndarray, half: int, degree: int) -> np.
 def tip_outliers(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, *, k: float = 6.0, floor_px: float = 2.0,
                  half: int = 2, degree: int = 2) -> list[tuple[int, int, float, float]]:
     """Ends that leave the path of their neighbouring frames: a list of (frame, end (0: s = 0,
-    1: s = l), residual [px], residual in robust standard deviations), largest first; see the
-    module docstring. X, Y (T, P) [px]; ok (T,) the good frames."""
-    ok = np.asarray(ok, bool)
+    1: s = l), residual [px], residual in robust standard deviations), in the order found
+    (the largest first, then again without it); see the module docstring. X, Y (T, P) [px]; ok (T,) the good frames."""
+    ok = np.array(ok, bool)
     if np.count_nonzero(ok) < 2 * half + 3:
         return []
     off = end_offsets_across(X, Y, ok)
-    out = []
-    for e in (0, 1):
-        r = _leave_one_out(off[:, e], ok, half, degree)
-        good = np.isfinite(r)
-        if np.count_nonzero(good) < 5:
-            continue
-        sd = 1.4826 * float(np.median(np.abs(r[good] - np.median(r[good]))))
-        if not sd > 0:
-            continue
-        for i in np.nonzero(good & (np.abs(r) > max(k * sd, floor_px)))[0]:
-            out.append((int(i), e, float(r[i]), float(abs(r[i]) / sd)))
-    out.sort(key=lambda o: -o[3])
+    out: list[tuple[int, int, float, float]] = []
+    # one at a time, largest first: an outlier also moves its neighbours' predictions, so the
+    # residuals are computed again without it
+    while np.count_nonzero(ok) >= 2 * half + 3:
+        worst = None
+        for e in (0, 1):
+            r = _leave_one_out(off[:, e], ok, half, degree)
+            good = np.isfinite(r)
+            if np.count_nonzero(good) < 5:
+                continue
+            sd = 1.4826 * float(np.median(np.abs(r[good] - np.median(r[good]))))
+            if not sd > 0:
+                continue
+            z = np.where(good, np.abs(r), 0.0) / sd
+            i = int(np.argmax(z))
+            if abs(r[i]) > max(k * sd, floor_px) and (worst is None or z[i] > worst[3]):
+                worst = (i, e, float(r[i]), float(z[i]))
+        if worst is None:
+            break
+        out.append(worst)
+        ok[worst[0]] = False
     return out
 
 
