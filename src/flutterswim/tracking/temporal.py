@@ -90,11 +90,14 @@ def tip_outliers(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, *, k: float = 6.0
     off = end_offsets_across(X, Y, ok)
     out: list[tuple[int, int, float, float]] = []
     # one at a time, largest first: an outlier also moves its neighbours' predictions, so the
-    # residuals are computed again without it
-    while np.count_nonzero(ok) >= 2 * half + 3:
+    # residuals are computed again without it (each end's series keeps its own good frames)
+    use = [ok.copy(), ok.copy()]
+    while True:
         worst = None
         for e in (0, 1):
-            r = _leave_one_out(off[:, e], ok, half, degree)
+            if np.count_nonzero(use[e]) < 2 * half + 3:
+                continue
+            r = _leave_one_out(off[:, e], use[e], half, degree)
             good = np.isfinite(r)
             if np.count_nonzero(good) < 5:
                 continue
@@ -108,7 +111,7 @@ def tip_outliers(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, *, k: float = 6.0
         if worst is None:
             break
         out.append(worst)
-        ok[worst[0]] = False
+        use[worst[1]][worst[0]] = False
     return out
 
 
