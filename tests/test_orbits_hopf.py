@@ -185,3 +185,20 @@ def test_periodic_orbit_near_onset_without_a_guess():
     orb = periodic_orbit(fs.PAPER.groups.replace(chi=hp.value + d), n_segments=16, steps=16)
     assert orb.stable and orb.residual < 1e-10
     assert orb.amplitude ** 2 == pytest.approx(nf.amplitude2_slope * d, rel=0.05)
+
+
+def test_continuation_starts_at_a_nearly_degenerate_hopf_point():
+    """At twice the paper's viscosity the first Lyapunov coefficient is ~500x smaller than at
+    the paper's (a degenerate Hopf point is near): the square-root seed is far too large there.
+    The branch still starts at the Hopf point (fixed-amplitude start), its orbits close to 1e-10
+    with the trivial multiplier 1 to 1e-8, and their amplitude grows from zero."""
+    p = fs.PAPER.replace(mu=2 * fs.PAPER.mu)
+    nf = normal_form(hopf_point(p, "kappa_E_ratio", n_segments=24))
+    nf0 = normal_form(hopf_point(fs.PAPER, "kappa_E_ratio", n_segments=24))
+    assert abs(nf.lyapunov_coefficient) < 0.05 * abs(nf0.lyapunov_coefficient)
+    br = continue_orbits(p, "kappa_E_ratio", 1.0, n_points=6, n_segments=24, max_points=12)
+    assert len(br.orbits) >= 6
+    assert abs(br.values[0] / br.hopf_value - 1) < 1e-3
+    assert all(o.residual < 1e-10 and o.trivial_multiplier_error < 1e-8 for o in br.orbits)
+    amp = [o.amplitude for o in br.orbits]
+    assert np.all(np.diff(amp) > 0) and amp[0] < 0.5 * amp[-1]

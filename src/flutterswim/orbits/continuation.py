@@ -236,32 +236,48 @@ def _amplitude_start(axis, n, steps, hopf, amp, p_guess, tol, max_newton):
     qi /= np.linalg.norm(qi)
     us = _systems(axis, hopf.value, n).straight()
     m = us.size
-    x = np.concatenate((us + amp * qr, [2 * math.pi / hopf.omega, p_guess]))
-    fl, dphi_dp, res = None, None, math.inf
+    rows = np.zeros((2, m + 2))
+    rows[0, :m], rows[1, :m] = qi, qr
+
+    def conditions(x):
+        d = x[:m] - us
+        return np.array([qi @ d, qr @ d - amp * (qr @ qr)]), rows
+
+    x0 = np.concatenate((us + amp * qr, [2 * math.pi / hopf.omega, p_guess]))
+    x, sysm, final, res, it = _newton_bordered(axis, n, steps, x0, None, conditions, 1e-10 * (1.0 + amp), tol,
+                                               max_newton, "the start from the Hopf point")
+    return sysm, x[:m], x[m], final, res, it, float(x[-1])
+
+
+def _newton_bordered(axis, n, steps, x, warm, conditions, cond_tol, tol, max_newton, what):
+    """Newton on x = (u, T, p) for Phi(u, T, p) = u and two scalar conditions
+    ``conditions(x) -> (values (2,), their gradients (2, m + 2))``; dPhi/dp by a difference of
+    flows, formed at the first iteration and kept (it changes little over a corrector).
+    Returns (x, system, exact final flow, residual, iterations)."""
+    m = x.size - 2
+    fl, dphi_dp, res = warm, None, math.inf
     for it in range(1, max_newton + 1):
         u, T, p = x[:m], x[m], x[-1]
         sysm, fl = _closing(axis, n, steps, u, T, p, fl, True, derivative_tol=1e-6)
         r = fl.y[-1, 2:] - u
         res = float(np.max(np.abs(r)))
-        cond = np.array([qi @ (u - us), qr @ (u - us) - amp * (qr @ qr)])
-        if res < tol and np.max(np.abs(cond)) < 1e-10 * (1.0 + amp):
+        c, rows = conditions(x)
+        if res < tol and np.max(np.abs(c)) < cond_tol:
             _, final = _closing(axis, n, steps, u, T, p, fl, True)
-            return sysm, u, T, final, float(np.max(np.abs(final.y[-1, 2:] - u))), it, float(p)
+            return x, sysm, final, float(np.max(np.abs(final.y[-1, 2:] - u))), it
         if dphi_dp is None:
-            dp = 1e-6 * abs(p) if p != 0 else 1e-6
+            dp = 1e-6 * abs(p) if p != 0 else 1e-6  # relative: physical parameters may be ~1e-14
             _, fl_p = _closing(axis, n, steps, u, T, p + dp, fl, False)
             dphi_dp = (fl_p.y[-1, 2:] - fl.y[-1, 2:]) / dp
         a = np.zeros((m + 2, m + 2))
         a[:m, :m] = fl.monodromy - np.eye(m)
         a[:m, m] = fl.f[-1, 2:]
         a[:m, m + 1] = dphi_dp
-        a[m, :m] = qi
-        a[m + 1, :m] = qr
-        x = x + np.linalg.solve(a, -np.concatenate((r, cond)))
+        a[m:] = rows
+        x = x + np.linalg.solve(a, -np.concatenate((r, c)))
         if not (np.all(np.isfinite(x)) and x[m] > 0):
-            raise OrbitNotFound(f"the start from the Hopf point left the admissible region at iteration {it}")
-    raise OrbitNotFound(f"the start from the Hopf point did not converge in {max_newton} iterations "
-                        f"(residual {res:.3g})")
+            raise OrbitNotFound(f"{what}: Newton left the admissible region at iteration {it}")
+    raise OrbitNotFound(f"{what}: no convergence in {max_newton} iterations (residual {res:.3g})")
 
 
 def _hopf_bracket(axis: Axis, n: int, base: float, to: float) -> tuple[float, float] | None:
@@ -292,40 +308,20 @@ def _closing(axis, n, steps, u, T, p, warm, variational, derivative_tol=1e-10):
 
 
 def _newton_arclength(axis, n, steps, xk, warm, tangent, w, ds, tol, max_newton):
-    """Newton on (u, T, p) with the arclength condition; dPhi/dp by a difference of flows,
-    formed at the first iteration and kept (it changes little over a corrector)."""
+    """Corrector: Newton on (u, T, p) with the phase condition at the previous orbit and the
+    pseudo-arclength condition (weights ``w``) at distance ``ds`` along ``tangent``."""
     m = xk.size - 2
-    x = xk + ds * tangent
-    sys_k = _systems(axis, xk[-1], n)
-    normal = sys_k.f(xk[:m])
+    normal = _systems(axis, xk[-1], n).f(xk[:m])
     normal /= np.linalg.norm(normal)
-    fl = warm
-    dphi_dp = None
-    res = math.inf
-    for it in range(1, max_newton + 1):
-        u, T, p = x[:m], x[m], x[-1]
-        sysm, fl = _closing(axis, n, steps, u, T, p, fl, True, derivative_tol=1e-6)
-        r = fl.y[-1, 2:] - u
-        res = float(np.max(np.abs(r)))
-        arc = float(np.sum(w * w * tangent * (x - xk))) - ds
-        if res < tol and abs(arc) < 1e-8:
-            _, final = _closing(axis, n, steps, u, T, p, fl, True)
-            return x, final, float(np.max(np.abs(final.y[-1, 2:] - u))), it
-        if dphi_dp is None:
-            dp = 1e-6 * abs(p) if p != 0 else 1e-6  # relative: physical parameters may be ~1e-14
-            _, fl_p = _closing(axis, n, steps, u, T, p + dp, fl, False)
-            dphi_dp = (fl_p.y[-1, 2:] - fl.y[-1, 2:]) / dp
-        a = np.zeros((m + 2, m + 2))
-        a[:m, :m] = fl.monodromy - np.eye(m)
-        a[:m, m] = fl.f[-1, 2:]
-        a[:m, m + 1] = dphi_dp
-        a[m, :m] = normal
-        a[m + 1] = w * w * tangent
-        rhs = -np.concatenate((r, [normal @ (u - xk[:m]), arc]))
-        x = x + np.linalg.solve(a, rhs)
-        if not (np.all(np.isfinite(x)) and x[m] > 0):
-            raise OrbitNotFound(f"Newton left the admissible region at iteration {it}")
-    raise OrbitNotFound(f"no convergence in {max_newton} iterations (residual {res:.3g})")
+    rows = np.zeros((2, m + 2))
+    rows[0, :m], rows[1] = normal, w * w * tangent
+
+    def conditions(x):
+        return np.array([normal @ (x[:m] - xk[:m]), float(np.sum(w * w * tangent * (x - xk))) - ds]), rows
+
+    x, _, final, res, it = _newton_bordered(axis, n, steps, xk + ds * tangent, warm, conditions, 1e-8, tol,
+                                            max_newton, "corrector")
+    return x, final, res, it
 
 
 def _newton_natural(axis, n, steps, xk, warm, p, tol, max_newton):
