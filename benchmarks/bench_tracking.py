@@ -8,7 +8,8 @@ frame (coarse 4x-reduced localisation, then the window around it); ``whole frame
 segmentation of the whole 512 x 512 frame (the fallback); ``in a movie``: per frame of a 100-frame 512 x
 512 movie (after the first frame, the search window follows the body; the whole frame is
 searched again whenever a frame fails in the window). Accuracy: per SNR and noise seed,
-centreline RMS distance to the true curve and tip RMS error [px], and the relative error of
+centreline RMS distance to the true curve and tip RMS error [px], frames flagged (of which
+tip outliers), whether the ends' offsets were smoothed in time, and the relative error of
 the descriptors of :func:`describe` against those of the simulated centrelines on the same
 frames.
 """
@@ -94,7 +95,9 @@ def accuracy(sim, seeds: int) -> list[dict]:
                    "centreline_rms_px": float(np.sqrt(np.mean(D**2))),
                    "worst_frame_rms_px": float(np.sqrt(np.mean(D**2, axis=1)).max()),
                    "tip_rms_px": float(np.sqrt(np.mean(E**2))), "tip_max_px": float(E.max()),
-                   "length_spread": tr.meta["length_spread"], "cycles": dm.n_cycles_used}
+                   "length_spread": tr.meta["length_spread"], "cycles": dm.n_cycles_used,
+                   "tip_outliers": sum(r.startswith("tip outlier") for r in tr.meta["frames"]["reason"]),
+                   "smoothing": tr.meta["temporal"]["smoothing"].split(",")[0]}
             for k in KEYS:
                 row[k + "_rel_err_pct"] = 100 * (getattr(dm, k) - getattr(dt, k)) / getattr(dt, k)
             rows.append(row)
