@@ -26,10 +26,8 @@ _GRID = 256
 _GRID_BASIS: dict[int, np.ndarray] = {}
 
 
-def _fourier_p2p(phase: np.ndarray, q: np.ndarray, harmonics: int) -> float:
-    """Peak-to-peak of a least-squares Fourier series in phase (period 1) fitted to q: each
-    extreme on a 256-point grid refined by the parabola through it and its neighbours (error
-    ~ (2 pi H / 256)^4 / 24 of the top harmonic's amplitude)."""
+def _fourier_fit(phase: np.ndarray, q: np.ndarray, harmonics: int):
+    """Least-squares Fourier series in phase (period 1): (harmonic coefficients (2H,), H)."""
     H = int(min(harmonics, max(1, (phase.size - 1) // 4)))
     w = 2 * np.pi * np.arange(1, H + 1)
     arg = np.outer(phase, w)
@@ -38,9 +36,16 @@ def _fourier_p2p(phase: np.ndarray, q: np.ndarray, harmonics: int) -> float:
         coef = np.linalg.solve(A.T @ A, A.T @ q)
     except np.linalg.LinAlgError:
         coef = np.linalg.lstsq(A, q, rcond=None)[0]
+    return coef[1:], H
+
+
+def _waveform_p2p(coef: np.ndarray, H: int) -> float:
+    """Peak-to-peak of the Fourier series with harmonic coefficients ``coef``: each extreme on
+    a 256-point grid refined by the parabola through it and its neighbours (error
+    ~ (2 pi H / 256)^4 / 24 of the top harmonic's amplitude)."""
     if H not in _GRID_BASIS:
-        g = np.outer(np.arange(_GRID) / _GRID, w)
-        _GRID_BASIS[H] = np.hstack([np.ones((_GRID, 1)), np.cos(g), np.sin(g)])
+        g = np.outer(np.arange(_GRID) / _GRID, 2 * np.pi * np.arange(1, H + 1))
+        _GRID_BASIS[H] = np.hstack([np.cos(g), np.sin(g)])
     f = _GRID_BASIS[H] @ coef
     ext = []
     for i in (int(np.argmax(f)), int(np.argmin(f))):
@@ -50,15 +55,20 @@ def _fourier_p2p(phase: np.ndarray, q: np.ndarray, harmonics: int) -> float:
     return float(ext[0] - ext[1])
 
 
-def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmonics: int) -> np.ndarray:
-    """Per cycle: peak-to-peak of point ``i_end`` across direction ang[k] (Fourier fit).
+def _fourier_p2p(phase: np.ndarray, q: np.ndarray, harmonics: int) -> float:
+    """Peak-to-peak of a least-squares Fourier series in phase (period 1) fitted to q."""
+    return _waveform_p2p(*_fourier_fit(phase, q, harmonics))
+
+
+def _lateral_series(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray) -> list:
+    """Per cycle: (phase, lateral coordinate of point ``i_end`` across direction ang[k]), or
+    None for a cycle with fewer than 4 frames.
 
     When the directions differ between cycles (a turning swimmer) the measuring frame turns
     with the swimmer: across a direction turning at the cycles' rate (from the directions of
-    the neighbouring cycles) and relative to the cycle's mean centroid path (a linear fit over
-    the cycle), so the body's own turn within a cycle is not read as lateral motion."""
+    the neighbouring cycles) and relative to the cycle's mean centroid path (its mean velocity
+    through its mean position), so the body's own turn within a cycle is not read as lateral motion."""
     K = st.size - 1
-    p2p = np.full(K, np.nan)
     lo = np.searchsorted(tr.t, st[:-1], side="left")
     hi = np.searchsorted(tr.t, st[1:], side="left")  # frames with st[k] <= t < st[k+1]
     turning = K >= 2 and float(np.ptp(ang)) > 0.0
@@ -66,19 +76,31 @@ def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmoni
         tm = 0.5 * (st[:-1] + st[1:])
         omega = np.gradient(np.unwrap(ang), tm)
         xc, yc = tr.centroid()
+        vx, vy = np.diff(np.interp(st, tr.t, xc)) / np.diff(st), np.diff(np.interp(st, tr.t, yc)) / np.diff(st)
+    out = []
     for k in range(K):
-        if hi[k] - lo[k] >= 4:
-            sl = slice(lo[k], hi[k])
-            if turning:
-                dt = tr.t[sl] - tm[k]
-                a = ang[k] + omega[k] * dt
-                bx, by = np.polyfit(dt, xc[sl], 1), np.polyfit(dt, yc[sl], 1)  # mean centroid path
-                q = (-(tr.x[sl, i_end] - np.polyval(bx, dt)) * np.sin(a)
-                     + (tr.y[sl, i_end] - np.polyval(by, dt)) * np.cos(a))
-            else:
-                q = -tr.x[sl, i_end] * math.sin(ang[k]) + tr.y[sl, i_end] * math.cos(ang[k])
-            p2p[k] = _fourier_p2p((tr.t[sl] - st[k]) / (st[k + 1] - st[k]), q, harmonics)
-    return p2p
+        if hi[k] - lo[k] < 4:
+            out.append(None)
+            continue
+        sl = slice(lo[k], hi[k])
+        if turning:
+            dt = tr.t[sl] - tm[k]
+            a = ang[k] + omega[k] * dt
+            # the cycle's mean centroid path: its mean velocity (net displacement / period), through
+            # the cycle's mean position (a fitted line would absorb part of the stroke's own wobble)
+            px, py = xc[sl] - vx[k] * dt, yc[sl] - vy[k] * dt
+            q = (-(tr.x[sl, i_end] - px.mean() - vx[k] * dt) * np.sin(a)
+                 + (tr.y[sl, i_end] - py.mean() - vy[k] * dt) * np.cos(a))
+        else:
+            q = -tr.x[sl, i_end] * math.sin(ang[k]) + tr.y[sl, i_end] * math.cos(ang[k])
+        out.append(((tr.t[sl] - st[k]) / (st[k + 1] - st[k]), q))
+    return out
+
+
+def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmonics: int) -> np.ndarray:
+    """Per cycle: peak-to-peak of point ``i_end`` across direction ang[k] (Fourier fit)."""
+    return np.array([_fourier_p2p(*c, harmonics) if c is not None else np.nan
+                     for c in _lateral_series(tr, st, i_end, ang)])
 
 
 def shape_modes(obj: Any, t0: float | None = None, t1: float | None = None, n_modes: int = 2):
