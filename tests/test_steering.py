@@ -159,7 +159,7 @@ def test_the_trap_is_the_bent_equilibrium_family():
 def test_turning_does_not_bias_the_lateral_amplitudes(seconds_per_turn):
     """A settled straight stroke turned rigidly (each frame rotated about its centroid at a
     constant rate, the centroid path bent to match) has the same body-frame stroke: describe
-XX
+    reads both ends' lateral peak-to-peak as for the straight run, within 0.5 % (it read 3-12 %
     low when measuring across fixed per-cycle directions)."""
     from scipy.integrate import cumulative_trapezoid
 
