@@ -182,3 +182,18 @@ def test_turning_does_not_bias_the_lateral_amplitudes(seconds_per_turn):
     assert d.trailing_lateral_p2p_mm == pytest.approx(d0.trailing_lateral_p2p_mm, rel=0.005)
     assert d.leading_lateral_p2p_mm == pytest.approx(d0.leading_lateral_p2p_mm, rel=0.005)
     assert d.period_s == pytest.approx(d0.period_s, rel=1e-3)
+
+
+def test_path_min_radius_matches_the_analytic_curvature():
+    """Smallest radius of curvature of the reference paths (used to warn when a path is tighter
+    than the swimmer's smallest turning radius): a circle's radius, a filleted square's fillet,
+    and the lemniscate of Gerono's 1 / max curvature."""
+    from flutterswim.steering.path import figure8, fillet, min_radius
+
+    assert min_radius(circle(2 * L), L) == pytest.approx(2 * L, rel=2e-3)
+    assert min_radius(fillet(square(10 * L), 1.1 * L), L) == pytest.approx(1.1 * L, rel=2e-3)
+    u = np.linspace(0, 2 * np.pi, 200001)
+    a = 4 * L  # size 8 L: x = a sin u, y = a/2 sin 2u
+    k = np.abs(a * np.cos(u) * -2 * a * np.sin(2 * u) + a * np.cos(2 * u) * a * np.sin(u)) / (
+        (a * np.cos(u)) ** 2 + (a * np.cos(2 * u)) ** 2) ** 1.5
+    assert min_radius(figure8(8 * L), L) == pytest.approx(1 / k.max(), rel=2e-3)

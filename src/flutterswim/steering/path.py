@@ -13,7 +13,7 @@ import numpy as np
 
 from .._validate import ParameterError, positive
 
-__all__ = ["RefPath", "square", "circle", "figure8", "waypoints_csv"]
+__all__ = ["RefPath", "square", "circle", "figure8", "waypoints_csv", "min_radius"]
 
 
 @dataclass(frozen=True)
@@ -166,3 +166,20 @@ def fillet(path: RefPath, radius: float, step: float = 1e-5) -> RefPath:
     s = np.r_[0.0, np.cumsum(np.hypot(*np.diff(p, axis=0).T))]
     corners = np.array([int(np.argmin(np.hypot(*(p - pts[c]).T))) for c in path.corners], int)
     return RefPath(p, s, corners, path.closed, f"{path.name} filleted r={radius:.3g} m")
+
+
+def min_radius(path: RefPath, scale: float) -> float:
+    """Smallest radius of curvature of ``path`` [m]: circumradius of consecutive points resampled
+    every ``scale`` / 20 along it (``scale``: the radius of interest, e.g. the swimmer's
+    smallest turning radius); inf for a straight path."""
+    step = positive("scale", scale) / 20.0
+    q = np.arange(0.0, path.s[-1], step)
+    if q.size < 3:
+        return math.inf
+    p = np.stack([np.interp(q, path.s, path.points[:, 0]), np.interp(q, path.s, path.points[:, 1])], axis=1)
+    a, b, c = p[:-2], p[1:-1], p[2:]
+    cross = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+    sides = np.linalg.norm(b - a, axis=1) * np.linalg.norm(c - b, axis=1) * np.linalg.norm(c - a, axis=1)
+    with np.errstate(divide="ignore"):
+        r = sides / (2.0 * np.abs(cross))
+    return float(np.min(r))

@@ -7,6 +7,7 @@ corner, waypoint arrivals, and whether the filament was trapped."""
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -59,10 +60,16 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     path: RefPath = path_factory(start, 0.0)
     duration = 1.1 * laps * path.length / reduced.U + 3 * reduced.period  # corners slow it down
     # the controller tracks the path with its corners rounded to the turning radius it allows
-    from .path import fillet
+    from .path import fillet, min_radius
 
     r_turn = reduced.U / (rate_fraction * reduced.omega_max)
-    ctrl = Controller(fillet(path, r_turn), reduced.period, reduced.U, reduced.omega_max, lookahead_bl * params.l,
+    tracked = fillet(path, r_turn)
+    r_path = min_radius(tracked, r_turn)
+    if r_path < 0.95 * reduced.r_min:
+        warnings.warn(f"the path bends with a radius down to {r_path / params.l:.2f} body lengths, below the "
+                      f"swimmer's smallest turning radius U/Omega_max = {reduced.r_min / params.l:.2f}: it cannot be "
+                      "followed there (scale the path up)", stacklevel=2)
+    ctrl = Controller(tracked, reduced.period, reduced.U, reduced.omega_max, lookahead_bl * params.l,
                       correction_bl * params.l, rate_fraction=rate_fraction, fps=fps)
     for t, x, y in zip(first.t, cx, cy):  # the camera has watched the onset too
         ctrl.observe(t, np.array([x, y]) + sigma * rng.standard_normal(2))
@@ -97,6 +104,8 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
         bar.close()
     run = concatenate(parts)
     met = metrics(run, path, reduced, onset, params.l)
+    met["path_min_radius_bl"] = r_path / params.l
+    met["path_feasible"] = bool(r_path >= 0.95 * reduced.r_min)
     met["trapped"] = bool(math.isfinite(trapped_at)) or met["trapped"]
     met.update(closed_loop=closed_loop, noise_px=noise_px, um_per_px=um_per_px, fps=fps, delay_frames=delay_frames,
                path=path.name, lookahead_bl=lookahead_bl, correction_bl=correction_bl)
