@@ -44,9 +44,11 @@ class Controller:
     lead_max: float = 0.35
     fps: float = 50.0
     integral_rate: float = 0.2  # 1/s: removes the steady cross-track offset on curved paths
+    homing: float = 3.0  # beyond this many ``correction`` lengths off the path, head for it directly
     _obs: deque = field(default_factory=deque, repr=False)
     _integral: float = 0.0
     _near: int = 0
+    _turn_sign: float = 0.0
     command: float = 0.0
     heading_estimate: float = 0.0
 
@@ -70,6 +72,12 @@ class Controller:
         pos = p1 + 0.5 * d  # the late average describes the swimmer half a period ago
         return pos, heading
 
+    def _index_ahead(self, i: int, distance: float) -> int:
+        s_ahead = self.path.s[i] + distance
+        if self.path.closed:
+            s_ahead %= self.path.length
+        return min(int(np.searchsorted(self.path.s, s_ahead)), len(self.path.s) - 2)
+
     def update(self, t: float) -> float:
         """The field direction for the next frame."""
         est = self.estimate()
@@ -78,17 +86,30 @@ class Controller:
         pos, heading = est
         self.heading_estimate = heading
         i, e = self.path.project(pos, near=self._near)
-        self._near = i
-        # the path direction a little ahead (turns start before a corner), corrected towards
-        # the path over the distance ``correction`` (Stanley-type guidance)
-        s_ahead = self.path.s[i] + self.lookahead
-        if self.path.closed:
-            s_ahead %= self.path.length
-        j = min(int(np.searchsorted(self.path.s, s_ahead)), len(self.path.s) - 2)
-        tj = self.path.points[j + 1] - self.path.points[j]
-        self._integral = max(-self.correction, min(self.correction, self._integral + e / self.fps * self.integral_rate))
-        desired = math.atan2(tj[1], tj[0]) + math.atan2(-(e + self._integral), self.correction)
+        if abs(e) > self.homing * self.correction:
+            # far off the path (after a bend tighter than the swimmer can turn): home in on a
+            # point of the path ahead of its nearest point, searched over the whole path
+            i, e = self.path.project(pos)
+            self._near = i
+            j = self._index_ahead(i, self.correction)
+            d = self.path.points[j] - pos
+            desired = math.atan2(d[1], d[0])
+            self._integral = 0.0
+        else:
+            self._near = i
+            # the path direction a little ahead (turns start before a corner), corrected towards
+            # the path over the distance ``correction`` (Stanley-type guidance)
+            j = self._index_ahead(i, self.lookahead)
+            tj = self.path.points[j + 1] - self.path.points[j]
+            self._integral = max(-self.correction,
+                                 min(self.correction, self._integral + e / self.fps * self.integral_rate))
+            desired = math.atan2(tj[1], tj[0]) + math.atan2(-(e + self._integral), self.correction)
         err = wrap(desired - heading)
+        # a turn of nearly 180 degrees: keep turning the way it started (the sign of a wrapped
+        # angle near pi flips with the heading's wobble, and the command would chatter in place)
+        if abs(err) > 0.8 * math.pi and self._turn_sign != 0.0:
+            err = self._turn_sign * abs(err)
+        self._turn_sign = math.copysign(1.0, err) if err != 0.0 else self._turn_sign
         target = heading + err * (1.0 + self.heading_gain)
         # within lead_max of the heading, and turning no faster than the rate limit
         target = heading + max(-self.lead_max, min(self.lead_max, wrap(target - heading)))
