@@ -86,8 +86,9 @@ def plot(rows: list[dict], load: float | None = None) -> None:
         ax.set_xlabel(f"relative time error of the {label} (vs ndf rtol 1e-10, same N)")
         ax.set_ylabel("wall time of the simulation [s] (one core)")
         ax.grid(True, which="both", alpha=0.3)
-    axes[1].legend(fontsize=7, ncol=2, loc="upper right")
-    fig.suptitle("Paper job (35 tau, 15 cycles described): work against time error; dotted: targets"
+    axes[1].legend(fontsize=7, ncol=2, loc="upper right", handlelength=3.5)
+    fig.suptitle("Paper job (35 tau, 15 cycles described): work against time error; dashed: N = 24, solid: N = 48; "
+                 "dotted: targets"
                  + (f"\n(shared machine, load average {load:.1f} at the end of the run)" if load else ""))
     tmp = HERE / "work_precision.png.tmp.png"
     fig.savefig(tmp, dpi=110)
