@@ -53,6 +53,7 @@ class Flow:
     stages: np.ndarray
     monodromy: np.ndarray | None
     matrices: tuple = field(default=(), repr=False, compare=False)
+    matrix_key: tuple = field(default=(), repr=False, compare=False)  # (h, system) they were formed for
 
 
 class StepFailure(FloatingPointError):
@@ -87,6 +88,10 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
     eye3 = np.eye(3 * m)
     have_warm = warm is not None and warm.stages.shape == zs.shape
     warm_mats = have_warm and len(warm.matrices) == steps
+    key = (h, id(system))
+    # matrices of another step size or system serve the stage iteration, and an approximate
+    # derivative (Newton shooting), but never a derivative asked to be exact
+    stale = warm_mats and warm.matrix_key != key and derivative_tol < 1e-8
 
     def step_matrix(z):
         yst = u + z
@@ -103,6 +108,8 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
             z = np.outer(RADAU_C * h, fs[step, 2:])  # explicit predictor
         scale = 1.0 + np.max(np.abs(u))
         jac, lu, y_lu = warm.matrices[step] if warm_mats else step_matrix(z)
+        if stale:
+            y_lu = np.full_like(y_lu, np.inf)  # formed for another h or system: re-form for the derivative
         last = np.inf
         for it in range(max_iter + 1):
             fz = np.array([system.rhs_full(system.full(u + z[i])) for i in range(3)])
@@ -135,4 +142,4 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
         zs[step] = z
         ys[step + 1, :2], ys[step + 1, 2:] = r, u
         fs[step + 1] = fz[2]
-    return Flow(np.linspace(0.0, period, steps + 1), ys, fs, zs, smat, tuple(mats))
+    return Flow(np.linspace(0.0, period, steps + 1), ys, fs, zs, smat, tuple(mats), key)
