@@ -29,7 +29,13 @@ def register(subparsers) -> None:
     p.set_defaults(func=_cmd_steer)
 
 
-_UNITS = {"bl": None, "m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "µm": 1e-6}
+
+
+def _units() -> dict:
+    """Length units of the steering CLI: body lengths (None) and the analysis' units, plus cm."""
+    from ..analysis.track import UNIT_SCALE
+
+    return {"bl": None, "cm": 1e-2, **UNIT_SCALE}
 
 
 def length(name: str, text, body_length: float) -> float:
@@ -40,16 +46,17 @@ def length(name: str, text, body_length: float) -> float:
 
     from .._validate import ParameterError
 
+    units = _units()
     m = re.fullmatch(r"\s*([-+0-9.eE]+)\s*([a-zµ]*)\s*", str(text))
     unit = (m.group(2) or "bl") if m else None
     try:
         value = float(m.group(1)) if m else math.nan
     except ValueError:
         value = math.nan
-    if unit not in _UNITS or not (math.isfinite(value) and value > 0):
+    if unit not in units or not (math.isfinite(value) and value > 0):
         raise ParameterError(f"{name}={text!r} must be a length > 0: a number of body lengths, or with a unit "
-                             f"({', '.join(_UNITS)})")
-    return value * (body_length if _UNITS[unit] is None else _UNITS[unit])
+                             f"({', '.join(units)})")
+    return value * (body_length if units[unit] is None else units[unit])
 
 
 def _cmd_steer(args) -> int:
