@@ -30,7 +30,6 @@ def register(subparsers) -> None:
 
 
 
-
 def _units() -> dict:
     """Length units of the steering CLI: body lengths (None) and the analysis' units, plus cm."""
     from ..analysis.track import UNIT_SCALE
