@@ -29,7 +29,6 @@ def register(subparsers) -> None:
     p.set_defaults(func=_cmd_steer)
 
 
-
 def _units() -> dict:
     """Length units of the steering CLI: body lengths (None) and the analysis' units, plus cm."""
     from ..analysis.track import UNIT_SCALE
