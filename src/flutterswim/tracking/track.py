@@ -211,7 +211,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
           min_contrast: float = 4.0, length_tol: float = 0.03, jump_tol: float = 0.25,
           gap_fraction: float = 0.2, refine: bool = True, window_px: float = 40.0,
           fixed_length: bool = True, tip_check: bool = True, tip_k: float = 6.0, tip_floor_px: float = 2.0,
-          smooth_frames: int = 7, t0: float = 0.0, progress: bool = False) -> Track:
+          smooth_frames: int = 7, periodic: bool = True, t0: float = 0.0, progress: bool = False) -> Track:
     """Track the filament in a movie and return its :class:`Track` (good frames only, mm, s).
 
     source: TIFF stack, folder of PNG/TIFF frames, MP4/AVI movie (path), an array (T, H, W)
@@ -227,7 +227,12 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     deviations and tip_floor_px (:func:`flutterswim.tracking.temporal.tip_outliers`);
     smooth_frames: window [frames] of the along-body position of the ends, smoothed in time
     through the middle of the body (:func:`~flutterswim.tracking.temporal.smooth_offsets`;
-    0: off; the ends' paths are never smoothed). Per-frame results (all frames, failed ones NaN, with their reasons) are in
+    0: off; the ends' paths are never smoothed); periodic: when the movie is verified periodic
+    (a settled stroke: >= 3 strokes, no drift of the shape in the body frame), every frame
+    becomes the stroke's shape template at its phase (fitted over all cycles), placed by the
+    frame's own rigid motion (:func:`flutterswim.tracking.periodic.periodic_shape`; the raw
+    per-frame lengths stay in the record; ``meta["temporal"]["periodic"]`` says whether and
+    why (not)). Per-frame results (all frames, failed ones NaN, with their reasons) are in
     ``track.meta["frames"]``; see the module docstring for the checks.
     """
     px_per_mm = positive("px_per_mm", px_per_mm)
@@ -317,7 +322,8 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     from .temporal import frames_per_stroke, smoothing_allowed
 
     per_stroke = frames_per_stroke(X, Y, ok)
-    temporal = {"frames_per_stroke": per_stroke, "tip_check": "off", "smoothing": "off"}
+    temporal: dict[str, Any] = {"frames_per_stroke": per_stroke, "tip_check": "off", "smoothing": "off",
+                                "periodic": "off"}
     if tip_check and not per_stroke >= 12:
         temporal["tip_check"] = f"not done: {per_stroke:.1f} frames per stroke (needs >= 12)"
     elif tip_check:
@@ -352,6 +358,12 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         else:
             temporal["smoothing"] = (f"not done: {per_stroke:.1f} frames per stroke, too few for a quartic over "
                                      f"{w} frames")
+    if periodic and np.count_nonzero(ok) >= 2:
+        from .periodic import periodic_shape
+
+        X, Y, pinfo = periodic_shape(X, Y, ok, per_stroke)
+        temporal["periodic"] = pinfo["reason"]
+        temporal["periodic_info"] = {k: v for k, v in pinfo.items() if k != "reason"}
     n_ok = int(np.count_nonzero(ok))
     if n_ok < 2:
         counts: dict[str, int] = {}
