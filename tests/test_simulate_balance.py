@@ -154,3 +154,26 @@ def test_a_field_callable_returning_nan_is_reported(paper_groups):
 
     with pytest.raises(fs.ParameterError, match="returned nan"):
         simulate(paper_groups, 1.0, field=Field(direction=lambda t: float("nan")), n_segments=8)
+
+
+@pytest.mark.parametrize("n", [6, 20])
+def test_group_derivatives_match_central_differences(n):
+    """d rhs / d (eta_par, eta_perp, chi) from the model against central differences of the
+    rhs in each group: second-order convergence of the differences to it."""
+    rng = np.random.default_rng(n + 1)
+    groups = np.array([41.5, 71.5, 70.7])
+    fil = Filament(n, *groups)
+    y = np.r_[0.1, -0.2, np.cumsum(rng.normal(scale=0.3, size=n)), rng.normal(size=n + 1)]
+    der = fil.group_derivatives(y, 0.2, 0.8)
+
+    def fd(rel):
+        out = np.empty_like(der)
+        for k in range(3):
+            d = np.zeros(3)
+            d[k] = rel * groups[k]
+            out[:, k] = (Filament(n, *(groups + d)).rhs(y, 0.2, 0.8) - Filament(n, *(groups - d)).rhs(y, 0.2, 0.8)) / (2 * d[k])
+        return out
+
+    e1, e2 = (np.abs(fd(r) - der).max(axis=0) / np.abs(der).max(axis=0) for r in (0.2, 0.1))
+    assert np.all(e1 < 0.05)
+    assert np.all((e2 < 1e-12) | ((3.0 < e1 / e2) & (e1 / e2 < 5.0)))  # chi: exact (the rhs is linear in it)

@@ -27,7 +27,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import mobility
-from .activity import activity_slope
 
 __all__ = ["Filament", "centreline"]
 
@@ -114,31 +113,32 @@ class Filament:
 
         k = rosw.kernels() if self.compiled else rosw
         y = np.ascontiguousarray(y, dtype=float)
-        return k.rhs(y, self._avg, self._diff, self._weights, self.eta_par, self.eta_perp, self.chi * sigma,
-                     float(phi), np.empty_like(y))
+        return k.rhs(y, *self.rhs_args(phi, sigma), np.empty_like(y))
+
+    def rhs_args(self, phi: float, sigma: float) -> tuple:
+        """The arguments after the state of the rhs kernel :func:`flutterswim.rosw.rhs`
+        (for compiled loops that call it)."""
+        return (self._avg, self._diff, self._weights, self.eta_par, self.eta_perp, self.chi * sigma, float(phi))
 
     def jacobian(self, y: np.ndarray, phi: float, sigma: float, *, exact: bool = False) -> np.ndarray:
         """Jacobian of :meth:`rhs`. By default it leaves out the change of G with theta
         (a non-stiff term that W-methods may drop); ``exact=True`` adds it,
         -G^-1 d(G z)/d theta (:func:`flutterswim.mobility.apply_theta_derivative`)."""
-        n = self.n
-        theta, kappa = y[2 : n + 2], y[n + 2 :]
-        k = self._k
-        args = self._args(theta)
-        ginv = k.inverse(*args)
-        ginv_m = ginv[:, 2 : n + 1]  # dz/d(-M)
-        jac = np.zeros((self.size, self.size))
-        jac[: n + 2, 2 : n + 2] = -ginv_m @ self._diff
-        if exact:
-            z = ginv @ self._load(theta, kappa)
-            dgz = k.apply_theta_derivative(theta, args[1], self._avg, *args[2:], z)
-            jac[: n + 2, 2 : n + 2] -= ginv @ dgz
-        jac[: n + 2, n + 3 : 2 * n + 2] = ginv_m
-        slope = activity_slope(self.node_theta(theta), self.chi * sigma, phi)
-        jac[n + 2 :, 2 : n + 2] = slope[:, None] * self._avg
-        idx = np.arange(n + 2, 2 * n + 3)
-        jac[idx, idx] = -1.0
-        return jac
+        from . import rosw
+
+        k = rosw.kernels() if self.compiled else rosw
+        y = np.ascontiguousarray(y, dtype=float)
+        return k.jacobian(y, *self.rhs_args(phi, sigma), bool(exact), np.empty((self.size, self.size)))
+
+    def group_derivatives(self, y: np.ndarray, phi: float, sigma: float) -> np.ndarray:
+        """Derivatives of :meth:`rhs` with respect to the groups (eta_par, eta_perp, chi),
+        (2N+3, 3) (:func:`flutterswim.rosw.group_derivatives`)."""
+        from . import rosw
+
+        k = rosw.kernels() if self.compiled else rosw
+        y = np.ascontiguousarray(y, dtype=float)
+        return k.group_derivatives(y, self._avg, self._diff, self._weights, self.eta_par, self.eta_perp,
+                                   float(sigma), float(phi), np.empty((self.size, 3)))
 
     def joint_drag(self, y: np.ndarray, z: np.ndarray | None = None):
         """Weighted drag (wfx, wfy) at the joints and joint positions relative to r(0)."""

@@ -30,7 +30,7 @@ import numpy as np
 
 from . import _jit, activity, mobility
 
-KERNELS = ("band_product", "rhs", "banded_lu_factor", "w_factor", "w_solve", "hermite", "run")
+KERNELS = ("band_product", "moment_load", "rhs", "jacobian", "group_derivatives", "banded_lu_factor", "w_factor", "w_solve", "hermite", "run")
 
 
 def kernels():
@@ -62,9 +62,9 @@ def band_product(mat, x, offset, out):
     return out
 
 
-def rhs(y, avg, diff, weights, eta_par, eta_perp, chi_sigma, phi, dy):
-    """dy = f(y) (2N+3,): z = G^-1 b with b = -(theta_s - kappa) at the interior joints,
-    kappa_t from :func:`flutterswim.activity.activity_rate`."""
+def moment_load(y, avg, diff):
+    """(theta, kappa, joint angles, b): the state's parts and the mobility problem's
+    right-hand side b = -(theta_s - kappa) at the interior joints (N+2,)."""
     n = avg.shape[1]
     theta = y[2 : n + 2]
     kappa = y[n + 2 :]
@@ -73,10 +73,69 @@ def rhs(y, avg, diff, weights, eta_par, eta_perp, chi_sigma, phi, dy):
     b = np.zeros(n + 2)
     for j in range(1, n):
         b[1 + j] = kappa[j] - ts[j - 1]
+    return theta, kappa, tn, b
+
+
+def rhs(y, avg, diff, weights, eta_par, eta_perp, chi_sigma, phi, dy):
+    """dy = f(y) (2N+3,): z = G^-1 b with b = -(theta_s - kappa) at the interior joints,
+    kappa_t from :func:`flutterswim.activity.activity_rate`."""
+    n = avg.shape[1]
+    theta, kappa, tn, b = moment_load(y, avg, diff)
     z = mobility.solve(theta, tn, weights, eta_par, eta_perp, 1.0 / n, b)
     dy[: n + 2] = z
     dy[n + 2 :] = activity.activity_rate(kappa, tn, chi_sigma, phi)
     return dy
+
+
+def jacobian(y, avg, diff, weights, eta_par, eta_perp, chi_sigma, phi, exact, jac):
+    """jac = df/dy (2N+3, 2N+3) of :func:`rhs`. z = G^-1 b depends on theta through b (the
+    moments, -D theta) and, with ``exact``, through G itself: -G^-1 d(G z)/d theta
+    (:func:`flutterswim.mobility.apply_theta_derivative`; a W-method may leave it out);
+    on kappa through b; kappa_t through the activity law."""
+    n = avg.shape[1]
+    theta, _, tn, b = moment_load(y, avg, diff)
+    ginv = mobility.inverse(theta, tn, weights, eta_par, eta_perp, 1.0 / n)
+    jac[:, :] = 0.0
+    for i in range(n + 2):
+        for c in range(n):  # -G^-1[:, moments] D
+            acc = 0.0
+            for j in range(max(0, c - 2), min(n - 1, c + 2)):
+                acc += ginv[i, 2 + j] * diff[j, c]
+            jac[i, 2 + c] = -acc
+        for j in range(1, n):  # kappa_j enters the moment of joint j
+            jac[i, n + 2 + j] = ginv[i, 1 + j]
+    if exact:
+        z = ginv @ b
+        dgz = mobility.apply_theta_derivative(theta, tn, avg, weights, eta_par, eta_perp, 1.0 / n, z)
+        corr = ginv @ dgz
+        for i in range(n + 2):
+            for c in range(n):
+                jac[i, 2 + c] -= corr[i, c]
+    slope = activity.activity_slope(tn, chi_sigma, phi)
+    for j in range(n + 1):
+        for c in range(max(0, j - 2), min(n, j + 2)):
+            jac[n + 2 + j, 2 + c] = slope[j] * avg[j, c]
+        jac[n + 2 + j, n + 2 + j] = -1.0
+    return jac
+
+
+def group_derivatives(y, avg, diff, weights, eta_par, eta_perp, sigma, phi, out):
+    """out = d f / d (eta_par, eta_perp, chi) (2N+3, 3) of :func:`rhs` at field strength
+    ``sigma``. The drag is linear in the two coefficients, G = eta_par G_par + eta_perp
+    G_perp, so dz/d eta = -G^-1 (G_eta z) (two O(N) solves); chi enters only the activity
+    law, linearly."""
+    n = avg.shape[1]
+    h = 1.0 / n
+    theta, _, tn, b = moment_load(y, avg, diff)
+    z = mobility.solve(theta, tn, weights, eta_par, eta_perp, h, b)
+    out[:, :] = 0.0
+    for col in range(2):
+        g_z = mobility.apply(theta, tn, weights, 1.0 - col, float(col), h, z)
+        dz = mobility.solve(theta, tn, weights, eta_par, eta_perp, h, g_z)
+        for i in range(n + 2):
+            out[i, col] = -dz[i]
+    out[n + 2 :, 2] = activity.activity_rate(np.zeros(n + 1), tn, sigma, phi)
+    return out
 
 
 def banded_lu_factor(a, piv, nb):

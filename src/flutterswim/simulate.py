@@ -6,6 +6,8 @@ units at the edge, drives the integrator and packages a :class:`SimulationResult
 
 from __future__ import annotations
 
+import functools
+
 from typing import Callable
 
 import numpy as np
@@ -139,13 +141,17 @@ def _frames(t0: float, t1: float, n_frames: int | None, dt: float | None) -> np.
 def single_blas_thread():
     """Context manager: BLAS limited to one thread for the duration (threadpoolctl; a no-op
     without it). At N = 96 default BLAS threads made a run 120x slower on a busy machine."""
-    import contextlib
+    return _blas_controller().limit(limits=1, user_api="blas")
 
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # pragma: no cover - threadpoolctl is a core dependency
-        return contextlib.nullcontext()
-    return threadpool_limits(limits=1, user_api="blas")
+
+@functools.lru_cache(maxsize=1)
+def _blas_controller():
+    """The threadpoolctl controller of the loaded BLAS libraries (numpy's and scipy's),
+    made once: finding the libraries costs milliseconds, limiting them microseconds."""
+    import scipy.linalg  # noqa: F401  (loads scipy's BLAS before the libraries are listed)
+    from threadpoolctl import ThreadpoolController
+
+    return ThreadpoolController()
 
 
 def _progress(enabled: bool, t0: float, t1: float):

@@ -93,6 +93,9 @@ class DescriptorModel:
         self._cache.append((key, orb))
         if len(self._cache) > 64:
             self._cache.pop(0)
+        if len(self._cache) > 8:  # warm starts (step matrices, MBs each) only on the newest
+            k, o = self._cache[-9]
+            self._cache[-9] = (k, o.compact())
 
     def prefetch(self, xs, executor) -> None:
         """Compute the orbits at identifiable points ``xs`` (k, 3) not yet known, in parallel

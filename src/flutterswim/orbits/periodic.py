@@ -67,6 +67,24 @@ class PeriodicOrbit:
     kappa: np.ndarray = field(repr=False)
     r0: np.ndarray = field(repr=False)  # (M, 2), dimensionless, r(0) = 0 at phase 0
     units: str = "SI"
+    #: the converged flow (stages, step matrices, monodromy, parameter sensitivity): a warm
+    #: start for a neighbouring orbit (``periodic_orbit(params, guess=this)``). It holds the
+    #: step matrices (about 5 MB at N = 24, 22 MB at N = 48): :meth:`compact` drops it, and
+    #: it is not pickled (orbits sent to workers stay small).
+    warm_start: Flow | None = field(default=None, repr=False, compare=False)
+
+    def compact(self) -> "PeriodicOrbit":
+        """This orbit without its warm start (for keeping many orbits in memory)."""
+        return replace(self, warm_start=None) if self.warm_start is not None else self
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state["warm_start"] = None
+        return state
+
+    def __setstate__(self, state):
+        for k, v in state.items():
+            object.__setattr__(self, k, v)
 
     @property
     def u0(self) -> np.ndarray:
@@ -153,7 +171,8 @@ def _check_params(params) -> None:
 @one_blas_thread
 def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: int = DEFAULT_STEPS,
                 tol: float = 1e-10, max_newton: int = 12, u_ref: np.ndarray | None = None,
-                warm: Flow | None = None, exact_multipliers: bool = True) -> tuple[np.ndarray, float, Flow, float, int]:
+                warm: Flow | None = None, exact_multipliers: bool = True,
+                sensitivity: bool = False) -> tuple[np.ndarray, float, Flow, float, int]:
     """Newton shooting from the guess (u0, period). Returns (u0, T, flow, residual, steps).
 
     Each Newton step integrates the variational equation with the step matrices formed at
@@ -161,8 +180,15 @@ def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: in
     needs); once the orbit closes, a final pass from the converged stages gives the exact
     monodromy, so the Floquet multipliers are those of the orbit itself. With
     ``exact_multipliers=False`` that pass is skipped: the orbit and its descriptors are the
-    same, the multipliers are those of step matrices formed within 1e-3 of the final stages
-    (good to about that size: enough to tell a stable orbit unless a multiplier is near 1)."""
+    same, the multipliers are those of the last derivative formed (within 1e-3 of the final
+    stages, or the warm start's: good enough to tell a stable orbit unless a multiplier is near 1).
+
+    From a neighbouring orbit (``warm`` a converged flow with its monodromy and parameter
+    sensitivity, and (u0, period) its start and period), the change of the groups gives a
+    first-order predictor, and the neighbour's monodromy serves as a chord (no derivative
+    passes until the last, which is exact): Newton only if the chord converges slowly.
+    ``sensitivity``: the returned flow carries the parameter sensitivity too (a seed for
+    the next neighbour)."""
     u = np.array(u0, float)
     T = float(period)
     u_ref = u.copy() if u_ref is None else np.asarray(u_ref, float)
@@ -171,14 +197,27 @@ def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: in
     m = u.size
     res = math.inf
     fl = warm
-    mono, chord = None, False
+    mono, chord, exact_next = None, False, False
+    if _is_neighbour(warm, system, u, T, steps):
+        fil = system.filament
+        dg = np.array([fil.eta_par, fil.eta_perp, fil.chi]) - np.array(warm.groups[:3])
+        closing = warm.y[-1, 2:] - u + warm.sensitivity @ dg  # first order in the change
+        dx = np.linalg.solve(_bordered(warm.monodromy, warm.f[-1, 2:], normal), np.concatenate((-closing, [0.0])))
+        lam = min(1.0, 0.2 * T / max(abs(dx[m]), 1e-300))
+        u, T = u + lam * dx[:m], T + lam * dx[m]
+        mono, chord = warm.monodromy, True
     for it in range(1, max_newton + 1):
         try:
             # stages solved to a fraction of the last residual (exactly once it is small), the
             # derivative from the reused step matrices unless the stages moved by > 1e-3; once
             # the residual is small and falling fast, the last monodromy is kept (chord steps)
+            # and the pass expected to close the orbit is the exact one
             stage_tol = min(1e-6, max(1e-13, 1e-4 * res)) if math.isfinite(res) else 1e-6
-            fl = flow(system, u, T, steps, variational=not chord, warm=fl, derivative_tol=1e-3, stage_tol=stage_tol)
+            if exact_next:
+                fl = flow(system, u, T, steps, variational=True, warm=fl, sensitivity=sensitivity)
+            else:
+                fl = flow(system, u, T, steps, variational=not chord, warm=fl, derivative_tol=1e-3,
+                          stage_tol=stage_tol)
         except StepFailure as exc:  # the iterate left the region where the steps converge
             raise OrbitNotFound(f"Newton iteration {it}: {exc}") from None
         r = fl.y[-1, 2:] - u
@@ -186,20 +225,24 @@ def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: in
         if fl.monodromy is not None:
             mono = fl.monodromy
         if res < tol:
+            if exact_next:
+                return u, T, fl, res, it
             if not exact_multipliers:
                 return u, T, replace(fl, monodromy=mono), res, it
             try:
-                final = flow(system, u, T, steps, variational=True, warm=fl)
+                final = flow(system, u, T, steps, variational=True, warm=fl, sensitivity=sensitivity)
             except StepFailure as exc:
                 raise OrbitNotFound(f"the final pass at the converged orbit failed: {exc}") from None
             return u, T, final, float(np.max(np.abs(final.y[-1, 2:] - u))), it
-        chord = res < 1e-6 and res < 0.01 * res_before
-        a = np.zeros((m + 1, m + 1))
-        a[:m, :m] = mono - np.eye(m)
-        a[:m, m] = fl.f[-1, 2:]
-        a[m, :m] = normal
-        rhs = np.concatenate((-r, [-(normal @ (u - u_ref))]))
-        dx = np.linalg.solve(a, rhs)
+        rate = res / res_before if math.isfinite(res_before) else math.inf
+        if chord and math.isfinite(rate) and not exact_next and (
+                rate > 0.3 or math.log(tol / res) / math.log(max(rate, 1e-300)) > max_newton - it - 1):
+            chord = False  # the chord converges too slowly: Newton with fresh derivatives
+        elif not chord:
+            chord = res < 1e-6 and rate < 0.01
+        exact_next = chord and exact_multipliers and not exact_next and res * rate < 0.1 * tol
+        dx = np.linalg.solve(_bordered(mono, fl.f[-1, 2:], normal),
+                             np.concatenate((-r, [-(normal @ (u - u_ref))])))
         # damp steps that would change the period by more than a fifth
         lam = min(1.0, 0.2 * T / max(abs(dx[m]), 1e-300))
         u = u + lam * dx[:m]
@@ -208,6 +251,25 @@ def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: in
             raise OrbitNotFound(f"Newton left the admissible region at iteration {it} (T={T:.4g})")
     raise OrbitNotFound(f"Newton shooting did not converge in {max_newton} iterations "
                         f"(residual {res:.3g}, tolerance {tol:.3g})")
+
+
+def _bordered(mono: np.ndarray, f_end: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """The shooting Jacobian [[S - I, dPhi/dT], [phase-condition normal, 0]]."""
+    m = normal.size
+    a = np.zeros((m + 1, m + 1))
+    a[:m, :m] = mono - np.eye(m)
+    a[:m, m] = f_end
+    a[m, :m] = normal
+    return a
+
+
+def _is_neighbour(warm: Flow | None, system: ShapeSystem, u: np.ndarray, T: float, steps: int) -> bool:
+    """Whether ``warm`` is a converged flow started at (u, T), in the same field direction,
+    with what a predictor needs."""
+    return (warm is not None and warm.monodromy is not None and warm.sensitivity is not None
+            and warm.stages.shape[0] == steps and warm.monodromy.shape[0] == u.size
+            and warm.groups[3] == system.phi
+            and np.array_equal(warm.y[0, 2:], u) and warm.t[-1] == T)
 
 
 def orbit_from_flow(params, system: ShapeSystem, fl: Flow, residual: float, n_newton: int,
@@ -305,6 +367,7 @@ def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = 
     steps = positive_int("steps", steps, minimum=8)
     tol = positive("tol", tol)
     system = ShapeSystem.of(params, n_segments, phi)
+    warm = None
     if guess is None:
         from .linear import leading_pair
 
@@ -325,8 +388,10 @@ def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = 
         if guess.n_segments != n_segments:
             raise ParameterError(f"guess has n_segments={guess.n_segments}; this orbit needs {n_segments}")
         u0, T = guess.u0, guess.period_dimensionless
-    u, T, fl, res, it = solve_orbit(system, u0, T, steps=steps, tol=tol, max_newton=max_newton)
-    return orbit_from_flow(params, system, fl, res, it, steps)
+        warm = guess.warm_start
+    u, T, fl, res, it = solve_orbit(system, u0, T, steps=steps, tol=tol, max_newton=max_newton, warm=warm,
+                                    sensitivity=True)
+    return replace(orbit_from_flow(params, system, fl, res, it, steps), warm_start=fl)
 
 
 def seed_from_simulation(system: ShapeSystem, *, t_max: float = 80.0) -> tuple[np.ndarray, float]:

@@ -14,6 +14,12 @@ and du_{n+1}/du_n = I + dZ_3/du_n (the last stage is the step's end). The produc
 M steps is the exact derivative of the discrete map: its trivial Floquet multiplier equals
 1 up to the time-discretisation error O(h^5). The position r(0) follows by the same
 quadrature, r_{n+1} = r_n + h sum_j b_j U0(Y_j).
+
+The derivative of the end state with respect to the dimensionless groups g = (eta_par,
+eta_perp, chi) follows in the same pass (``sensitivity=True``): with S_g = du_n/dg,
+  P dZ/dg = h [sum_j A_ij (J_j S_g + f_g(Y_j))]_i,
+one more right-hand side per group, f_g from the model
+(:meth:`flutterswim.filament.Filament.group_derivatives`).
 """
 
 from __future__ import annotations
@@ -24,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 
+from . import radau
 from .system import ShapeSystem
 
 __all__ = ["Flow", "flow", "RADAU_A", "RADAU_C"]
@@ -54,6 +61,9 @@ class Flow:
     monodromy: np.ndarray | None
     matrices: tuple = field(default=(), repr=False, compare=False)
     matrix_key: tuple = field(default=(), repr=False, compare=False)  # (h, system) they were formed for
+    #: d(end shape)/d(eta_par, eta_perp, chi) at fixed start and period, (2N+1, 3), or None
+    sensitivity: np.ndarray | None = field(default=None, repr=False, compare=False)
+    groups: tuple = field(default=(), repr=False, compare=False)  # (eta_par, eta_perp, chi, phi) of the system
 
 
 class StepFailure(FloatingPointError):
@@ -62,7 +72,8 @@ class StepFailure(FloatingPointError):
 
 def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
          variational: bool = False, warm: Flow | None = None, r0=(0.0, 0.0),
-         stage_tol: float = 1e-13, max_iter: int = 12, derivative_tol: float = 1e-10) -> Flow:
+         stage_tol: float = 1e-13, max_iter: int = 12, derivative_tol: float = 1e-10,
+         sensitivity: bool = False) -> Flow:
     """Integrate the shape from u0 over ``period`` in ``steps`` equal Radau IIA steps.
 
     Stage equations by a simplified Newton iteration: the step matrix P of the warm flow
@@ -72,7 +83,8 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
     formed again there unless the stage points differ by less than ``derivative_tol``
     (relative) from where they were formed, so the derivative is exact to that size (Newton
     shooting needs it only to the size of its correction; the Floquet multipliers of the
-    converged orbit need it exact: the default)."""
+    converged orbit need it exact: the default). With ``sensitivity`` (and ``variational``),
+    also the end shape's derivative with respect to the groups (module docstring)."""
     a = RADAU_A
     h = period / steps
     u = np.array(u0, float)
@@ -85,6 +97,11 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
     ys[0, :2], ys[0, 2:] = r, u
     fs[0] = system.rhs_full(ys[0])
     smat = np.eye(m) if variational else None
+    fil = system.filament
+    groups = (fil.eta_par, fil.eta_perp, fil.chi)
+    sens = variational and sensitivity
+    if sens:
+        smat = np.concatenate((smat, np.zeros((m, 3))), axis=1)  # [du/du0 | du/dg]
     eye3 = np.eye(3 * m)
     have_warm = warm is not None and warm.stages.shape == zs.shape
     warm_mats = have_warm and len(warm.matrices) == steps
@@ -101,6 +118,11 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
         p = eye3 - blocks.transpose(0, 2, 1, 3).reshape(3 * m, 3 * m)
         return jac, sla.lu_factor(p, overwrite_a=True, check_finite=False), yst
 
+    kern = radau.kernels() if system.filament.compiled else radau
+    kargs = system.filament.rhs_args(system.phi, 1.0)
+    ha = h * a
+    state = np.empty(3)
+    fz = np.empty((3, m + 2))
     for step in range(steps):
         if have_warm:
             z = warm.stages[step].copy()
@@ -110,31 +132,29 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
         jac, lu, y_lu = warm.matrices[step] if warm_mats else step_matrix(z)
         if stale:
             y_lu = np.full_like(y_lu, np.inf)  # formed for another h or system: re-form for the derivative
-        last = np.inf
-        for it in range(max_iter + 1):
-            fz = np.array([system.rhs_full(system.full(u + z[i])) for i in range(3)])
-            res = (z - h * (a @ fz[:, 2:])).ravel()
-            dz = sla.lu_solve(lu, -res, check_finite=False).reshape(3, m)
-            z += dz
-            size = np.max(np.abs(dz))
-            if not np.all(np.isfinite(z)):
-                raise StepFailure(f"non-finite stage values at step {step} of {steps}")
-            if size < stage_tol * scale:
+        state[:] = (0.0, np.inf, max_iter)
+        while True:  # the stage iteration (compiled), with a fresh matrix when it is slow
+            status = kern.stages(u, z, ha, lu[0], lu[1], *kargs, stage_tol * scale, state, fz)
+            if status != radau.SLOW:
                 break
-            if size < 1e3 * stage_tol * scale and size >= 0.5 * last:
-                break  # at the rounding floor: the corrections no longer shrink
-            if size > 0.1 * last and it >= 1:  # slow: a fresh matrix at the current iterate
-                jac, lu, y_lu = step_matrix(z)
-            last = size
-        else:
+            jac, lu, y_lu = step_matrix(z)
+        if status == radau.NOT_FINITE:
+            raise StepFailure(f"non-finite stage values at step {step} of {steps}")
+        if status == radau.NO_CONVERGENCE:
             raise StepFailure(f"stage equations did not converge at step {step} of {steps} (h={h:.3g})")
         if variational:
             if np.max(np.abs(u + z - y_lu)) > derivative_tol * scale:
                 jac, lu, y_lu = step_matrix(z)
             # P dZ/du = h [sum_j A_ij J_j]_i at the converged stages
             rhs = (h * np.tensordot(a, jac, axes=1)).reshape(3 * m, m)
-            dzdu = sla.lu_solve(lu, rhs, check_finite=False)[2 * m:]
+            if sens:  # f_g at the stages: three more columns
+                fg = np.array([system.group_derivatives(u + z[i]) for i in range(3)])  # (stage, m, group)
+                rhs = np.concatenate((rhs, (h * np.tensordot(a, fg, axes=1)).reshape(3 * m, 3)), axis=1)
+            dz = sla.lu_solve(lu, rhs, check_finite=False)[2 * m:]
+            dzdu = dz[:, :m]
             smat = smat + dzdu @ smat
+            if sens:
+                smat[:, m:] += dz[:, m:]
         mats.append((jac, lu, y_lu))
         # (fz is from the last iterate, within stage_tol of z: no new evaluation)
         r = r + h * (RADAU_B @ fz[:, :2])
@@ -142,4 +162,5 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
         zs[step] = z
         ys[step + 1, :2], ys[step + 1, 2:] = r, u
         fs[step + 1] = fz[2]
-    return Flow(np.linspace(0.0, period, steps + 1), ys, fs, zs, smat, tuple(mats), key)
+    mono, dg = (smat[:, :m], smat[:, m:]) if sens else (smat, None)
+    return Flow(np.linspace(0.0, period, steps + 1), ys, fs, zs, mono, tuple(mats), key, dg, groups + (system.phi,))

@@ -59,6 +59,10 @@ class ShapeSystem:
         """Exact Jacobian df/du (2N+1, 2N+1)."""
         return self.jac_full(self.full(u))[2:, 2:]
 
+    def group_derivatives(self, u: np.ndarray) -> np.ndarray:
+        """d f / d (eta_par, eta_perp, chi), (2N+1, 3)."""
+        return self.filament.group_derivatives(self.full(u), self.phi, 1.0)[2:]
+
     def straight(self) -> np.ndarray:
         """The straight state aligned with the field: an equilibrium."""
         u = np.zeros(self.size)

@@ -1,0 +1,118 @@
+"""A periodic orbit from a neighbouring one: the parameter sensitivity of the flow, the
+first-order predictor with the neighbour's monodromy as chord, and the compiled stage solve."""
+
+import pickle
+
+import numpy as np
+import pytest
+import scipy.linalg as sla
+
+import flutterswim as fs
+from flutterswim.orbits import periodic_orbit
+from flutterswim.orbits.periodic import solve_orbit
+from flutterswim.orbits.shooting import flow
+from flutterswim.orbits.system import ShapeSystem
+from flutterswim.params import Groups
+
+N = 12
+STEPS = 24
+
+
+@pytest.fixture(scope="module")
+def base():
+    return periodic_orbit(fs.PAPER.groups, n_segments=N, steps=STEPS)
+
+
+def test_flow_sensitivity_matches_differences_of_flows(base):
+    """d(end shape)/d(groups) of the discrete flow against central differences of whole
+    flows: the differences converge to it at second order."""
+    g = np.array([fs.PAPER.groups.eta_par, fs.PAPER.groups.eta_perp, fs.PAPER.groups.chi])
+    system = ShapeSystem.of(Groups(*g), N)
+    u, T = base.u0, base.period_dimensionless
+    fl = flow(system, u, T, STEPS, variational=True, sensitivity=True)
+    assert fl.sensitivity.shape == (u.size, 3)
+    plain = flow(system, u, T, STEPS, variational=True)
+    assert np.abs(plain.monodromy - fl.monodromy).max() < 1e-9 * np.abs(fl.monodromy).max()
+
+    def fd(rel):
+        out = np.empty((u.size, 3))
+        for k in range(3):
+            d = np.zeros(3)
+            d[k] = rel * g[k]
+            ends = [flow(ShapeSystem.of(Groups(*(g + sgn * d)), N), u, T, STEPS).y[-1, 2:] for sgn in (1, -1)]
+            out[:, k] = (ends[0] - ends[1]) / (2 * d[k])
+        return out
+
+    e1, e2 = (np.abs(fd(r) - fl.sensitivity).max(axis=0) / np.abs(fl.sensitivity).max(axis=0) for r in (2e-2, 1e-2))
+    assert np.all(e1 < 1e-2)
+    assert np.all((3.0 < e1 / e2) & (e1 / e2 < 5.0))
+
+
+@pytest.mark.parametrize("change", [{"kappa_E": 1.02}, {"B": 0.97}, {"kappa_E": 0.99, "tau": 1.01}])
+def test_orbit_from_a_neighbour_equals_the_orbit_from_scratch(base, change, monkeypatch):
+    """The predictor + chord path (warm start kept on the neighbour: one derivative pass,
+    the last) and Newton without the warm start land on the same orbit: period, advance and
+    multipliers."""
+    from flutterswim.orbits import periodic
+
+    params = fs.PAPER.replace(**{k: getattr(fs.PAPER, k) * v for k, v in change.items()})
+    assert base.warm_start is not None and base.warm_start.sensitivity is not None
+    passes = []
+
+    def counted(*args, **kwargs):
+        passes.append(bool(kwargs.get("variational")))
+        return flow(*args, **kwargs)
+
+    monkeypatch.setattr(periodic, "flow", counted)
+    near = periodic_orbit(params, base, n_segments=N, steps=STEPS)
+    assert passes[-1] and sum(passes) == 1
+    monkeypatch.undo()
+    cold = periodic_orbit(params, base.compact(), n_segments=N, steps=STEPS)  # Newton, no warm start
+    assert near.residual < 1e-10 and cold.residual < 1e-10
+    assert abs(near.period / cold.period - 1) < 1e-9
+    assert abs(near.advance / cold.advance - 1) < 1e-8
+    assert near.trivial_multiplier_error < 1e-8
+    lead = lambda o: np.sort(np.abs(o.multipliers))[::-1][:4]  # noqa: E731
+    assert np.abs(lead(near) - lead(cold)).max() < 1e-7
+
+
+def test_warm_start_is_not_pickled_and_compact_drops_it(base):
+    again = pickle.loads(pickle.dumps(base))
+    assert again.warm_start is None and base.warm_start is not None
+    assert again.period == base.period and np.array_equal(again.theta, base.theta)
+    assert base.compact().warm_start is None
+
+
+def test_stage_solve_kernel_matches_lapack():
+    from flutterswim.orbits import radau
+
+    k = radau.kernels()
+    rng = np.random.default_rng(3)
+    a = rng.normal(size=(40, 40)) + 3 * np.eye(40)
+    b = rng.normal(size=40)
+    lu, piv = sla.lu_factor(a)
+    x = k.lu_solve(lu, piv, b.copy())
+    assert np.abs(a @ x - b).max() < 1e-12 * np.abs(b).max() * np.linalg.cond(a)
+
+
+def test_solve_orbit_rejects_a_warm_start_from_another_field_direction(base):
+    """The predictor needs the neighbour's own field direction: a rotated system falls back
+    to Newton and still converges (rotating the field rotates the stroke)."""
+    system = ShapeSystem.of(fs.PAPER.groups, N, phi=0.3)
+    u = base.u0.copy()
+    u[:N] += 0.3  # the stroke turned with the field
+    _, T, fl, res, _ = solve_orbit(system, u, base.period_dimensionless, steps=STEPS, warm=base.warm_start)
+    assert res < 1e-10 and abs(T / base.period_dimensionless - 1) < 1e-8
+
+
+def test_a_far_neighbour_falls_back_to_newton(base):
+    """25 % away (the period changes by 15 %) the chord converges too slowly: Newton takes
+    over from the predicted orbit. Newton alone, in two halves without warm starts, lands on
+    the same orbit."""
+    params = fs.PAPER.replace(kappa_E=fs.PAPER.kappa_E * 1.25)
+    near = periodic_orbit(params, base, n_segments=N, steps=STEPS)
+    mid = periodic_orbit(fs.PAPER.replace(kappa_E=fs.PAPER.kappa_E * 1.12), base.compact(), n_segments=N, steps=STEPS)
+    chained = periodic_orbit(params, mid.compact(), n_segments=N, steps=STEPS)
+    assert near.residual < 1e-10 and abs(near.period / chained.period - 1) < 1e-9
+    assert abs(near.period / base.period - 1) > 0.1
+    assert near.trivial_multiplier_error < 1e-8
