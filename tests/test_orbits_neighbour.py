@@ -5,7 +5,6 @@ import pickle
 
 import numpy as np
 import pytest
-import scipy.linalg as sla
 
 import flutterswim as fs
 from flutterswim.orbits import periodic_orbit
@@ -83,16 +82,30 @@ def test_warm_start_is_not_pickled_and_compact_drops_it(base):
     assert base.compact().warm_start is None
 
 
-def test_stage_solve_kernel_matches_lapack():
+@pytest.mark.parametrize("columns", [1, 7])
+def test_reduced_step_solve_equals_the_full_step_matrix_solve(columns):
+    """The kappa elimination (radau.factor + reduced_solve) against a dense solve of the
+    full step matrix P = I - h (A x I) diag(J_j), for Jacobians with the model's kappa
+    block -I; a Jacobian without it is refused."""
     from flutterswim.orbits import radau
+    from flutterswim.orbits.shooting import RADAU_A
 
     k = radau.kernels()
-    rng = np.random.default_rng(3)
-    a = rng.normal(size=(40, 40)) + 3 * np.eye(40)
-    b = rng.normal(size=40)
-    lu, piv = sla.lu_factor(a)
-    x = k.lu_solve(lu, piv, b.copy())
-    assert np.abs(a @ x - b).max() < 1e-12 * np.abs(b).max() * np.linalg.cond(a)
+    rng = np.random.default_rng(columns)
+    n, h = 9, 0.04
+    m = 2 * n + 1
+    jac = rng.normal(scale=20.0, size=(3, m, m))
+    jac[:, n:, n:] = -np.eye(n + 1)
+    consts = radau.constants(h, RADAU_A)
+    p = np.eye(3 * m) - (h * RADAU_A)[:, None, :, None].repeat(m, 1).repeat(m, 3).reshape(3 * m, 3 * m) * \
+        np.tile(np.concatenate(list(jac), axis=1), (3, 1))
+    r = rng.normal(size=(3 * m, columns))
+    x = r.copy()
+    assert k.reduced_solve(*radau.factor(jac, n, consts), *consts, x) == 0
+    assert np.abs(x - np.linalg.solve(p, r)).max() < 1e-11 * np.abs(x).max()
+    jac[1, n + 2, n + 3] = 0.5
+    with pytest.raises(ValueError, match="kappa block"):
+        radau.factor(jac, n, consts)
 
 
 def test_solve_orbit_rejects_a_warm_start_from_another_field_direction(base):

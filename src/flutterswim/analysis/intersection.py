@@ -47,13 +47,15 @@ def _intersect_frames(x: np.ndarray, y: np.ndarray, tol: float) -> np.ndarray:
     return hit.sum(axis=1)
 
 
-def polyline_self_intersects(x: np.ndarray, y: np.ndarray, *, tol: float = 0.0) -> bool:
-    """True if the open polyline (x, y) crosses itself (non-adjacent segments intersect)."""
-    x = np.asarray(x, float)[None, :]
-    y = np.asarray(y, float)[None, :]
-    if x.shape != y.shape or x.shape[1] < 2:
-        raise ParameterError(f"x and y have shapes {x.shape[1:]} and {y.shape[1:]}; equal 1-d shapes are required")
-    return bool(_intersect_frames(x, y, tol)[0] > 0)
+def polyline_self_intersects(x: np.ndarray, y: np.ndarray, *, tol: float = 0.0) -> bool | np.ndarray:
+    """True if the open polyline (x, y) crosses itself (non-adjacent segments intersect).
+    For (F, P) arrays (F polylines), an (F,) boolean array."""
+    x = np.asarray(x, float)
+    y = np.asarray(y, float)
+    if x.shape != y.shape or x.ndim not in (1, 2) or x.shape[-1] < 2:
+        raise ParameterError(f"x and y have shapes {x.shape} and {y.shape}; equal 1-d or 2-d shapes are required")
+    hits = _intersect_frames(np.atleast_2d(x), np.atleast_2d(y), tol) > 0
+    return bool(hits[0]) if x.ndim == 1 else hits
 
 
 def count_pruned(x, y, out):

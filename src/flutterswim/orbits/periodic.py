@@ -240,7 +240,7 @@ def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: in
             chord = False  # the chord converges too slowly: Newton with fresh derivatives
         elif not chord:
             chord = res < 1e-6 and rate < 0.01
-        exact_next = chord and exact_multipliers and not exact_next and res * rate < 0.1 * tol
+        exact_next = chord and exact_multipliers and not exact_next and res * rate < 0.3 * tol
         dx = np.linalg.solve(_bordered(mono, fl.f[-1, 2:], normal),
                              np.concatenate((-r, [-(normal @ (u - u_ref))])))
         # damp steps that would change the period by more than a fifth
@@ -317,7 +317,7 @@ def _with_shape_descriptors(orb: PeriodicOrbit) -> PeriodicOrbit:
     coef, *_ = shape_modes(orb.to_result(1))
     nr = stroke_area(coef[:-1, 0], coef[:-1, 1]) if coef.shape[1] >= 2 else 0.0
     x, y = centreline(np.zeros((orb.theta.shape[0], 2)), orb.theta)
-    crossing = any(polyline_self_intersects(xi, yi) for xi, yi in zip(x, y))
+    crossing = bool(np.any(polyline_self_intersects(x, y)))
     return replace(orb, nonreciprocity=float(nr), self_intersecting=bool(crossing))
 
 

@@ -28,7 +28,6 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg as sla
 
 from . import radau
 from .system import ShapeSystem
@@ -102,7 +101,6 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
     sens = variational and sensitivity
     if sens:
         smat = np.concatenate((smat, np.zeros((m, 3))), axis=1)  # [du/du0 | du/dg]
-    eye3 = np.eye(3 * m)
     have_warm = warm is not None and warm.stages.shape == zs.shape
     warm_mats = have_warm and len(warm.matrices) == steps
     key = (h, id(system))
@@ -110,17 +108,15 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
     # derivative (Newton shooting), but never a derivative asked to be exact
     stale = warm_mats and warm.matrix_key != key and derivative_tol < 1e-8
 
+    consts = radau.constants(h, a)
+
     def step_matrix(z):
         yst = u + z
         jac = np.array([system.jac_full(system.full(yst[i]))[2:, 2:] for i in range(3)])
-        # block (i, j) of P is delta_ij I - h A_ij J_j
-        blocks = (h * a)[:, :, None, None] * jac[None, :, :, :]
-        p = eye3 - blocks.transpose(0, 2, 1, 3).reshape(3 * m, 3 * m)
-        return jac, sla.lu_factor(p, overwrite_a=True, check_finite=False), yst
+        return jac, radau.factor(jac, system.n, consts), yst  # P = I - h (A x I) diag(J_j), reduced
 
     kern = radau.kernels() if system.filament.compiled else radau
     kargs = system.filament.rhs_args(system.phi, 1.0)
-    ha = h * a
     state = np.empty(3)
     fz = np.empty((3, m + 2))
     for step in range(steps):
@@ -134,7 +130,7 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
             y_lu = np.full_like(y_lu, np.inf)  # formed for another h or system: re-form for the derivative
         state[:] = (0.0, np.inf, max_iter)
         while True:  # the stage iteration (compiled), with a fresh matrix when it is slow
-            status = kern.stages(u, z, ha, lu[0], lu[1], *kargs, stage_tol * scale, state, fz)
+            status = kern.stages(u, z, *consts, *lu, *kargs, stage_tol * scale, state, fz)
             if status != radau.SLOW:
                 break
             jac, lu, y_lu = step_matrix(z)
@@ -150,7 +146,10 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
             if sens:  # f_g at the stages: three more columns
                 fg = np.array([system.group_derivatives(u + z[i]) for i in range(3)])  # (stage, m, group)
                 rhs = np.concatenate((rhs, (h * np.tensordot(a, fg, axes=1)).reshape(3 * m, 3)), axis=1)
-            dz = sla.lu_solve(lu, rhs, check_finite=False)[2 * m:]
+            rhs = np.ascontiguousarray(rhs)
+            if kern.reduced_solve(*lu, *consts, rhs) != 0:
+                raise StepFailure(f"singular step matrix at step {step} of {steps}")
+            dz = rhs[2 * m:]
             dzdu = dz[:, :m]
             smat = smat + dzdu @ smat
             if sens:
