@@ -1,7 +1,7 @@
 """Tracking benchmarks (not a test): speed per 512 x 512 frame and per 5-cycle movie, and the
 accuracy on movies rendered from the paper's settled stroke (50 fps, 14 um/px).
 
-    OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_tracking.py [--repeat 5] [--seeds 4] [--json out.json]
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_tracking.py [--repeat 5] [--seeds 4] [--json out.json] [--no-periodic]
 
 Speed: one core; min and median over repeats. ``scratch``: one frame tracked with no previous
 frame (coarse 4x-reduced localisation, then the window around it); ``whole frame``: the
@@ -9,7 +9,8 @@ segmentation of the whole 512 x 512 frame (the fallback); ``in a movie``: per fr
 512 movie (after the first frame, the search window follows the body; the whole frame is
 searched again whenever a frame fails in the window). Accuracy: per SNR and noise seed,
 centreline RMS distance to the true curve and tip RMS error [px], frames flagged (of which
-tip outliers), whether the ends' offsets were smoothed in time, and the relative error of
+tip outliers), whether the ends' offsets were smoothed in time, whether the periodic shape
+template was used (and its drift test's F statistic), and the relative error of
 the descriptors of :func:`describe` against those of the simulated centrelines on the same
 frames.
 """
@@ -97,7 +98,9 @@ def accuracy(sim, seeds: int) -> list[dict]:
                    "tip_rms_px": float(np.sqrt(np.mean(E**2))), "tip_max_px": float(E.max()),
                    "length_spread": tr.meta["length_spread"], "cycles": dm.n_cycles_used,
                    "tip_outliers": sum(r.startswith("tip outlier") for r in tr.meta["frames"]["reason"]),
-                   "smoothing": tr.meta["temporal"]["smoothing"].split(",")[0]}
+                   "smoothing": tr.meta["temporal"]["smoothing"].split(",")[0],
+                   "periodic": tr.meta["temporal"]["periodic"].split(":")[0],
+                   "periodic_drift_f": tr.meta["temporal"].get("periodic_info", {}).get("drift_f")}
             for k in KEYS:
                 row[k + "_rel_err_pct"] = 100 * (getattr(dm, k) - getattr(dt, k)) / getattr(dt, k)
             rows.append(row)
@@ -142,7 +145,13 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--seeds", type=int, default=4)
     ap.add_argument("--json", default=None)
+    ap.add_argument("--no-periodic", action="store_true", help="track without the periodic shape template (before/after)")
     args = ap.parse_args()
+    if args.no_periodic:  # the functions above import track from the package when they run
+        import flutterswim.tracking as pkg
+
+        orig = pkg.track
+        pkg.track = lambda *a, **k: orig(*a, **{**k, "periodic": False})
     sim = stroke()
     res = {"machine": machine(), "speed": speed(sim, args.repeat)}
     print(json.dumps(res, indent=1), flush=True)
