@@ -124,19 +124,65 @@ def assemble(theta, tn, weights, eta_par, eta_perp, h):
 
 
 def apply_theta_derivative(theta, tn, avg, weights, eta_par, eta_perp, h, z):
-    """D = d(G(theta) z)/d theta at fixed z, (N+2, N), by complex step (exact to rounding):
-    the term of the exact Jacobian that a W-method may leave out. ``avg`` (N+1, N) maps
-    segment angles to joint angles (tn = avg @ theta)."""
+    """D = d(G(theta) z)/d theta at fixed z, (N+2, N): the term of the exact Jacobian that a
+    W-method may leave out. ``avg`` (N+1, N) maps segment angles to joint angles
+    (tn = avg @ theta). Forward-mode differentiation of the sums of :func:`apply`, all N
+    directions at once, O(N^2): theta_m moves the joints beyond segment m (their velocity by
+    -h (cos, sin) theta_m omega_m, position by h (-sin, cos) theta_m) and turns the
+    resistance tensors of the joints that average it."""
     n = theta.size
-    eps = 1e-30
     d = np.zeros((n + 2, n))
+    # running values and their derivatives (over m) before joint j
+    vx = z[0]
+    vy = z[1]
+    x = 0.0
+    y = 0.0
+    sx = 0.0
+    sy = 0.0
+    p = 0.0
+    dvx = np.zeros(n)
+    dvy = np.zeros(n)
+    dx = np.zeros(n)
+    dy = np.zeros(n)
+    dsx = np.zeros(n)
+    dsy = np.zeros(n)
+    dp = np.zeros(n)
+    for j in range(n + 1):
+        rxx, rxy, ryy = resistance(tn[j], weights[j], eta_par, eta_perp)
+        cn = np.cos(tn[j])
+        sn = np.sin(tn[j])
+        dxx = 2.0 * weights[j] * (eta_perp - eta_par) * cn * sn  # d/d(angle) of the tensor
+        dxy = weights[j] * (eta_par - eta_perp) * (cn * cn - sn * sn)
+        wfx = -(rxx * vx + rxy * vy)
+        wfy = -(rxy * vx + ryy * vy)
+        if j > 0:
+            for m in range(n):
+                d[1 + j, m] = dp[m] - dx[m] * sy - x * dsy[m] + dy[m] * sx + y * dsx[m]
+        for m in range(n):
+            a = avg[j, m]
+            dwfx = -(a * (dxx * vx + dxy * vy) + rxx * dvx[m] + rxy * dvy[m])
+            dwfy = -(a * (dxy * vx - dxx * vy) + rxy * dvx[m] + ryy * dvy[m])
+            dp[m] += dx[m] * wfy + x * dwfy - dy[m] * wfx - y * dwfx
+            dsx[m] += dwfx
+            dsy[m] += dwfy
+        sx += wfx
+        sy += wfy
+        p += x * wfy - y * wfx
+        if j < n:
+            c = np.cos(theta[j])
+            s = np.sin(theta[j])
+            om = z[2 + j]
+            dvx[j] = -h * c * om
+            dvy[j] = -h * s * om
+            dx[j] = -h * s
+            dy[j] = h * c
+            vx = vx - h * s * om
+            vy = vy + h * c * om
+            x = x + h * c
+            y = y + h * s
     for m in range(n):
-        thc = theta + 0j
-        thc[m] = thc[m] + 1j * eps
-        tnc = tn + 1j * eps * avg[:, m]
-        r = apply(thc, tnc, weights, eta_par, eta_perp, h, z)
-        for i in range(n + 2):
-            d[i, m] = r[i].imag / eps
+        d[0, m] = dsx[m]
+        d[1, m] = dsy[m]
     return d
 
 
