@@ -112,7 +112,7 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
 
     def step_matrix(z):
         yst = u + z
-        jac = np.array([system.jac_full(system.full(yst[i]))[2:, 2:] for i in range(3)])
+        jac = system.at_points(yst, "jacobian")
         return jac, radau.factor(jac, system.n, consts), yst  # P = I - h (A x I) diag(J_j), reduced
 
     kern = radau.kernels() if system.filament.compiled else radau
@@ -142,11 +142,11 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
             if np.max(np.abs(u + z - y_lu)) > derivative_tol * scale:
                 jac, lu, y_lu = step_matrix(z)
             # P dZ/du = h [sum_j A_ij J_j]_i at the converged stages
-            rhs = (h * np.tensordot(a, jac, axes=1)).reshape(3 * m, m)
             if sens:  # f_g at the stages: three more columns
-                fg = np.array([system.group_derivatives(u + z[i]) for i in range(3)])  # (stage, m, group)
-                rhs = np.concatenate((rhs, (h * np.tensordot(a, fg, axes=1)).reshape(3 * m, 3)), axis=1)
-            rhs = np.ascontiguousarray(rhs)
+                jac_g = np.concatenate((jac, system.at_points(u + z, "groups")), axis=2)
+                rhs = (consts[0] @ jac_g.reshape(3, -1)).reshape(3 * m, m + 3)
+            else:
+                rhs = (consts[0] @ jac.reshape(3, -1)).reshape(3 * m, m)
             if kern.reduced_solve(*lu, *consts, rhs) != 0:
                 raise StepFailure(f"singular step matrix at step {step} of {steps}")
             dz = rhs[2 * m:]

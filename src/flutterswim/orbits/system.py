@@ -63,6 +63,29 @@ class ShapeSystem:
         """d f / d (eta_par, eta_perp, chi), (2N+1, 3)."""
         return self.filament.group_derivatives(self.full(u), self.phi, 1.0)[2:]
 
+    def at_points(self, points: np.ndarray, what: str) -> np.ndarray:
+        """The exact Jacobians (``what="jacobian"``: (k, 2N+1, 2N+1)) or the group derivatives
+        (``"groups"``: (k, 2N+1, 3)) at k shapes ``points`` (k, 2N+1): the simulator's kernels
+        (:mod:`flutterswim.rosw`) called directly, for the Radau steps' stages."""
+        from .. import rosw
+
+        fil = self.filament
+        k = rosw.kernels() if fil.compiled else rosw
+        size = points.shape[1] + 2
+        y = np.zeros(size)
+        if what == "jacobian":
+            out = np.empty((points.shape[0], size, size))
+            args = (*fil.rhs_args(self.phi, 1.0), True)
+            kernel = k.jacobian
+        else:
+            out = np.empty((points.shape[0], size, 3))
+            args = (fil._avg, fil._diff, fil._weights, fil.eta_par, fil.eta_perp, 1.0, float(self.phi))
+            kernel = k.group_derivatives
+        for i in range(points.shape[0]):
+            y[2:] = points[i]
+            kernel(y, *args, out[i])
+        return out[:, 2:, 2:] if what == "jacobian" else out[:, 2:]
+
     def straight(self) -> np.ndarray:
         """The straight state aligned with the field: an equilibrium."""
         u = np.zeros(self.size)
