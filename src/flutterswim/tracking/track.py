@@ -20,6 +20,11 @@ the raw pixels). A frame is flagged, never kept, when:
   than ``tip_k`` robust standard deviations and ``tip_floor_px``), see
   :mod:`flutterswim.tracking.temporal`.
 
+Across frames (after the checks): the ends placed for the median body length, their position
+along the body smoothed in time (:mod:`flutterswim.tracking.temporal`), and, for a movie verified
+periodic (a settled stroke), every frame replaced by the stroke's shape template at its phase in
+its own rigid placement (:mod:`flutterswim.tracking.periodic`).
+
 Coordinates: x = column, y = row (image axes, y pointing down), pixel centres at integers,
 converted to mm by ``px_per_mm``; times = frame index / fps.
 """
