@@ -13,8 +13,9 @@ a 3N-square system instead of 3(2N+1): its LU costs 8 times less, a solve 4 time
 :func:`factor` forms and factors R (scipy/LAPACK); :func:`reduced_solve` solves with it
 (triangular solves over all columns at once, so the same kernel serves one stage
 residual and the variational equation's many columns); :func:`stages` is the simplified
-Newton iteration of one step. The step loop and the forming of step matrices stay in
-:func:`flutterswim.orbits.shooting.flow`. Kernels are written once and compiled with numba
+Newton iteration of one step; :func:`chord_pass` runs it over all steps of a pass whose
+step matrices are all given (a warm start). The forming of step matrices and the
+variational equation stay in :func:`flutterswim.orbits.shooting.flow`. Kernels are written once and compiled with numba
 when it is installed (:mod:`flutterswim._jit`).
 """
 
@@ -25,7 +26,7 @@ import scipy.linalg as sla
 
 from .. import _jit, rosw
 
-KERNELS = ("reduced_solve", "stages")
+KERNELS = ("reduced_solve", "stages", "chord_pass")
 
 #: status codes of :func:`stages`
 CONVERGED, SLOW, NOT_FINITE, NO_CONVERGENCE = 0, 1, 2, 3
@@ -186,3 +187,38 @@ def stages(u, z, ha, w, hwa, lu, piv, b, c, avg, diff, weights, eta_par, eta_per
         last = size
         it += 1
     return NO_CONVERGENCE
+
+
+def chord_pass(u0, zs, lus, pivs, bs, cs, ha, w, hwa, avg, diff, weights, eta_par, eta_perp, chi, phi, h, rk_b,
+               tol, max_iter, ys, fs):
+    """All steps of a pass with given step matrices (stacked per step): the stage increments
+    zs (steps, 3, m) in place (warm start in, converged out), states ys and full rhs fs
+    (steps + 1, m + 2) from ys[0] on (ys[0] and fs[0] given). Stage tolerance ``tol`` times
+    1 + max|u| of each step. Returns (step, status): (-1, CONVERGED), or the first step whose
+    iteration did not converge with its given matrix (the caller takes over)."""
+    m = u0.shape[0]
+    u = u0.copy()
+    state = np.empty(3)
+    fz = np.empty((3, m + 2))
+    rx = ys[0, 0]
+    ry = ys[0, 1]
+    for step in range(zs.shape[0]):
+        scale = 1.0 + np.max(np.abs(u))
+        state[0] = 0.0
+        state[1] = np.inf
+        state[2] = max_iter
+        z = zs[step]
+        status = stages(u, z, ha, w, hwa, lus[step], pivs[step], bs[step], cs[step], avg, diff, weights, eta_par,
+                        eta_perp, chi, phi, tol * scale, state, fz)
+        if status != CONVERGED:
+            return step, status
+        for i in range(3):
+            rx += h * rk_b[i] * fz[i, 0]
+            ry += h * rk_b[i] * fz[i, 1]
+        for k in range(m):
+            u[k] += z[2, k]
+        ys[step + 1, 0] = rx
+        ys[step + 1, 1] = ry
+        ys[step + 1, 2:] = u
+        fs[step + 1, :] = fz[2]
+    return -1, CONVERGED

@@ -65,6 +65,19 @@ class Flow:
     groups: tuple = field(default=(), repr=False, compare=False)  # (eta_par, eta_perp, chi, phi) of the system
 
 
+class StepMatrices(list):
+    """Per step (stage Jacobians, factors of :func:`radau.factor`, stage points they were
+    formed at); :meth:`stacked` gives the factors as arrays over the steps (made once) for
+    the compiled pass."""
+
+    _stacked: tuple | None = None
+
+    def stacked(self) -> tuple:
+        if self._stacked is None:
+            self._stacked = tuple(np.stack([f[1][k] for f in self]) for k in range(4))
+        return self._stacked
+
+
 class StepFailure(FloatingPointError):
     """A Radau step's stage equations did not converge."""
 
@@ -117,6 +130,14 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
 
     kern = radau.kernels() if system.filament.compiled else radau
     kargs = system.filament.rhs_args(system.phi, 1.0)
+    if have_warm and warm_mats and not variational:  # every step matrix given: the compiled pass
+        zs[:] = warm.stages
+        step, status = kern.chord_pass(u, zs, *warm.matrices.stacked(), *consts, *kargs, h, RADAU_B,
+                                       stage_tol, max_iter, ys, fs)
+        if step < 0:
+            return Flow(np.linspace(0.0, period, steps + 1), ys, fs, zs, None, warm.matrices, warm.matrix_key,
+                        None, groups + (system.phi,))
+        # a step needs a fresh matrix (or failed): the general loop below redoes the pass
     state = np.empty(3)
     fz = np.empty((3, m + 2))
     for step in range(steps):
@@ -162,4 +183,4 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
         ys[step + 1, :2], ys[step + 1, 2:] = r, u
         fs[step + 1] = fz[2]
     mono, dg = (smat[:, :m], smat[:, m:]) if sens else (smat, None)
-    return Flow(np.linspace(0.0, period, steps + 1), ys, fs, zs, mono, tuple(mats), key, dg, groups + (system.phi,))
+    return Flow(np.linspace(0.0, period, steps + 1), ys, fs, zs, mono, StepMatrices(mats), key, dg, groups + (system.phi,))
