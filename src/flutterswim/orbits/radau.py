@@ -26,7 +26,7 @@ import scipy.linalg as sla
 
 from .. import _jit, rosw
 
-KERNELS = ("reduced_solve", "stages", "chord_pass")
+KERNELS = ("reduced_matrix", "reduced_solve", "stages", "chord_pass")
 
 #: status codes of :func:`stages`
 CONVERGED, SLOW, NOT_FINITE, NO_CONVERGENCE = 0, 1, 2, 3
@@ -48,25 +48,50 @@ def constants(h: float, a: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarr
     return h * a, w, h * (w @ a)
 
 
-def factor(jac: np.ndarray, n: int, consts) -> tuple:
+def factor(jac: np.ndarray, n: int, consts, kern=None) -> tuple:
     """The reduced step matrix R of the stage Jacobians ``jac`` (3, 2N+1, 2N+1), factored:
     (LU (scipy ``lu_factor``: column-major, 0-based sequential row interchanges), pivots,
-    B (3, N, N+1), C (3, N+1, N))."""
-    ha, w, hwa = consts
+    B (3, N, N+1), C (3, N+1, N)). ``kern``: this module's kernels (compiled or not)."""
+    kern = kernels() if kern is None else kern
     nk = jac.shape[1] - n
-    if not (np.array_equal(np.diagonal(jac[:, n:, n:], axis1=1, axis2=2), np.full((3, nk), -1.0))
-            and np.count_nonzero(jac[:, n:, n:]) == 3 * nk):
+    r = np.empty((3 * n, 3 * n), order="F")
+    b = np.empty((3, n, nk))
+    c = np.empty((3, nk, n))
+    if not kern.reduced_matrix(jac, n, consts[0], consts[2], r, b, c):
         raise ValueError("the kappa block of the Jacobian is not -I: the reduced Radau step does not apply")
-    t = jac[:, :n, :n]
-    b = np.ascontiguousarray(jac[:, :n, n:])
-    c = np.ascontiguousarray(jac[:, n:, :n])
-    coef = ha[:, :, None] * hwa[None, :, :]  # (i, j, l): h A_ij (h W A)_jl
-    bsum = np.tensordot(coef, b, axes=([1], [0]))  # (i, l, N, N+1): sum_j coef_ijl B_j
-    r = np.matmul(bsum, c[None]) + ha[:, :, None, None] * t[None]  # (i, l, N, N)
-    r = -r.transpose(0, 2, 1, 3).reshape(3 * n, 3 * n)
-    r[np.diag_indices(3 * n)] += 1.0
     lu, piv = sla.lu_factor(r, overwrite_a=True, check_finite=False)
     return lu, piv, b, c
+
+
+def reduced_matrix(jac, n, ha, hwa, r, b, c):
+    """R (3N, 3N) of the module docstring into ``r``, with the blocks B_j and C_j of the stage
+    Jacobians into ``b`` (3, N, N+1) and ``c`` (3, N+1, N). False if a kappa block is not -I."""
+    nk = jac.shape[1] - n
+    for j in range(3):
+        for p in range(nk):
+            for q in range(nk):
+                if jac[j, n + p, n + q] != (-1.0 if p == q else 0.0):
+                    return False
+        for p in range(n):
+            for q in range(nk):
+                b[j, p, q] = jac[j, p, n + q]
+        for p in range(nk):
+            for q in range(n):
+                c[j, p, q] = jac[j, n + p, q]
+    for i in range(3):
+        for l in range(3):
+            bsum = np.zeros((n, nk))  # sum_j h A_ij (h W A)_jl B_j
+            for j in range(3):
+                coef = ha[i, j] * hwa[j, l]
+                for p in range(n):
+                    for q in range(nk):
+                        bsum[p, q] += coef * b[j, p, q]
+            block = np.dot(bsum, c[l])
+            hil = ha[i, l]
+            for p in range(n):
+                for q in range(n):
+                    r[i * n + p, l * n + q] = -block[p, q] - hil * jac[l, p, q] + (1.0 if i == l and p == q else 0.0)
+    return True
 
 
 def reduced_solve(lu, piv, b, c, ha, w, hwa, r):

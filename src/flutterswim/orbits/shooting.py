@@ -122,13 +122,13 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
     stale = warm_mats and warm.matrix_key != key and derivative_tol < 1e-8
 
     consts = radau.constants(h, a)
+    kern = radau.kernels() if system.filament.compiled else radau
 
     def step_matrix(z):
         yst = u + z
         jac = system.at_points(yst, "jacobian")
-        return jac, radau.factor(jac, system.n, consts), yst  # P = I - h (A x I) diag(J_j), reduced
+        return jac, radau.factor(jac, system.n, consts, kern), yst  # P = I - h (A x I) diag(J_j), reduced
 
-    kern = radau.kernels() if system.filament.compiled else radau
     kargs = system.filament.rhs_args(system.phi, 1.0)
     if have_warm and warm_mats and not variational:  # every step matrix given: the compiled pass
         zs[:] = warm.stages
