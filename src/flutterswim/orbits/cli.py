@@ -16,7 +16,7 @@ def register(subparsers) -> None:
     p.add_argument("--out", default="branch.nc")
     p.add_argument("--points", type=int, default=100, help="orbits along the branch (at least; default 100)")
     p.add_argument("--segments", type=int, default=None, help="segments N (default: the sweeps' resolution, 24)")
-    p.add_argument("--steps", type=int, default=None, help="Radau steps per period (default 24)")
+    p.add_argument("--steps", type=int, default=None, help="Radau steps per period (default 32)")
     p.add_argument("--plot", default=None, help="also draw the branch to this PNG")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_branch)

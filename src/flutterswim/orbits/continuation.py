@@ -31,8 +31,10 @@ __all__ = ["Branch", "continue_orbits"]
 
 N_MULTIPLIERS = 6
 #: Radau steps per period along a branch. Against 48 steps at kappa_E ratio 1.5 (N = 24):
-#: period 1.2e-6 and advance 3.6e-5 relative, far below the N = 24 space errors (1.7e-3, 1.4e-2).
-BRANCH_STEPS = 24
+#: period 2.5e-7 and advance 7.7e-6 relative, far below the N = 24 space errors (1.7e-3,
+#: 1.4e-2); the trivial multiplier within 1e-9 of 1 from the Hopf point to kappa_E ratio 2
+#: (24 steps: period 1.2e-6, advance 3.6e-5, trivial multiplier 1.2e-7 off at ratio 2).
+BRANCH_STEPS = 32
 #: Largest amplitude (along the unit Hopf eigenvector) of the branch's first orbit
 START_AMPLITUDE_CAP = 6.0
 
