@@ -8,8 +8,9 @@ Axes: the activity kappa_E / kappa_E(paper) (0.5 to 2) and the viscosity mu / mu
 Every stroke on the map is a periodic orbit (Newton shooting, stable Floquet multipliers), not
 a time-stepped state that merely looks periodic. Each row (one viscosity) runs from the
 strongest activity down:
-- the stroke of the previous point is the guess, and its flow (stages, step matrices) the warm
-  start, of Newton shooting at this point (natural continuation along the row);
+- the stroke of the previous point is the guess, and its flow (stages, step matrices,
+  monodromy, parameter sensitivity) the warm start, of shooting at this point (natural
+  continuation along the row: first-order predictor, chord steps, one exact pass);
 - if there is no previous stroke, or shooting fails, or the orbit found is unstable, the point
   goes to the settle engine (:func:`flutterswim.settle.settle`: time stepping from the
   neighbour's state, or from the paper's tilt, until the oscillation is steady, then Newton
@@ -40,7 +41,7 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 N_SEG = 24
-STEPS = 24  # Radau steps per period, as the branches (orbits.continuation.BRANCH_STEPS)
+STEPS = 32  # Radau steps per period, as the branches (orbits.continuation.BRANCH_STEPS)
 FIELDS = ("period_s", "advance_per_cycle_mm", "advance_along_field_mm", "speed_mm_s", "lateral_trailing_mm", "lateral_leading_mm",
           "nonreciprocity", "self_intersecting", "max_multiplier")
 OUTCOMES = ("straight", "orbit", "not_periodic", "bent_equilibrium", "failed")
@@ -72,26 +73,27 @@ def row(args: tuple[float, np.ndarray]) -> dict:
     out = {k: [math.nan] * len(ratios) for k in FIELDS}
     out["outcome"] = ["straight"] * len(ratios)
     out["how"] = [""] * len(ratios)
-    prev = older = None  # (u0, T, flow) of the previous point's stroke, and of the one before
+    prev = None  # (u0, T, flow) of the previous point's stroke
     state = None  # the previous point's final simulated state
     for i in np.argsort(ratios)[::-1]:
         p = P.replace(mu=P.mu * mu_f, kappa_E=P.kappa_E * ratios[i])
         sysm = ShapeSystem.of(p, N_SEG)
         orb = None
         if prev is not None:
-            # secant predictor from the two previous strokes of the row (equal spacing)
-            u0, T0 = (2 * prev[0] - older[0], 2 * prev[1] - older[1]) if older is not None else prev[:2]
+            # from the previous stroke of the row: with its flow's parameter sensitivity and
+            # monodromy, a first-order predictor and chord steps (one exact pass, the last);
+            # without them (a stroke from the settle engine), Newton from it
             try:
-                u, T, fl, res, it = solve_orbit(sysm, u0, T0, steps=STEPS, warm=prev[2], max_newton=8,
-                                                exact_multipliers=False)
+                u, T, fl, res, it = solve_orbit(sysm, prev[0], prev[1], steps=STEPS, warm=prev[2], max_newton=10,
+                                                sensitivity=True)
                 cand = orbit_from_flow(p, sysm, fl, res, it, STEPS)
                 if cand.stable:
-                    orb, older, prev = cand, prev, (u, T, fl)
+                    orb, prev = cand, (u, T, fl)
                     out["how"][i] = "continued"
             except (OrbitNotFound, FloatingPointError, np.linalg.LinAlgError):
                 pass  # (StepFailure is a FloatingPointError)
         if orb is None:
-            prev = older = None
+            prev = None
             try:
                 lam = leading_pair(p.groups, N_SEG)
             except ParameterError:
