@@ -59,6 +59,8 @@ def test_centreline_and_tips_in_pixels(sim, snr, tip_rms):
     assert idx.size == mv.frames.shape[0], failures(tr)
     # 6.3 frames per stroke: too few for the smoothing in time, which says so
     assert tr.meta["temporal"]["smoothing"].startswith("not done")
+    # and too few frames (34) for the periodic template (>= 78 for 6 harmonics), which says so
+    assert tr.meta["temporal"]["periodic"].startswith("not done: 34 good frames")
     assert math.sqrt(np.mean(D**2)) <= 0.25
     assert np.sqrt(np.mean(D**2, axis=1)).max() <= 0.25
     assert math.sqrt(np.mean(E**2)) <= tip_rms
@@ -216,6 +218,9 @@ def test_mp4_within_one_percent_of_lossless(snr3, tmp_path):
     tm = track(tmp_path / "movie.mp4", px_per_mm=mv.px_per_mm, t0=float(mv.t[0]))
     assert tm.meta["fps"] == pytest.approx(FPS)
     assert tm.meta["n_failed"] == 0, failures(tm)
+    # both movies verified periodic: the shape template is used on the lossy one too
+    for t_ in (tr, tm):
+        assert t_.meta["temporal"]["periodic"].startswith("done"), t_.meta["temporal"]["periodic"]
     a, b = describe(tr), describe(tm)
     for k in ("period_s", "advance_per_cycle_mm", "leading_lateral_p2p_mm", "trailing_lateral_p2p_mm",
               "body_length_mm"):
