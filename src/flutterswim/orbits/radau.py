@@ -9,10 +9,10 @@ kappa rows), W = (I + h A)^-1 and a right-hand side (r_theta, r_kappa) per stage
     kappa_i = sum_k W_ik r_kappa,k + h sum_l (W A)_il C_l theta_l,
     R theta = r_theta,i + h sum_j A_ij B_j sum_k W_jk r_kappa,k,
     R_il = delta_il I - h A_il T_l - h^2 sum_j A_ij (W A)_jl B_j C_l,
-a 3N-square system instead of 3(2N+1): its LU costs 8 times less, a solve 4 times less.
-:func:`factor` forms and factors R (scipy/LAPACK); :func:`reduced_solve` solves with it
-(triangular solves over all columns at once, so the same kernel serves one stage
-residual and the variational equation's many columns); :func:`stages` is the simplified
+a 3N-square system instead of 3(2N+1): its inverse costs 8 times less, a solve 4 times less.
+:func:`factor` forms and inverts R (scipy/LAPACK); :func:`reduced_solve` solves with it
+(with R^-1: one matrix product, so the same kernel serves one stage residual and the
+variational equation's many columns); :func:`stages` is the simplified
 Newton iteration of one step; :func:`chord_pass` runs it over all steps of a pass whose
 step matrices are all given (a warm start). The forming of step matrices and the
 variational equation stay in :func:`flutterswim.orbits.shooting.flow`. Kernels are written once and compiled with numba
@@ -49,18 +49,23 @@ def constants(h: float, a: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarr
 
 
 def factor(jac: np.ndarray, n: int, consts, kern=None) -> tuple:
-    """The reduced step matrix R of the stage Jacobians ``jac`` (3, 2N+1, 2N+1), factored:
-    (LU (scipy ``lu_factor``: column-major, 0-based sequential row interchanges), pivots,
-    B (3, N, N+1), C (3, N+1, N)). ``kern``: this module's kernels (compiled or not)."""
+    """The reduced step matrix R of the stage Jacobians ``jac`` (3, 2N+1, 2N+1), inverted:
+    (R^-1, B (3, N, N+1), C (3, N+1, N)). A solve is then one matrix product (BLAS), for one
+    stage residual as for the variational equation's many columns: the chord passes solve
+    about 20 times with each matrix, where a product is several times faster than two
+    triangular solves. ``kern``: this module's kernels (compiled or not)."""
     kern = kernels() if kern is None else kern
     nk = jac.shape[1] - n
-    r = np.empty((3 * n, 3 * n), order="F")
+    r = np.empty((3 * n, 3 * n))
     b = np.empty((3, n, nk))
     c = np.empty((3, nk, n))
     if not kern.reduced_matrix(jac, n, consts[0], consts[2], r, b, c):
         raise ValueError("the kappa block of the Jacobian is not -I: the reduced Radau step does not apply")
-    lu, piv = sla.lu_factor(r, overwrite_a=True, check_finite=False)
-    return lu, piv, b, c
+    try:
+        rinv = sla.inv(r, overwrite_a=True, check_finite=False)
+    except np.linalg.LinAlgError:  # singular: a step too long for the stiff dynamics
+        rinv = np.full((3 * n, 3 * n), np.nan)
+    return np.ascontiguousarray(rinv), b, c
 
 
 def reduced_matrix(jac, n, ha, hwa, r, b, c):
@@ -94,9 +99,9 @@ def reduced_matrix(jac, n, ha, hwa, r, b, c):
     return True
 
 
-def reduced_solve(lu, piv, b, c, ha, w, hwa, r):
+def reduced_solve(rinv, b, c, ha, w, hwa, r):
     """Solve P x = r in place for r (3(2N+1), k) (stage-major rows: theta then kappa of
-    each stage), with the factors of :func:`factor`. Returns 0, or 1 if R is singular."""
+    each stage), with the factors of :func:`factor`. Returns 0, or 1 if R was singular."""
     n = b.shape[1]
     nk = b.shape[2]
     m = n + nk
@@ -108,45 +113,23 @@ def reduced_solve(lu, piv, b, c, ha, w, hwa, r):
             for p in range(nk):
                 for col in range(k):
                     qk[j, p, col] += wjq * r[q * m + n + p, col]
-    rt = np.empty((3 * n, k))
+    th = np.empty((3 * n, k))
     for i in range(3):
         for p in range(n):
             for col in range(k):
-                rt[i * n + p, col] = r[i * m + p, col]
+                th[i * n + p, col] = r[i * m + p, col]
     for j in range(3):
         bq = np.dot(b[j], qk[j])  # (N, k)
         for i in range(3):
             hij = ha[i, j]
             for p in range(n):
                 for col in range(k):
-                    rt[i * n + p, col] += hij * bq[p, col]
-    size = 3 * n
-    for i in range(size):  # row interchanges, then L (unit) and U by columns of the LU
-        p = piv[i]
-        if p != i:
-            for col in range(k):
-                tmp = rt[i, col]
-                rt[i, col] = rt[p, col]
-                rt[p, col] = tmp
-    for j in range(size):
-        for i in range(j + 1, size):
-            lij = lu[i, j]
-            if lij != 0.0:
-                for col in range(k):
-                    rt[i, col] -= lij * rt[j, col]
-    for j in range(size - 1, -1, -1):
-        d = lu[j, j]
-        if d == 0.0:
-            return 1
-        for col in range(k):
-            rt[j, col] /= d
-        for i in range(j):
-            uij = lu[i, j]
-            if uij != 0.0:
-                for col in range(k):
-                    rt[i, col] -= uij * rt[j, col]
+                    th[i * n + p, col] += hij * bq[p, col]
+    th = np.dot(rinv, th)
+    if not np.isfinite(th[0, 0]):
+        return 1
     for l in range(3):
-        theta = np.ascontiguousarray(rt[l * n : (l + 1) * n])
+        theta = np.ascontiguousarray(th[l * n : (l + 1) * n])
         for p in range(n):
             for col in range(k):
                 r[l * m + p, col] = theta[p, col]
@@ -163,7 +146,7 @@ def reduced_solve(lu, piv, b, c, ha, w, hwa, r):
     return 0
 
 
-def stages(u, z, ha, w, hwa, lu, piv, b, c, avg, diff, weights, eta_par, eta_perp, chi, phi, tol, state, fz):
+def stages(u, z, ha, w, hwa, rinv, b, c, avg, diff, weights, eta_par, eta_perp, chi, phi, tol, state, fz):
     """Simplified Newton iteration for the stage increments z (3, m), in place, with a
     factored step matrix (:func:`factor`). ``state`` = [iterations done, last correction
     size, iteration limit] carries over when the caller re-forms the matrix (status SLOW).
@@ -187,7 +170,7 @@ def stages(u, z, ha, w, hwa, lu, piv, b, c, avg, diff, weights, eta_par, eta_per
                 for j in range(3):
                     acc -= ha[i, j] * fz[j, 2 + k]
                 res[i * m + k, 0] = -acc
-        if reduced_solve(lu, piv, b, c, ha, w, hwa, res) != 0:
+        if reduced_solve(rinv, b, c, ha, w, hwa, res) != 0:
             return NOT_FINITE
         size = 0.0
         finite = True
@@ -214,7 +197,7 @@ def stages(u, z, ha, w, hwa, lu, piv, b, c, avg, diff, weights, eta_par, eta_per
     return NO_CONVERGENCE
 
 
-def chord_pass(u0, zs, lus, pivs, bs, cs, ha, w, hwa, avg, diff, weights, eta_par, eta_perp, chi, phi, h, rk_b,
+def chord_pass(u0, zs, rinvs, bs, cs, ha, w, hwa, avg, diff, weights, eta_par, eta_perp, chi, phi, h, rk_b,
                tol, max_iter, ys, fs):
     """All steps of a pass with given step matrices (stacked per step): the stage increments
     zs (steps, 3, m) in place (warm start in, converged out), states ys and full rhs fs
@@ -233,7 +216,7 @@ def chord_pass(u0, zs, lus, pivs, bs, cs, ha, w, hwa, avg, diff, weights, eta_pa
         state[1] = np.inf
         state[2] = max_iter
         z = zs[step]
-        status = stages(u, z, ha, w, hwa, lus[step], pivs[step], bs[step], cs[step], avg, diff, weights, eta_par,
+        status = stages(u, z, ha, w, hwa, rinvs[step], bs[step], cs[step], avg, diff, weights, eta_par,
                         eta_perp, chi, phi, tol * scale, state, fz)
         if status != CONVERGED:
             return step, status

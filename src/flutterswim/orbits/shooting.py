@@ -74,7 +74,7 @@ class StepMatrices(list):
 
     def stacked(self) -> tuple:
         if self._stacked is None:
-            self._stacked = tuple(np.stack([f[1][k] for f in self]) for k in range(4))
+            self._stacked = tuple(np.stack([f[1][k] for f in self]) for k in range(3))
         return self._stacked
 
 
