@@ -54,7 +54,7 @@ def polyline_self_intersects(x: np.ndarray, y: np.ndarray, *, tol: float = 0.0) 
     y = np.asarray(y, float)
     if x.shape != y.shape or x.ndim not in (1, 2) or x.shape[-1] < 2:
         raise ParameterError(f"x and y have shapes {x.shape} and {y.shape}; equal 1-d or 2-d shapes are required")
-    hits = _intersect_frames(np.atleast_2d(x), np.atleast_2d(y), tol) > 0
+    hits = _count(np.atleast_2d(x), np.atleast_2d(y), tol) > 0
     return bool(hits[0]) if x.ndim == 1 else hits
 
 
@@ -105,7 +105,13 @@ def self_intersections(obj: Any, *, tol: float = 0.0, chunk_bytes: float = 64e6)
     Frames are processed in chunks to bound memory.
     """
     tr: Track = as_track(obj)
-    n_seg = tr.n_points - 1
+    return _count(tr.x, tr.y, tol, chunk_bytes)
+
+
+def _count(x: np.ndarray, y: np.ndarray, tol: float, chunk_bytes: float = 64e6) -> np.ndarray:
+    """(F, P) coordinates -> (F,) crossing pairs: pruned and compiled for tol = 0 when numba
+    is installed, else all pairs in chunks of frames."""
+    n_frames, n_seg = x.shape[0], x.shape[1] - 1
     if tol == 0.0 and n_seg >= 3:
         import sys
 
@@ -113,12 +119,12 @@ def self_intersections(obj: Any, *, tol: float = 0.0, chunk_bytes: float = 64e6)
 
         mod = sys.modules[__name__]
         if _jit.compile_module(mod, ("count_pruned",)):
-            return mod.count_pruned(np.ascontiguousarray(tr.x, float), np.ascontiguousarray(tr.y, float),
-                                    np.empty(tr.n_frames, np.int64)).astype(int)
+            return mod.count_pruned(np.ascontiguousarray(x, float), np.ascontiguousarray(y, float),
+                                    np.empty(n_frames, np.int64)).astype(int)
     n_pairs = max(_pairs(n_seg)[0].size, 1)
     per_frame = n_pairs * 8 * 14
     step = max(1, int(chunk_bytes // per_frame))
-    out = np.empty(tr.n_frames, int)
-    for a in range(0, tr.n_frames, step):
-        out[a : a + step] = _intersect_frames(tr.x[a : a + step], tr.y[a : a + step], tol)
+    out = np.empty(n_frames, int)
+    for a in range(0, n_frames, step):
+        out[a : a + step] = _intersect_frames(x[a : a + step], y[a : a + step], tol)
     return out
