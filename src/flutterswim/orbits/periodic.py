@@ -69,7 +69,7 @@ class PeriodicOrbit:
     units: str = "SI"
     #: the converged flow (stages, step matrices, monodromy, parameter sensitivity): a warm
     #: start for a neighbouring orbit (``periodic_orbit(params, guess=this)``). It holds the
-    #: step matrices (about 5 MB at N = 24, 22 MB at N = 48): :meth:`compact` drops it, and
+    #: step matrices (about 4 MB at N = 24, 17 MB at N = 48): :meth:`compact` drops it, and
     #: it is not pickled (orbits sent to workers stay small).
     warm_start: Flow | None = field(default=None, repr=False, compare=False)
 
