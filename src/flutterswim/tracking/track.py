@@ -366,7 +366,10 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     if periodic and np.count_nonzero(ok) >= 2:
         from .periodic import periodic_shape
 
-        X, Y, pinfo = periodic_shape(X, Y, ok, per_stroke)
+        try:
+            X, Y, pinfo = periodic_shape(X, Y, ok, per_stroke)
+        except (np.linalg.LinAlgError, ValueError) as exc:  # a degenerate movie: the frames stay as they are
+            pinfo = {"done": False, "reason": f"not done: the template fit failed ({exc})"}
         temporal["periodic"] = pinfo["reason"]
         temporal["periodic_info"] = {k: v for k, v in pinfo.items() if k != "reason"}
     n_ok = int(np.count_nonzero(ok))
