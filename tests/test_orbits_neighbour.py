@@ -129,3 +129,12 @@ def test_a_far_neighbour_falls_back_to_newton(base):
     assert near.residual < 1e-10 and abs(near.period / chained.period - 1) < 1e-9
     assert abs(near.period / base.period - 1) > 0.1
     assert near.trivial_multiplier_error < 1e-8
+
+
+def test_resolution_defaults_to_the_guess(base):
+    near = periodic_orbit(fs.PAPER.replace(kappa_E=fs.PAPER.kappa_E * 1.01), base)
+    assert (near.n_segments, near.steps) == (N, STEPS)
+    from flutterswim._validate import ParameterError
+
+    with pytest.raises(ParameterError, match="n_segments"):
+        periodic_orbit(fs.PAPER, base, n_segments=N + 4)

@@ -354,17 +354,22 @@ def _p2p(q: np.ndarray) -> float:
 
 @one_blas_thread
 def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = None, *,
-                   n_segments: int = DEFAULT_SEGMENTS, steps: int = DEFAULT_STEPS, tol: float = 1e-10,
+                   n_segments: int | None = None, steps: int | None = None, tol: float = 1e-10,
                    max_newton: int = 12, phi: float = 0.0) -> PeriodicOrbit:
     """The stroke at ``params`` as a periodic orbit of the shape dynamics.
 
     ``guess``: a neighbouring :class:`PeriodicOrbit` (same resolution), or None to seed from
     a simulation of the onset from the straight state (or, near the Hopf point where that
-    onset is too slow, from the Hopf eigenvector by continuation). Raises :class:`OrbitNotFound` if the
-    straight state is stable (no stroke to find) or Newton fails."""
+    onset is too slow, from the Hopf eigenvector by continuation). ``n_segments`` and
+    ``steps`` default to the guess's, else to 48 segments (the paper's) and 32 Radau steps
+    per period. Raises :class:`OrbitNotFound` if the straight state is stable (no stroke to
+    find) or Newton fails."""
     _check_params(params)
-    n_segments = positive_int("n_segments", n_segments, minimum=4)
-    steps = positive_int("steps", steps, minimum=8)
+    if isinstance(guess, PeriodicOrbit):
+        n_segments = guess.n_segments if n_segments is None else n_segments
+        steps = guess.steps if steps is None else steps
+    n_segments = positive_int("n_segments", DEFAULT_SEGMENTS if n_segments is None else n_segments, minimum=4)
+    steps = positive_int("steps", DEFAULT_STEPS if steps is None else steps, minimum=8)
     tol = positive("tol", tol)
     system = ShapeSystem.of(params, n_segments, phi)
     warm = None
