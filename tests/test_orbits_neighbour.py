@@ -138,3 +138,23 @@ def test_resolution_defaults_to_the_guess(base):
 
     with pytest.raises(ParameterError, match="n_segments"):
         periodic_orbit(fs.PAPER, base, n_segments=N + 4)
+
+
+def test_plain_python_stage_solve_equals_the_compiled_one():
+    """The kernels are written once and run as plain Python without numba: same result."""
+    pytest.importorskip("numba")
+    from flutterswim.orbits import radau
+    from flutterswim.orbits.shooting import RADAU_A
+
+    k = radau.kernels()
+    rng = np.random.default_rng(5)
+    n, m = 7, 15
+    jac = rng.normal(scale=10.0, size=(3, m, m))
+    jac[:, n:, n:] = -np.eye(n + 1)
+    consts = radau.constants(0.05, RADAU_A)
+    fac = radau.factor(jac, n, consts)
+    r = rng.normal(size=(3 * m, 3))
+    a, b = r.copy(), r.copy()
+    assert k.reduced_solve(*fac, *consts, a) == 0
+    assert k.reduced_solve.py_func(*fac, *consts, b) == 0
+    assert np.abs(a - b).max() < 1e-12 * np.abs(a).max()

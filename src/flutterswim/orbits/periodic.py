@@ -201,6 +201,7 @@ def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: in
     if _is_neighbour(warm, system, u, T, steps):
         fil = system.filament
         dg = np.array([fil.eta_par, fil.eta_perp, fil.chi]) - np.array(warm.groups[:3])
+        T = float(warm.t[-1])  # (the guess's period may have passed through seconds and back)
         closing = warm.y[-1, 2:] - u + warm.sensitivity @ dg  # first order in the change
         dx = np.linalg.solve(_bordered(warm.monodromy, warm.f[-1, 2:], normal), np.concatenate((-closing, [0.0])))
         lam = min(1.0, 0.2 * T / max(abs(dx[m]), 1e-300))
@@ -269,7 +270,7 @@ def _is_neighbour(warm: Flow | None, system: ShapeSystem, u: np.ndarray, T: floa
     return (warm is not None and warm.monodromy is not None and warm.sensitivity is not None
             and warm.stages.shape[0] == steps and warm.monodromy.shape[0] == u.size
             and warm.groups[3] == system.phi
-            and np.array_equal(warm.y[0, 2:], u) and warm.t[-1] == T)
+            and np.array_equal(warm.y[0, 2:], u) and math.isclose(warm.t[-1], T, rel_tol=1e-12))
 
 
 def orbit_from_flow(params, system: ShapeSystem, fl: Flow, residual: float, n_newton: int,
