@@ -178,7 +178,8 @@ def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: in
     Each Newton step integrates the variational equation with the step matrices formed at
     the warm-started stages (exact to the size of the last correction, which is all Newton
     needs); once the orbit closes, a final pass from the converged stages gives the exact
-    monodromy, so the Floquet multipliers are those of the orbit itself. With
+    monodromy, so the Floquet multipliers are those of the orbit itself (that pass must close
+    the orbit too: the residual returned is its own, below ``tol``). With
     ``exact_multipliers=False`` that pass is skipped: the orbit and its descriptors are the
     same, the multipliers are those of the last derivative formed (within 1e-3 of the final
     stages, or the warm start's: good enough to tell a stable orbit unless a multiplier is near 1).
@@ -207,14 +208,17 @@ def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: in
         lam = min(1.0, 0.2 * T / max(abs(dx[m]), 1e-300))
         u, T = u + lam * dx[:m], T + lam * dx[m]
         mono, chord = warm.monodromy, True
-    for it in range(1, max_newton + 1):
+    verify = False  # this pass is the exact one at an iterate that already closed
+    for it in range(1, max_newton + 2):
+        if it > max_newton and not verify:
+            break
         try:
             # stages solved to a fraction of the last residual (exactly once it is small), the
             # derivative from the reused step matrices unless the stages moved by > 1e-3; once
             # the residual is small and falling fast, the last monodromy is kept (chord steps)
             # and the pass expected to close the orbit is the exact one
             stage_tol = min(1e-6, max(1e-13, 1e-4 * res)) if math.isfinite(res) else 1e-6
-            if exact_next:
+            if exact_next or verify:
                 fl = flow(system, u, T, steps, variational=True, warm=fl, sensitivity=sensitivity)
             else:
                 fl = flow(system, u, T, steps, variational=not chord, warm=fl, derivative_tol=1e-3,
@@ -226,15 +230,13 @@ def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: in
         if fl.monodromy is not None:
             mono = fl.monodromy
         if res < tol:
-            if exact_next:
+            if exact_next or verify:
                 return u, T, fl, res, it
             if not exact_multipliers:
                 return u, T, replace(fl, monodromy=mono), res, it
-            try:
-                final = flow(system, u, T, steps, variational=True, warm=fl, sensitivity=sensitivity)
-            except StepFailure as exc:
-                raise OrbitNotFound(f"the final pass at the converged orbit failed: {exc}") from None
-            return u, T, final, float(np.max(np.abs(final.y[-1, 2:] - u))), it
+            verify = True  # the exact pass at this iterate gives the multipliers, and must close too
+            continue
+        verify = False
         rate = res / res_before if math.isfinite(res_before) else math.inf
         if chord and math.isfinite(rate) and not exact_next and (
                 rate > 0.3 or math.log(tol / res) / math.log(max(rate, 1e-300)) > max_newton - it - 1):
