@@ -111,7 +111,13 @@ def test_reduced_step_solve_equals_the_full_step_matrix_solve(columns):
 def test_solve_orbit_rejects_a_warm_start_from_another_field_direction(base):
     """The predictor needs the neighbour's own field direction: a rotated system falls back
     to Newton and still converges (rotating the field rotates the stroke)."""
+    from flutterswim.orbits import periodic
+
     system = ShapeSystem.of(fs.PAPER.groups, N, phi=0.3)
+    # the neighbour's own start, unshifted: only the field direction tells it apart
+    assert periodic._is_neighbour(base.warm_start, ShapeSystem.of(fs.PAPER.groups, N), base.u0,
+                                  base.period_dimensionless, STEPS)
+    assert not periodic._is_neighbour(base.warm_start, system, base.u0, base.period_dimensionless, STEPS)
     u = base.u0.copy()
     u[:N] += 0.3  # the stroke turned with the field
     _, T, fl, res, _ = solve_orbit(system, u, base.period_dimensionless, steps=STEPS, warm=base.warm_start)
@@ -158,3 +164,25 @@ def test_plain_python_stage_solve_equals_the_compiled_one():
     assert k.reduced_solve(*fac, *consts, a) == 0
     assert k.reduced_solve.py_func(*fac, *consts, b) == 0
     assert np.abs(a - b).max() < 1e-12 * np.abs(a).max()
+
+
+def test_without_numba_the_same_kernels_give_the_same_flow(tmp_path):
+    """Kernels are written once: run as plain Python (numba hidden, in a subprocess) the
+    variational pass and the chord pass equal the compiled ones."""
+    pytest.importorskip("numba")
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    small = periodic_orbit(fs.PAPER.groups, n_segments=8, steps=16)
+    np.savez(tmp_path / "in.npz", u=small.u0, T=small.period_dimensionless, n=8, steps=16)
+    script = Path(__file__).with_name("_plain_flow.py")
+    r = subprocess.run([sys.executable, str(script), str(tmp_path / "in.npz"), str(tmp_path / "out.npz")],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    plain = np.load(tmp_path / "out.npz")
+    s = ShapeSystem.of(fs.PAPER.groups, 8)
+    f0 = flow(s, small.u0, small.period_dimensionless, 16, variational=True, sensitivity=True)
+    f1 = flow(s, small.u0, small.period_dimensionless, 16, warm=f0)
+    for a, b in ((f0.y, plain["y"]), (f0.monodromy, plain["mono"]), (f0.sensitivity, plain["sens"]), (f1.y, plain["y1"])):
+        assert np.abs(a - b).max() < 1e-9 * np.abs(a).max()

@@ -70,7 +70,8 @@ class PeriodicOrbit:
     #: the converged flow (stages, step matrices, monodromy, parameter sensitivity): a warm
     #: start for a neighbouring orbit (``periodic_orbit(params, guess=this)``). It holds the
     #: step matrices (about 4 MB at N = 24, 17 MB at N = 48): :meth:`compact` drops it, and
-    #: it is not pickled (orbits sent to workers stay small).
+    #: it is not pickled or copied (``copy.copy``, ``copy.deepcopy``: orbits sent to workers
+    #: stay small; ``dataclasses.replace`` keeps it).
     warm_start: Flow | None = field(default=None, repr=False, compare=False)
 
     def compact(self) -> "PeriodicOrbit":
@@ -397,8 +398,15 @@ def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = 
             raise ParameterError(f"guess has n_segments={guess.n_segments}; this orbit needs {n_segments}")
         u0, T = guess.u0, guess.period_dimensionless
         warm = guess.warm_start
-    u, T, fl, res, it = solve_orbit(system, u0, T, steps=steps, tol=tol, max_newton=max_newton, warm=warm,
-                                    sensitivity=True)
+    try:
+        u, T, fl, res, it = solve_orbit(system, u0, T, steps=steps, tol=tol, max_newton=max_newton, warm=warm,
+                                        sensitivity=True)
+    except OrbitNotFound:
+        if warm is None:
+            raise
+        # the predictor and chord from the neighbour failed (near a fold, say): Newton from its shape
+        u, T, fl, res, it = solve_orbit(system, u0, T, steps=steps, tol=tol, max_newton=max_newton,
+                                        sensitivity=True)
     return replace(orbit_from_flow(params, system, fl, res, it, steps), warm_start=fl)
 
 

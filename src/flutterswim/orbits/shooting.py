@@ -59,7 +59,7 @@ class Flow:
     stages: np.ndarray
     monodromy: np.ndarray | None
     matrices: tuple = field(default=(), repr=False, compare=False)
-    matrix_key: tuple = field(default=(), repr=False, compare=False)  # (h, system) they were formed for
+    matrix_key: tuple = field(default=(), repr=False, compare=False)  # (h, N, groups, phi) they were formed for
     #: d(end shape)/d(eta_par, eta_perp, chi) at fixed start and period, (2N+1, 3), or None
     sensitivity: np.ndarray | None = field(default=None, repr=False, compare=False)
     groups: tuple = field(default=(), repr=False, compare=False)  # (eta_par, eta_perp, chi, phi) of the system
@@ -75,6 +75,8 @@ class StepMatrices(list):
     def stacked(self) -> tuple:
         if self._stacked is None:
             self._stacked = tuple(np.stack([f[1][k] for f in self]) for k in range(3))
+            for i, (jac, _, y_lu) in enumerate(self):  # per step, views of the stacks (no second copy)
+                self[i] = (jac, tuple(a[i] for a in self._stacked), y_lu)
         return self._stacked
 
 
@@ -116,7 +118,7 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
         smat = np.concatenate((smat, np.zeros((m, 3))), axis=1)  # [du/du0 | du/dg]
     have_warm = warm is not None and warm.stages.shape == zs.shape
     warm_mats = have_warm and len(warm.matrices) == steps
-    key = (h, id(system))
+    key = (h, system.n, fil.eta_par, fil.eta_perp, fil.chi, system.phi)  # what the matrices depend on
     # matrices of another step size or system serve the stage iteration, and an approximate
     # derivative (Newton shooting), but never a derivative asked to be exact
     stale = warm_mats and warm.matrix_key != key and derivative_tol < 1e-8
