@@ -186,3 +186,21 @@ def test_without_numba_the_same_kernels_give_the_same_flow(tmp_path):
     f1 = flow(s, small.u0, small.period_dimensionless, 16, warm=f0)
     for a, b in ((f0.y, plain["y"]), (f0.monodromy, plain["mono"]), (f0.sensitivity, plain["sens"]), (f1.y, plain["y1"])):
         assert np.abs(a - b).max() < 1e-9 * np.abs(a).max()
+
+
+def test_a_failed_predictor_falls_back_to_newton_from_the_neighbour(base, monkeypatch):
+    from flutterswim.orbits import OrbitNotFound, periodic
+
+    real = periodic.solve_orbit
+
+    def failing_warm(*args, warm=None, **kwargs):
+        if warm is not None:
+            raise OrbitNotFound("chord diverged (test)")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(periodic, "solve_orbit", failing_warm)
+    params = fs.PAPER.replace(kappa_E=fs.PAPER.kappa_E * 1.02)
+    near = periodic_orbit(params, base)
+    monkeypatch.undo()
+    assert near.residual < 1e-10
+    assert abs(near.period / periodic_orbit(params, base).period - 1) < 1e-9
