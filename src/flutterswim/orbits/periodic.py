@@ -69,7 +69,7 @@ class PeriodicOrbit:
     units: str = "SI"
     #: the converged flow (stages, step matrices, monodromy, parameter sensitivity): a warm
     #: start for a neighbouring orbit (``periodic_orbit(params, guess=this)``). It holds the
-    #: step matrices (about 4 MB at N = 24, 17 MB at N = 48): :meth:`compact` drops it, and
+    #: step matrices (about 2 MB at N = 24, 9 MB at N = 48): :meth:`compact` drops it, and
     #: it is not pickled or copied (``copy.copy``, ``copy.deepcopy``: orbits sent to workers
     #: stay small; ``dataclasses.replace`` keeps it).
     warm_start: Flow | None = field(default=None, repr=False, compare=False)
@@ -407,7 +407,8 @@ def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = 
         # the predictor and chord from the neighbour failed (near a fold, say): Newton from its shape
         u, T, fl, res, it = solve_orbit(system, u0, T, steps=steps, tol=tol, max_newton=max_newton,
                                         sensitivity=True)
-    return replace(orbit_from_flow(params, system, fl, res, it, steps), warm_start=fl)
+    return replace(orbit_from_flow(params, system, fl, res, it, steps),
+                   warm_start=replace(fl, matrices=fl.matrices.without_jacobians()))
 
 
 def seed_from_simulation(system: ShapeSystem, *, t_max: float = 80.0) -> tuple[np.ndarray, float]:

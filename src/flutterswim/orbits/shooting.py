@@ -68,7 +68,12 @@ class Flow:
 class StepMatrices(list):
     """Per step (stage Jacobians, factors of :func:`radau.factor`, stage points they were
     formed at); :meth:`stacked` gives the factors as arrays over the steps (made once) for
-    the compiled pass."""
+    the compiled pass; :meth:`without_jacobians` keeps only what a stage iteration needs."""
+
+    def without_jacobians(self) -> "StepMatrices":
+        """The same factors without the stage Jacobians (a derivative re-forms them): for a
+        warm start kept on an orbit, about half the memory."""
+        return StepMatrices((None, f, y) for _, f, y in self)
 
     _stacked: tuple | None = None
 
@@ -162,7 +167,7 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
         if status == radau.NO_CONVERGENCE:
             raise StepFailure(f"stage equations did not converge at step {step} of {steps} (h={h:.3g})")
         if variational:
-            if np.max(np.abs(u + z - y_lu)) > derivative_tol * scale:
+            if jac is None or np.max(np.abs(u + z - y_lu)) > derivative_tol * scale:
                 jac, lu, y_lu = step_matrix(z)
             # P dZ/du = h [sum_j A_ij J_j]_i at the converged stages
             if sens:  # f_g at the stages: three more columns
