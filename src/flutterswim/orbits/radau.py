@@ -12,10 +12,10 @@ kappa rows), W = (I + h A)^-1 and a right-hand side (r_theta, r_kappa) per stage
 a 3N-square system instead of 3(2N+1): its inverse costs 8 times less, a solve 4 times less.
 :func:`factor` forms and inverts R (scipy/LAPACK); :func:`reduced_solve` solves with it
 (with R^-1: one matrix product, so the same kernel serves one stage residual and the
-variational equation's many columns); :func:`stages` is the simplified
-Newton iteration of one step; :func:`chord_pass` runs it over all steps of a pass whose
-step matrices are all given (a warm start). The forming of step matrices and the
-variational equation stay in :func:`flutterswim.orbits.shooting.flow`. Kernels are written once and compiled with numba
+variational equation's many columns); :func:`stages` is the simplified Newton iteration of
+one step; :func:`chord_pass` runs it over all steps of a pass whose step matrices are all
+given (a warm start). The forming of step matrices and the variational equation stay in
+:func:`flutterswim.orbits.shooting.flow`. Kernels are written once and compiled with numba
 when it is installed (:mod:`flutterswim._jit`).
 """
 

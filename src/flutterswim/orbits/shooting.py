@@ -4,8 +4,10 @@ With a fixed number of steps M per period, the discrete flow map Phi(u0, T) is a
 function of (u0, T), so Newton's method on Phi(u0, T) = u0 converges quadratically to the
 fixed point of the discrete map. The steps are those of the 3-stage Radau IIA collocation
 method (order 5, L-stable and stiffly accurate, so the stiff bending modes are damped as
-in the ODE, not reflected as with Gauss collocation), with stage equations solved by full
-Newton with the exact Jacobian of the simulator's rhs.
+in the ODE, not reflected as with Gauss collocation), with stage equations solved by a
+simplified Newton iteration whose step matrix comes from the exact Jacobians of the
+simulator's rhs (kept from a warm start while it converges fast, re-formed when it does not;
+its linear algebra, with the kappa unknowns eliminated, is in :mod:`.radau`).
 
 Stage equations, Z_i = Y_i - u_n:  Z_i = h sum_j A_ij f(u_n + Z_j).
 The derivative of the step follows from the implicit function theorem,
