@@ -67,7 +67,9 @@ def test_spectrum_invariant_under_chi_sign(chi, eta):
 
 
 def _free_free_k(count):
-    f = lambda k: np.cos(k) * np.cosh(k) - 1
+    def f(k):
+        return np.cos(k) * np.cosh(k) - 1
+
     return [scipy.optimize.brentq(f, (j + 0.5) * np.pi - 0.3, (j + 0.5) * np.pi + 0.3, xtol=1e-15)
             for j in range(1, count + 1)]
 

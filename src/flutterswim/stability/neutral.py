@@ -42,7 +42,7 @@ class NeutralCurve:
 
 def _seed(eta: float, chi_max: float, tol: float) -> tuple[float, float]:
     """Bracket Re omega_max = 0 in chi at fixed eta, then Hopf-Newton."""
-    lo_chi, lo = 0.0, -1.0
+    lo_chi = 0.0
     chi = 1.0
     prev = None
     while chi <= 2 * chi_max:
