@@ -200,7 +200,8 @@ def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: in
     res = math.inf
     fl = warm
     mono, chord, exact_next = None, False, False
-    if _is_neighbour(warm, system, u, T, steps):
+    predicted = _is_neighbour(warm, system, u, T, steps)
+    if predicted:
         fil = system.filament
         dg = np.array([fil.eta_par, fil.eta_perp, fil.chi]) - np.array(warm.groups[:3])
         T = float(warm.t[-1])  # (the guess's period may have passed through seconds and back)
@@ -219,8 +220,9 @@ def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: in
             # the residual is small and falling fast, the last monodromy is kept (chord steps)
             # and the pass expected to close the orbit is the exact one
             stage_tol = min(1e-6, max(1e-13, 1e-4 * res)) if math.isfinite(res) else 1e-6
-            if exact_next or verify:
-                fl = flow(system, u, T, steps, variational=True, warm=fl, sensitivity=sensitivity)
+            if exact_next or verify:  # from a neighbour, its matrices stay the warm start
+                fl = flow(system, u, T, steps, variational=True, warm=fl, sensitivity=sensitivity,
+                          keep_matrices=predicted)
             else:
                 fl = flow(system, u, T, steps, variational=not chord, warm=fl, derivative_tol=1e-3,
                           stage_tol=stage_tol)

@@ -12,8 +12,9 @@ kappa rows), W = (I + h A)^-1 and a right-hand side (r_theta, r_kappa) per stage
 a 3N-square system instead of 3(2N+1): its inverse costs 8 times less, a solve 4 times less.
 :func:`factor` forms and inverts R (scipy/LAPACK); :func:`reduced_solve` solves with it
 (with R^-1: one matrix product, so the same kernel serves one stage residual and the
-variational equation's many columns); :func:`stages` is the simplified Newton iteration of
-one step; :func:`chord_pass` runs it over all steps of a pass whose step matrices are all
+variational equation's many columns); :func:`exact_solve` solves a variational equation
+whose step matrix is not kept by one LU instead; :func:`stages` is the simplified Newton
+iteration of one step; :func:`chord_pass` runs it over all steps of a pass whose step matrices are all
 given (a warm start). The forming of step matrices and the variational equation stay in
 :func:`flutterswim.orbits.shooting.flow`. Kernels are written once and compiled with numba
 when it is installed (:mod:`flutterswim._jit`).
@@ -26,7 +27,7 @@ import scipy.linalg as sla
 
 from .. import _jit, rosw
 
-KERNELS = ("reduced_matrix", "reduced_solve", "stages", "chord_pass")
+KERNELS = ("reduced_matrix", "reduce_rhs", "expand", "reduced_solve", "stages", "chord_pass")
 
 #: status codes of :func:`stages`
 CONVERGED, SLOW, NOT_FINITE, NO_CONVERGENCE = 0, 1, 2, 3
@@ -48,24 +49,52 @@ def constants(h: float, a: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarr
     return h * a, w, h * (w @ a)
 
 
-def factor(jac: np.ndarray, n: int, consts, kern=None) -> tuple:
-    """The reduced step matrix R of the stage Jacobians ``jac`` (3, 2N+1, 2N+1), inverted:
-    (R^-1, B (3, N, N+1), C (3, N+1, N)). A solve is then one matrix product (BLAS), for one
-    stage residual as for the variational equation's many columns: the chord passes solve
-    about 20 times with each matrix, where a product is several times faster than two
-    triangular solves. ``kern``: this module's kernels (compiled or not)."""
+def reduced(jac: np.ndarray, n: int, consts, kern=None) -> tuple:
+    """The reduced step matrix R (3N, 3N, column-major) of the stage Jacobians ``jac``
+    (3, 2N+1, 2N+1), with their blocks B (3, N, N+1) and C (3, N+1, N). ``kern``: this
+    module's kernels (compiled or not)."""
     kern = kernels() if kern is None else kern
     nk = jac.shape[1] - n
-    r = np.empty((3 * n, 3 * n))
+    r = np.empty((3 * n, 3 * n), order="F")
     b = np.empty((3, n, nk))
     c = np.empty((3, nk, n))
     if not kern.reduced_matrix(jac, n, consts[0], consts[2], r, b, c):
         raise ValueError("the kappa block of the Jacobian is not -I: the reduced Radau step does not apply")
+    return r, b, c
+
+
+def factor(jac: np.ndarray, n: int, consts, kern=None) -> tuple:
+    """R of :func:`reduced`, inverted: (R^-1, B, C). A solve is then one matrix product
+    (BLAS), for one stage residual as for many columns: the chord passes solve about 20
+    times with each matrix, where a product is several times faster than two triangular
+    solves. ``kern``: this module's kernels (compiled or not)."""
+    r, b, c = reduced(jac, n, consts, kern)
     try:
         rinv = sla.inv(r, overwrite_a=True, check_finite=False)
     except np.linalg.LinAlgError:  # singular: a step too long for the stiff dynamics
-        rinv = np.full((3 * n, 3 * n), np.nan)
+        rinv = np.full(r.shape, np.nan)
     return np.ascontiguousarray(rinv), b, c
+
+
+def exact_solve(jac: np.ndarray, n: int, consts, x: np.ndarray, kern=None) -> bool:
+    """Solve P x = r in place for x (3(2N+1), k), P from the stage Jacobians ``jac``, by one
+    LU of R (LAPACK) and no inverse: for a variational equation whose step matrix is not
+    kept. False if R is singular."""
+    kern = kernels() if kern is None else kern
+    r, b, c = reduced(jac, n, consts, kern)
+    th = np.empty((r.shape[0], x.shape[1]))
+    qk = np.empty((3, b.shape[2], x.shape[1]))
+    kern.reduce_rhs(b, consts[0], consts[1], x, th, qk)
+    from scipy.linalg.lapack import dgetrf, dgetrs
+
+    lu, piv, info = dgetrf(r, overwrite_a=1)
+    if info != 0:
+        return False
+    th, info = dgetrs(lu, piv, th, overwrite_b=1)
+    if info != 0 or not np.all(np.isfinite(th)):
+        return False
+    kern.expand(np.ascontiguousarray(th), c, consts[2], qk, x)
+    return True
 
 
 def reduced_matrix(jac, n, ha, hwa, r, b, c):
@@ -99,21 +128,20 @@ def reduced_matrix(jac, n, ha, hwa, r, b, c):
     return True
 
 
-def reduced_solve(rinv, b, c, ha, w, hwa, r):
-    """Solve P x = r in place for r (3(2N+1), k) (stage-major rows: theta then kappa of
-    each stage), with the factors of :func:`factor`. Returns 0, or 1 if R was singular."""
+def reduce_rhs(b, ha, w, r, th, qk):
+    """The reduced right-hand side (module docstring): th (3N, k) with R theta = th, and
+    qk (3, N+1, k) = sum_k W_jk r_kappa,k, of r (3(2N+1), k)."""
     n = b.shape[1]
     nk = b.shape[2]
     m = n + nk
     k = r.shape[1]
-    qk = np.zeros((3, nk, k))
+    qk[:] = 0.0
     for j in range(3):
         for q in range(3):
             wjq = w[j, q]
             for p in range(nk):
                 for col in range(k):
                     qk[j, p, col] += wjq * r[q * m + n + p, col]
-    th = np.empty((3 * n, k))
     for i in range(3):
         for p in range(n):
             for col in range(k):
@@ -125,9 +153,15 @@ def reduced_solve(rinv, b, c, ha, w, hwa, r):
             for p in range(n):
                 for col in range(k):
                     th[i * n + p, col] += hij * bq[p, col]
-    th = np.dot(rinv, th)
-    if not np.isfinite(th[0, 0]):
-        return 1
+
+
+def expand(th, c, hwa, qk, r):
+    """The solution into r (3(2N+1), k) from theta ``th`` (3N, k): kappa_i = qk_i +
+    h sum_l (W A)_il C_l theta_l."""
+    nk = c.shape[1]
+    n = c.shape[2]
+    m = n + nk
+    k = r.shape[1]
     for l in range(3):
         theta = np.ascontiguousarray(th[l * n : (l + 1) * n])
         for p in range(n):
@@ -143,6 +177,18 @@ def reduced_solve(rinv, b, c, ha, w, hwa, r):
         for p in range(nk):
             for col in range(k):
                 r[i * m + n + p, col] = qk[i, p, col]
+
+
+def reduced_solve(rinv, b, c, ha, w, hwa, r):
+    """Solve P x = r in place for r (3(2N+1), k) (stage-major rows: theta then kappa of
+    each stage), with the factors of :func:`factor`. Returns 0, or 1 if R was singular."""
+    th = np.empty((rinv.shape[0], r.shape[1]))
+    qk = np.empty((3, b.shape[2], r.shape[1]))
+    reduce_rhs(b, ha, w, r, th, qk)
+    th = np.dot(rinv, th)
+    if not np.isfinite(th[0, 0]):
+        return 1
+    expand(th, c, hwa, qk, r)
     return 0
 
 

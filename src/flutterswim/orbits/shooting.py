@@ -94,7 +94,7 @@ class StepFailure(FloatingPointError):
 def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
          variational: bool = False, warm: Flow | None = None, r0=(0.0, 0.0),
          stage_tol: float = 1e-13, max_iter: int = 12, derivative_tol: float = 1e-10,
-         sensitivity: bool = False) -> Flow:
+         sensitivity: bool = False, keep_matrices: bool = False) -> Flow:
     """Integrate the shape from u0 over ``period`` in ``steps`` equal Radau IIA steps.
 
     Stage equations by a simplified Newton iteration: the step matrix P of the warm flow
@@ -105,7 +105,10 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
     (relative) from where they were formed, so the derivative is exact to that size (Newton
     shooting needs it only to the size of its correction; the Floquet multipliers of the
     converged orbit need it exact: the default). With ``sensitivity`` (and ``variational``),
-    also the end shape's derivative with respect to the groups (module docstring)."""
+    also the end shape's derivative with respect to the groups (module docstring). With
+    ``keep_matrices``, the derivative's exact step matrices are solved by LU and not kept:
+    the flow keeps the (warm) matrices its stages converged with, re-formed only where that
+    iteration was slow (they serve the next warm start as well; no inversions)."""
     a = RADAU_A
     h = period / steps
     u = np.array(u0, float)
@@ -169,15 +172,22 @@ def flow(system: ShapeSystem, u0: np.ndarray, period: float, steps: int, *,
         if status == radau.NO_CONVERGENCE:
             raise StepFailure(f"stage equations did not converge at step {step} of {steps} (h={h:.3g})")
         if variational:
-            if jac is None or np.max(np.abs(u + z - y_lu)) > derivative_tol * scale:
-                jac, lu, y_lu = step_matrix(z)
+            fresh = jac is None or np.max(np.abs(u + z - y_lu)) > derivative_tol * scale
+            if fresh and keep_matrices:
+                jd = system.at_points(u + z, "jacobian")
+            else:
+                if fresh:
+                    jac, lu, y_lu = step_matrix(z)
+                jd = jac
             # P dZ/du = h [sum_j A_ij J_j]_i at the converged stages
             if sens:  # f_g at the stages: three more columns
-                jac_g = np.concatenate((jac, system.at_points(u + z, "groups")), axis=2)
+                jac_g = np.concatenate((jd, system.at_points(u + z, "groups")), axis=2)
                 rhs = (consts[0] @ jac_g.reshape(3, -1)).reshape(3 * m, m + 3)
             else:
-                rhs = (consts[0] @ jac.reshape(3, -1)).reshape(3 * m, m)
-            if kern.reduced_solve(*lu, *consts, rhs) != 0:
+                rhs = (consts[0] @ jd.reshape(3, -1)).reshape(3 * m, m)
+            ok = (radau.exact_solve(jd, system.n, consts, rhs, kern) if fresh and keep_matrices
+                  else kern.reduced_solve(*lu, *consts, rhs) == 0)
+            if not ok:
                 raise StepFailure(f"singular step matrix at step {step} of {steps}")
             dz = rhs[2 * m:]
             dzdu = dz[:, :m]
