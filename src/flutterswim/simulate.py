@@ -7,7 +7,6 @@ units at the edge, drives the integrator and packages a :class:`SimulationResult
 from __future__ import annotations
 
 import functools
-
 from typing import Callable
 
 import numpy as np
@@ -139,8 +138,8 @@ def _frames(t0: float, t1: float, n_frames: int | None, dt: float | None) -> np.
 
 
 def single_blas_thread():
-    """Context manager: BLAS limited to one thread for the duration (threadpoolctl; a no-op
-    without it). At N = 96 default BLAS threads made a run 120x slower on a busy machine."""
+    """Context manager: BLAS limited to one thread for the duration (threadpoolctl). At
+    N = 96 default BLAS threads made a run 120x slower on a busy machine."""
     return _blas_controller().limit(limits=1, user_api="blas")
 
 
