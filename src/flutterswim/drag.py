@@ -15,8 +15,7 @@ __all__ = ["resistance"]
 def resistance(angle, weight, eta_par, eta_perp):
     """Weighted resistance tensor w (eta_par t t + eta_perp n n) at tangent angle ``angle``.
 
-    Scalars in, components (rxx, rxy, ryy) out. ``angle`` may be complex: the exact
-    Jacobian of the mobility problem differentiates through it by complex step.
+    Scalars in, components (rxx, rxy, ryy) out.
     Compiled (inlined into the mobility kernels) when numba is installed."""
     cn = np.cos(angle)
     sn = np.sin(angle)

@@ -36,17 +36,16 @@ def kernels():
 
 def joint_drag(theta, tn, weights, eta_par, eta_perp, h, z):
     """Weighted drag w_j F_j = (wfx, wfy) at the joints for rates z, and the joint positions
-    (x_j, y_j) relative to r(0); each (N+1,). Complex theta and tn are allowed."""
+    (x_j, y_j) relative to r(0); each (N+1,)."""
     n = theta.size
-    wfx = np.zeros_like(tn)
-    wfy = np.zeros_like(tn)
-    xj = np.zeros_like(tn)
-    yj = np.zeros_like(tn)
-    zero = 0.0 * tn[0]
-    vx = z[0] + zero
-    vy = z[1] + zero
-    x = zero
-    y = zero
+    wfx = np.zeros(n + 1)
+    wfy = np.zeros(n + 1)
+    xj = np.zeros(n + 1)
+    yj = np.zeros(n + 1)
+    vx = z[0]
+    vy = z[1]
+    x = 0.0
+    y = 0.0
     for j in range(n + 1):
         rxx, rxy, ryy = resistance(tn[j], weights[j], eta_par, eta_perp)
         wfx[j] = -(rxx * vx + rxy * vy)
@@ -67,10 +66,10 @@ def apply(theta, tn, weights, eta_par, eta_perp, h, z):
     """G(theta) z without forming G, O(N): the force and cut-moment rows, (N+2,)."""
     n = theta.size
     wfx, wfy, xj, yj = joint_drag(theta, tn, weights, eta_par, eta_perp, h, z)
-    r = np.zeros(n + 2, dtype=wfx.dtype)
-    sx = 0.0 * wfx[0]
-    sy = 0.0 * wfx[0]
-    p = 0.0 * wfx[0]
+    r = np.zeros(n + 2)
+    sx = 0.0
+    sy = 0.0
+    p = 0.0
     for j in range(n + 1):
         if j > 0:
             r[1 + j] = p - xj[j] * sy + yj[j] * sx
