@@ -137,8 +137,11 @@ class Filament:
 
         k = rosw.kernels() if self.compiled else rosw
         y = np.ascontiguousarray(y, dtype=float)
-        return k.group_derivatives(y, self._avg, self._diff, self._weights, self.eta_par, self.eta_perp,
-                                   float(sigma), float(phi), np.empty((self.size, 3)))
+        return k.group_derivatives(y, *self.group_args(phi, sigma), np.empty((self.size, 3)))
+
+    def group_args(self, phi: float, sigma: float) -> tuple:
+        """The arguments after the state of :func:`flutterswim.rosw.group_derivatives`."""
+        return (self._avg, self._diff, self._weights, self.eta_par, self.eta_perp, float(sigma), float(phi))
 
     def joint_drag(self, y: np.ndarray, z: np.ndarray | None = None):
         """Weighted drag (wfx, wfy) at the joints and joint positions relative to r(0)."""

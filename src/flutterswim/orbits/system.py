@@ -59,10 +59,6 @@ class ShapeSystem:
         """Exact Jacobian df/du (2N+1, 2N+1)."""
         return self.jac_full(self.full(u))[2:, 2:]
 
-    def group_derivatives(self, u: np.ndarray) -> np.ndarray:
-        """d f / d (eta_par, eta_perp, chi), (2N+1, 3)."""
-        return self.filament.group_derivatives(self.full(u), self.phi, 1.0)[2:]
-
     def at_points(self, points: np.ndarray, what: str) -> np.ndarray:
         """The exact Jacobians (``what="jacobian"``: (k, 2N+1, 2N+1)) or the group derivatives
         (``"groups"``: (k, 2N+1, 3)) at k shapes ``points`` (k, 2N+1): the simulator's kernels
@@ -79,7 +75,7 @@ class ShapeSystem:
             kernel = k.jacobian
         else:
             out = np.empty((points.shape[0], size, 3))
-            args = (fil._avg, fil._diff, fil._weights, fil.eta_par, fil.eta_perp, 1.0, float(self.phi))
+            args = fil.group_args(self.phi, 1.0)
             kernel = k.group_derivatives
         for i in range(points.shape[0]):
             y[2:] = points[i]
