@@ -160,7 +160,8 @@ def test_refused_on_a_drifting_stroke_and_on_too_few_cycles(settled):
 @pytest.mark.parametrize("seed", [0, 1])
 def test_tracked_snr3_tips_within_the_target(run, seed):
     """Tracked at SNR 3 (5.3 strokes): tip RMS <= 0.45 px (target 0.5 px; 0.46-0.57 px before the
-    template), centreline RMS <= 0.15 px, and the template was used."""
+    template), centreline RMS <= 0.15 px, and the template was used (mirror-symmetric, ends
+    refitted on the raw frames)."""
     pytest.importorskip("skimage")
     from flutterswim.tracking import render, track
     from flutterswim.tracking.evaluate import pixel_errors
@@ -174,5 +175,8 @@ def test_tracked_snr3_tips_within_the_target(run, seed):
     assert idx.size >= 100
     assert math.sqrt(np.mean(E**2)) <= 0.45
     assert math.sqrt(np.mean(D**2)) <= 0.15
+    # the stroke is mirror-symmetric and the ends were refitted on the raw frames
+    info = tr.meta["temporal"]["periodic_info"]
+    assert info["symmetric"] and info["ends_refined"] >= 0.95 * idx.size, info
     off = track(mv, px_per_mm=mv.px_per_mm, fps=FPS, t0=float(mv.t[0]), periodic=False)
     assert off.meta["temporal"]["periodic"] == "off"

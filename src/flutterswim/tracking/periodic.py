@@ -16,7 +16,21 @@ The tracked centrelines of a settled stroke repeat, cycle after cycle, up to a r
    position along the body comes from the template (averaged over the cycles) and the
    measured ends only, not from the samples' correspondence;
 3. steps 1-2 are repeated (``iterations``); each frame becomes the template of its phase in
-   its own rigid placement. Per-frame rigid motion is never smoothed in time.
+   its own rigid placement. Per-frame rigid motion is never smoothed in time;
+4. mirror symmetry: a swimmer whose field lies along its mean axis strokes symmetrically, the
+   stroke reflected across the axis being the stroke half a period later. In the body frame
+   the along-body coordinate then holds only the constant and even harmonics and the
+   across-body coordinate only odd ones, half the coefficients. The symmetric template is
+   used unless the data reject it (nested F test of the full template against it, as for the
+   drift, ``max_f`` and ``floor_px``): a tilted field or an unsteady turn makes the stroke
+   asymmetric and keeps the full template;
+5. the ends refitted on the raw frames (``refine_ends``, e.g.
+   :func:`~flutterswim.tracking.tips.end_offsets`): each frame's two ends are moved across
+   the template placed in it to where the line-end model, with the template's shape over the
+   last 14 px and only its offset and slope free, fits the pixels; steps 1-3 again. The
+   per-frame end fit must also find the end's bend from its last few px and errs by 0.36 px
+   across the body at SNR 3; this fit errs by about 0.27 px, and the template then averages
+   those.
 
 This is only valid for a periodic movie. :func:`periodic_shape` therefore refuses (returns
 the input, with the reason) unless the good frames span at least ``min_cycles`` strokes and the
@@ -24,13 +38,15 @@ template passes a drift test: the same template with its coefficients changing l
 not fit significantly better (F statistic of the nested fit <= ``max_f``, or its systematic part
 below ``floor_px`` RMS). A stroke still growing (onset), an unsteady turn or a changing stroke fails it and is
 left to the per-frame estimates. On the paper's settled stroke rendered at SNR 3 (50 fps, 14 um/px,
-5.3 cycles) the tip error falls from 0.46-0.57 px RMS to about 0.2-0.3 px and the centreline error
-halves; without noise the result moves by < 0.01 px (benchmarks/RESULTS.md).
+5.3 cycles) the tip error falls from 0.46-0.57 px RMS to about 0.2 px and the centreline error
+halves; without noise the result moves by < 0.01 px; the leading end's lateral amplitude, whose
+error the ends' noise across the body sets, is unbiased (benchmarks/RESULTS.md).
 """
 
 from __future__ import annotations
 
 import math
+from typing import Callable
 
 import numpy as np
 
@@ -43,6 +59,29 @@ def fourier_basis(phase: np.ndarray, harmonics: int) -> np.ndarray:
     """(n, 2 H + 1) columns 1, cos(2 pi h phase), sin(2 pi h phase), h = 1..H."""
     a = np.outer(np.asarray(phase, float), 2.0 * np.pi * np.arange(1, harmonics + 1))
     return np.hstack([np.ones((a.shape[0], 1)), np.cos(a), np.sin(a)])
+
+
+def _symmetric_columns(harmonics: int) -> tuple[np.ndarray, np.ndarray]:
+    """Columns of :func:`fourier_basis` kept by a stroke symmetric under reflection across its
+    axis with a half-period shift: the constant and even harmonics along the body, odd
+    harmonics across it."""
+    h = np.concatenate([[0], np.arange(1, harmonics + 1), np.arange(1, harmonics + 1)])
+    return h % 2 == 0, h % 2 == 1
+
+
+def _fit(U: np.ndarray, B: np.ndarray, symmetric: bool) -> np.ndarray:
+    """The least-squares template B coef of the body-frame coordinates U (n, 2P) (columns x, y
+    of each sample); ``symmetric``: along-body (x) columns by the even, across (y) by the odd
+    harmonics only."""
+    if not symmetric:
+        coef, *_ = np.linalg.lstsq(B, U, rcond=None)
+        return B @ coef
+    even, odd = _symmetric_columns((B.shape[1] - 1) // 2)
+    out = np.empty_like(U)
+    for cols, sel in ((slice(0, None, 2), even), (slice(1, None, 2), odd)):
+        coef, *_ = np.linalg.lstsq(B[:, sel], U[:, cols], rcond=None)
+        out[:, cols] = B[:, sel] @ coef
+    return out
 
 
 def _initial_frames(pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -123,13 +162,21 @@ def _refine_period(U: np.ndarray, frame: np.ndarray, period0: float, harmonics: 
 
 def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: float, *, harmonics: int = 6,
                    iterations: int = 3, end_weight: float = 0.15, end_samples: int = 3, min_cycles: float = 3.0,
-                   max_f: float = 3.0, floor_px: float = 0.02) -> tuple[np.ndarray, np.ndarray, dict]:
+                   max_f: float = 3.0, floor_px: float = 0.02, symmetric: bool = True,
+                   refine_ends: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray] | None = None,
+                   ) -> tuple[np.ndarray, np.ndarray, dict]:
     """The periodic template of a settled stroke placed in every good frame (module docstring).
 
     X, Y (T, P) [px], equal arc-length samples, NaN on frames not ``ok``; period_frames: the
-    stroke's period estimate [frames]. Returns (X, Y, info): info["done"] (bool), info["reason"]
-    (why not, or a summary), and when tested "period_frames", "harmonics", "drift_f" and
-    "drift_px" (the systematic part of the drift model's improvement, RMS over samples)."""
+    stroke's period estimate [frames]; symmetric: use the mirror symmetry of the stroke when
+    the data do not reject it (module docstring, step 4); refine_ends: ``f(frames (n,), curves
+    (n, P, 2), ends (n, 2, 2)) -> ends (n, 2, 2)``, both ends of each listed good frame moved
+    across the template placed in it (NaN: keep), e.g. by
+    :func:`~flutterswim.tracking.tips.end_offsets` on the raw frames (step 5). Returns (X, Y,
+    info): info["done"] (bool), info["reason"] (why not, or a summary), and when tested
+    "period_frames", "harmonics", "drift_f", "drift_px" (the systematic part of the drift
+    model's improvement, RMS over samples), "symmetric", "symmetry_f", "symmetry_px" and
+    "ends_refined" (frames whose ends were refitted)."""
     ok = np.asarray(ok, bool)
     idx = np.nonzero(ok)[0]
     info: dict = {"done": False, "reason": ""}
@@ -152,13 +199,16 @@ def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: 
     U = _to_body(pts, c, R)
     period = _refine_period(U, frame, float(period_frames), H)
     B = fourier_basis(frame / period, H)
-    for _ in range(iterations + 1):
-        coef, *_ = np.linalg.lstsq(B, U, rcond=None)
-        tmpl = (B @ coef).reshape(n, P, 2)
-        c, R = _register(pts, tmpl, c, R, end_weight, end_samples)
-        U = _to_body(pts, c, R)
-    coef, *_ = np.linalg.lstsq(B, U, rcond=None)
-    rss0 = float(np.sum((U - B @ coef) ** 2))
+
+    def settle(pts: np.ndarray, c: np.ndarray, R: np.ndarray, sym: bool):
+        for _ in range(iterations + 1):
+            tmpl = _fit(_to_body(pts, c, R), B, sym).reshape(n, P, 2)
+            c, R = _register(pts, tmpl, c, R, end_weight, end_samples)
+        return c, R
+
+    c, R = settle(pts, c, R, False)
+    U = _to_body(pts, c, R)
+    rss0 = float(np.sum((U - _fit(U, B, False)) ** 2))
     tau = (2.0 * frame / max(frame[-1], 1.0) - 1.0)[:, None]
     B1 = np.hstack([B, B * tau])
     rss1 = _rss(U, B1)
@@ -171,12 +221,33 @@ def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: 
         info["reason"] = (f"not done: the stroke is not periodic (a drifting template fits better: F = {f_stat:.3g} "
                           f"> {max_f:g}, {drift_px:.3f} px > {floor_px:g} px)")
         return X, Y, info
-    tmpl = (B @ coef).reshape(n, P, 2)
+    # the mirror symmetry: the full template must not fit significantly better (nested F)
+    rss_sym = float(np.sum((U - _fit(U, B, True)) ** 2))
+    even, odd = _symmetric_columns(H)
+    extra = P * (2 * B.shape[1] - int(even.sum()) - int(odd.sum()))
+    f_sym = ((rss_sym - rss0) / extra) / (rss0 / (n * 2 * P - 2 * P * B.shape[1])) if rss0 > 0 else math.inf
+    sym_px = math.sqrt(max(rss_sym - rss0, 0.0) / (n * P))
+    sym = bool(symmetric and (f_sym <= max_f or sym_px <= floor_px))
+    info.update(symmetric=sym, symmetry_f=float(f_sym), symmetry_px=sym_px, ends_refined=0)
+    if sym:
+        c, R = settle(pts, c, R, True)
+    if refine_ends is not None:
+        tmpl = _fit(_to_body(pts, c, R), B, sym).reshape(n, P, 2)
+        c, R = _register(pts, tmpl, c, R, end_weight, end_samples)
+        new = np.asarray(refine_ends(idx, _place(tmpl, c, R), pts[:, [0, -1]].copy()), float)
+        good = np.all(np.isfinite(new), axis=2)  # (n, 2)
+        pts = pts.copy()
+        pts[good[:, 0], 0] = new[good[:, 0], 0]
+        pts[good[:, 1], -1] = new[good[:, 1], 1]
+        info["ends_refined"] = int(np.count_nonzero(good.all(axis=1)))
+        c, R = settle(pts, c, R, sym)
+    tmpl = _fit(_to_body(pts, c, R), B, sym).reshape(n, P, 2)
     c, R = _register(pts, tmpl, c, R, end_weight, end_samples)
     q = _place(tmpl, c, R)
     Xo, Yo = X.copy(), Y.copy()
     Xo[idx], Yo[idx] = q[..., 0], q[..., 1]
     info["done"] = True
-    info["reason"] = (f"done: period {period:.3f} frames, {H} harmonics, drift F = {f_stat:.2f}, "
-                      f"residual {info['residual_px']:.3f} px")
+    ends = f", ends refitted on {info['ends_refined']} of {n} frames" if refine_ends is not None else ""
+    info["reason"] = (f"done: period {period:.3f} frames, {H} harmonics{', mirror-symmetric' if sym else ''}, "
+                      f"drift F = {f_stat:.2f}, symmetry F = {f_sym:.2f}, residual {info['residual_px']:.3f} px{ends}")
     return Xo, Yo, info
