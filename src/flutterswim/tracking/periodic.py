@@ -24,13 +24,6 @@ The tracked centrelines of a settled stroke repeat, cycle after cycle, up to a r
    used unless the data reject it (nested F test of the full template against it, as for the
    drift, ``max_f`` and ``floor_px``): a tilted field or an unsteady turn makes the stroke
    asymmetric and keeps the full template;
-5. the ends refitted on the raw frames (``refine_ends``, e.g.
-   :func:`~flutterswim.tracking.tips.end_offsets`): each frame's two ends are moved across
-   the template placed in it to where the line-end model, with the template's shape over the
-   last 14 px and only its offset and slope free, fits the pixels; steps 1-3 again. The
-   per-frame end fit must also find the end's bend from its last few px and errs by 0.36 px
-   across the body at SNR 3; this fit errs by about 0.27 px, and the template then averages
-   those.
 
 This is only valid for a periodic movie. :func:`periodic_shape` therefore refuses (returns
 the input, with the reason) unless the good frames span at least ``min_cycles`` strokes and the
@@ -38,15 +31,13 @@ template passes a drift test: the same template with its coefficients changing l
 not fit significantly better (F statistic of the nested fit <= ``max_f``, or its systematic part
 below ``floor_px`` RMS). A stroke still growing (onset), an unsteady turn or a changing stroke fails it and is
 left to the per-frame estimates. On the paper's settled stroke rendered at SNR 3 (50 fps, 14 um/px,
-5.3 cycles) the tip error falls from 0.46-0.57 px RMS to about 0.2 px and the centreline error
-halves; without noise the result moves by < 0.01 px; the leading end's lateral amplitude, whose
-error the ends' noise across the body sets, is unbiased (benchmarks/RESULTS.md).
+5.3 cycles) the tip error falls from 0.46-0.57 px RMS to about 0.2 px (0.19 px over 16 movies) and the centreline error
+halves; without noise the result moves by < 0.01 px (benchmarks/RESULTS.md).
 """
 
 from __future__ import annotations
 
 import math
-from typing import Callable
 
 import numpy as np
 
@@ -163,20 +154,14 @@ def _refine_period(U: np.ndarray, frame: np.ndarray, period0: float, harmonics: 
 def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: float, *, harmonics: int = 6,
                    iterations: int = 3, end_weight: float = 0.15, end_samples: int = 3, min_cycles: float = 3.0,
                    max_f: float = 3.0, floor_px: float = 0.02, symmetric: bool = True,
-                   refine_ends: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray] | None = None,
                    ) -> tuple[np.ndarray, np.ndarray, dict]:
     """The periodic template of a settled stroke placed in every good frame (module docstring).
 
     X, Y (T, P) [px], equal arc-length samples, NaN on frames not ``ok``; period_frames: the
     stroke's period estimate [frames]; symmetric: use the mirror symmetry of the stroke when
-    the data do not reject it (module docstring, step 4); refine_ends: ``f(frames (n,), curves
-    (n, P, 2), ends (n, 2, 2)) -> ends (n, 2, 2)``, both ends of each listed good frame moved
-    across the template placed in it (NaN: keep), e.g. by
-    :func:`~flutterswim.tracking.tips.end_offsets` on the raw frames (step 5). Returns (X, Y,
-    info): info["done"] (bool), info["reason"] (why not, or a summary), and when tested
+    the data do not reject it (module docstring, step 4). Returns (X, Y, info): info["done"] (bool), info["reason"] (why not, or a summary), and when tested
     "period_frames", "harmonics", "drift_f", "drift_px" (the systematic part of the drift
-    model's improvement, RMS over samples), "symmetric", "symmetry_f", "symmetry_px" and
-    "ends_refined" (frames whose ends were refitted)."""
+    model's improvement, RMS over samples), "symmetric", "symmetry_f" and "symmetry_px"."""
     ok = np.asarray(ok, bool)
     idx = np.nonzero(ok)[0]
     info: dict = {"done": False, "reason": ""}
@@ -228,26 +213,15 @@ def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: 
     f_sym = ((rss_sym - rss0) / extra) / (rss0 / (n * 2 * P - 2 * P * B.shape[1])) if rss0 > 0 else math.inf
     sym_px = math.sqrt(max(rss_sym - rss0, 0.0) / (n * P))
     sym = bool(symmetric and (f_sym <= max_f or sym_px <= floor_px))
-    info.update(symmetric=sym, symmetry_f=float(f_sym), symmetry_px=sym_px, ends_refined=0)
+    info.update(symmetric=sym, symmetry_f=float(f_sym), symmetry_px=sym_px)
     if sym:
         c, R = settle(pts, c, R, True)
-    if refine_ends is not None:
-        tmpl = _fit(_to_body(pts, c, R), B, sym).reshape(n, P, 2)
-        c, R = _register(pts, tmpl, c, R, end_weight, end_samples)
-        new = np.asarray(refine_ends(idx, _place(tmpl, c, R), pts[:, [0, -1]].copy()), float)
-        good = np.all(np.isfinite(new), axis=2)  # (n, 2)
-        pts = pts.copy()
-        pts[good[:, 0], 0] = new[good[:, 0], 0]
-        pts[good[:, 1], -1] = new[good[:, 1], 1]
-        info["ends_refined"] = int(np.count_nonzero(good.all(axis=1)))
-        c, R = settle(pts, c, R, sym)
     tmpl = _fit(_to_body(pts, c, R), B, sym).reshape(n, P, 2)
     c, R = _register(pts, tmpl, c, R, end_weight, end_samples)
     q = _place(tmpl, c, R)
     Xo, Yo = X.copy(), Y.copy()
     Xo[idx], Yo[idx] = q[..., 0], q[..., 1]
     info["done"] = True
-    ends = f", ends refitted on {info['ends_refined']} of {n} frames" if refine_ends is not None else ""
     info["reason"] = (f"done: period {period:.3f} frames, {H} harmonics{', mirror-symmetric' if sym else ''}, "
-                      f"drift F = {f_stat:.2f}, symmetry F = {f_sym:.2f}, residual {info['residual_px']:.3f} px{ends}")
+                      f"drift F = {f_stat:.2f}, symmetry F = {f_sym:.2f}, residual {info['residual_px']:.3f} px")
     return Xo, Yo, info

@@ -19,7 +19,7 @@ import math
 import numpy as np
 from scipy.interpolate import make_interp_spline
 
-__all__ = ["refine_tips", "resample", "end_offsets"]
+__all__ = ["refine_tips", "resample"]
 
 
 def _arclength(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -41,65 +41,51 @@ def _points(spl, s_end: float, q: np.ndarray) -> np.ndarray:
     return p + (q - qc)[:, None] * tan
 
 
-def _end_pixels(img: np.ndarray, P: np.ndarray, T: np.ndarray, qq: np.ndarray, q0: float, outward: int,
-                sigma0: float, inner: float, outer: float):
-    """The raw pixels near one end of a dense polyline P (K, 2) with unit tangents T at
-    parameters qq: (q, d, u, v) for the pixels within 3 sigma0 of the curve and
-    -inner <= u <= outer, u = outward (q - q0) the parameter past the end q0 and d the signed
-    distance (positive to the left of increasing q); None if fewer than 30."""
+def _fit_end(img: np.ndarray, spl, s_end: float, q0: float, outward: int, sigma0: float,
+             inner: float, outer: float, pivot: float) -> tuple[float, float, float]:
+    """Fitted end parameter q_end (same parametrisation as ``spl``), sigma and the bend c
+    about the hinge at q0 - outward * pivot; NaN if the fit fails. ``outward`` = +1 for the s_end end, -1 for the s = 0 end."""
     H, W = img.shape
+    # dense polyline of the curve near the end (the inner part and the tangent extension)
+    lo, hi = (q0 - inner - 4, q0 + outer + 4) if outward > 0 else (q0 - outer - 4, q0 + inner + 4)
+    qq = np.arange(lo, hi + 1e-9, 0.25)
+    P = _points(spl, s_end, qq)
     r = int(math.ceil(3 * sigma0 + 1))
     c0, c1 = int(max(math.floor(P[:, 0].min()) - r, 0)), int(min(math.ceil(P[:, 0].max()) + r + 1, W))
     r0, r1 = int(max(math.floor(P[:, 1].min()) - r, 0)), int(min(math.ceil(P[:, 1].max()) + r + 1, H))
     if c1 - c0 < 3 or r1 - r0 < 3:
-        return None
+        return math.nan, math.nan, 0.0
     yy, xx = np.mgrid[r0:r1, c0:c1]
     px, py = xx.ravel().astype(float), yy.ravel().astype(float)
     # nearest polyline point for each pixel: q, and signed distance d
     d2 = (px[:, None] - P[None, :, 0]) ** 2 + (py[:, None] - P[None, :, 1]) ** 2
     j = np.argmin(d2, axis=1)
     q = qq[j]
+    T = _points(spl, s_end, qq + 0.01) - P
+    T /= np.hypot(T[:, 0], T[:, 1])[:, None]
+    # signed distance: positive to the left of the direction of increasing q
     d = (py - P[j, 1]) * T[j, 0] - (px - P[j, 0]) * T[j, 1]
     u = outward * (q - q0)
     sel = (np.abs(d) <= 3.0 * sigma0) & (u >= -inner) & (u <= outer) & (j > 0) & (j < qq.size - 1)
     if np.count_nonzero(sel) < 30:
-        return None
-    return q[sel], d[sel], u[sel], img[r0:r1, c0:c1].ravel()[sel].astype(float)
-
-
-def _fit_end(img: np.ndarray, spl, s_end: float, q0: float, outward: int, sigma0: float,
-             inner: float, outer: float, pivot: float) -> tuple[float, float, float]:
-    """Fitted end parameter q_end (same parametrisation as ``spl``), sigma and the bend c
-    about the hinge at q0 - outward * pivot; NaN if the fit fails. ``outward`` = +1 for the s_end end, -1 for the s = 0 end."""
-    # dense polyline of the curve near the end (the inner part and the tangent extension)
-    lo, hi = (q0 - inner - 4, q0 + outer + 4) if outward > 0 else (q0 - outer - 4, q0 + inner + 4)
-    qq = np.arange(lo, hi + 1e-9, 0.25)
-    P = _points(spl, s_end, qq)
-    T = _points(spl, s_end, qq + 0.01) - P
-    T /= np.hypot(T[:, 0], T[:, 1])[:, None]
-    px = _end_pixels(img, P, T, qq, q0, outward, sigma0, inner, outer)
-    if px is None:
         return math.nan, math.nan, 0.0
-    q, d, u, v = px
+    v = img[r0:r1, c0:c1].ravel()[sel].astype(float)
+    q, d, u = q[sel], d[sel], u[sel]
     hinge = np.maximum(u + pivot, 0.0)
-    qe, sg, c = _levenberg_marquardt(q, d, hinge[:, None], v, q0, sigma0, outward, np.array([0.3]))
-    return qe, sg, float(c[0])
+
+    return _levenberg_marquardt(q, d, hinge, v, q0, sigma0, outward)
 
 
-def _levenberg_marquardt(q: np.ndarray, d: np.ndarray, basis: np.ndarray, v: np.ndarray, q0: float,
-                         sigma0: float, o: int, bound: np.ndarray, iters: int = 30) -> tuple[float, float, np.ndarray]:
-    """Least squares of v ~ b + A exp(-(d - basis c)^2 / 2 sg^2) Phi(o (qe - q) / sg) over
-    (qe, sg, c, A, b) by Levenberg-Marquardt with the analytic Jacobian; ``basis`` (M, k): the
-    line's displacement across the curve, c (k,) its coefficients, |c| < ``bound``. Returns
-    (qe, sg, c), or NaNs (c zero) if the fit ends on the edge of the trust box (|qe - q0| < 6,
-    sigma0/2 < sg < 2 sigma0)."""
+def _levenberg_marquardt(q: np.ndarray, d: np.ndarray, h: np.ndarray, v: np.ndarray, q0: float,
+                         sigma0: float, o: int, iters: int = 30) -> tuple[float, float, float]:
+    """Least squares of v ~ b + A exp(-(d - c h)^2 / 2 sg^2) Phi(o (qe - q) / sg) over
+    (qe, sg, c, A, b) by Levenberg-Marquardt with the analytic Jacobian; returns (qe, sg, c)
+    or NaNs if the fit ends on the edge of the trust box (|qe - q0| < 6, sigma0/2 < sg < 2 sigma0)."""
     from scipy.special import ndtr
 
-    k = basis.shape[1]
-
     def parts(p):
-        qe, sg, c, A, b = p[0], p[1], p[2:2 + k], p[2 + k], p[3 + k]
-        e = d - basis @ c
+        qe, sg, c, A, b = p
+        e = d - c * h
         E = np.exp(-0.5 * (e / sg) ** 2)
         z = o * (qe - q) / sg
         Ph = ndtr(z)
@@ -110,15 +96,16 @@ def _levenberg_marquardt(q: np.ndarray, d: np.ndarray, basis: np.ndarray, v: np.
     # start: A, b linear at (q0, sigma0, 0)
     g = np.exp(-0.5 * (d / sigma0) ** 2) * ndtr(o * (q0 - q) / sigma0)
     (A0, b0), *_ = np.linalg.lstsq(np.stack([g, np.ones_like(g)], -1), v, rcond=None)
-    p = np.concatenate([[q0, sigma0], np.zeros(k), [A0, b0]])
+    p = np.array([q0, sigma0, 0.0, A0, b0])
     e, E, z, Ph, ph, r = parts(p)
     cost = float(r @ r)
     lam = 1e-3
-    done = False
     for _ in range(iters):
-        qe, sg, A = p[0], p[1], p[2 + k]
-        J = np.column_stack([A * E * ph * o / sg, A * E * (Ph * e * e / sg**3 - ph * z / sg),
-                             (A * E * Ph * e / sg**2)[:, None] * basis, E * Ph, np.ones_like(v)])
+        qe, sg, c, A, b = p
+        J = np.stack([A * E * ph * o / sg,
+                      A * E * (Ph * e * e / sg**3 - ph * z / sg),
+                      A * E * Ph * e * h / sg**2,
+                      E * Ph, np.ones_like(v)], -1)
         JtJ, Jtr = J.T @ J, J.T @ r
         improved = False
         for _ in range(8):
@@ -129,23 +116,23 @@ def _levenberg_marquardt(q: np.ndarray, d: np.ndarray, basis: np.ndarray, v: np.
                 lam *= 10
                 continue
             pn = p + step
-            if not (abs(pn[0] - q0) < 6.0 and 0.5 * sigma0 < pn[1] < 2.0 * sigma0 and np.all(np.abs(pn[2:2 + k]) < bound)):
+            if not (abs(pn[0] - q0) < 6.0 and 0.5 * sigma0 < pn[1] < 2.0 * sigma0 and abs(pn[2]) < 0.3):
                 lam *= 10
                 continue
             parts_n = parts(pn)
             cn = float(parts_n[-1] @ parts_n[-1])
             if cn < cost:
                 p, (e, E, z, Ph, ph, r) = pn, parts_n
-                done = abs(cost - cn) <= 1e-10 * cost or np.max(np.abs(step[:2 + k])) < 1e-5
+                done = abs(cost - cn) <= 1e-10 * cost or np.max(np.abs(step[:3])) < 1e-5
                 cost, lam, improved = cn, max(lam / 10, 1e-9), True
                 break
             lam *= 10
         if not improved or done:
             break
-    qe, sg, A = float(p[0]), float(p[1]), float(p[2 + k])
+    qe, sg, c, A, b = (float(t) for t in p)
     if not (A > 0 and abs(qe - q0) < 5.99):
-        return math.nan, math.nan, np.zeros(k)
-    return qe, sg, p[2:2 + k].copy()
+        return math.nan, math.nan, 0.0
+    return qe, sg, c
 
 
 def _fit_end_twice(img: np.ndarray, spl, s_end: float, q0: float, outward: int, sigma0: float,
@@ -159,55 +146,6 @@ def _fit_end_twice(img: np.ndarray, spl, s_end: float, q0: float, outward: int, 
         if np.isfinite(q2):
             return q2, c2, qe - outward * pivot
     return qe, c, q0 - outward * pivot
-
-
-def end_offsets(img: np.ndarray, x: np.ndarray, y: np.ndarray, tips: np.ndarray, *, sigma: float = 1.2,
-                inner: float = 14.0, outer: float = 6.0) -> np.ndarray:
-    """Both ends' positions across a known curve, fitted on the raw frame ``img``.
-
-    x, y (P,) [px]: a reference curve, tip to tip (the periodic template placed in this frame);
-    its own tips are not used: the reference is the interpolating spline through samples 1 to
-    P - 2, continued past them by its end cubics. tips (2, 2): the measured s = 0 and s = l
-    ends, whose position along the body is kept. The line-end model of the module docstring,
-    with the line displaced across the reference by a + b u (u the distance along it from the
-    end) over the last ``inner`` px, is fitted to the raw pixels; each end moves across the
-    reference to the fitted line (a). Its shape over those px comes from the reference, so
-    the fit needs only the line's offset and slope there, not its bend: at SNR 3 the end's
-    error across the body falls from 0.36 px (the per-frame end fit) to about 0.27 px.
-    Returns (2, 2) [px], NaN for an end whose fit failed."""
-    out = np.full((2, 2), np.nan)
-    xs, ys = np.asarray(x, float)[1:-1], np.asarray(y, float)[1:-1]
-    s = _arclength(xs, ys)
-    if s.size < 4 or s[-1] <= 2 * inner:
-        return out
-    spl = make_interp_spline(s, np.stack([xs, ys], -1), k=3)
-    der = spl.derivative()
-    L = float(s[-1])
-    for e, o in ((0, -1), (1, 1)):
-        tip = np.asarray(tips[e], float)
-        if not np.all(np.isfinite(tip)):
-            continue
-        # the measured end's parameter on the continued reference (nearest point)
-        qs = np.arange(-12.0, 0.01, 0.02) if o < 0 else np.arange(L, L + 12.01, 0.02)
-        Pq = spl(qs)
-        qt = float(qs[np.argmin(np.hypot(Pq[:, 0] - tip[0], Pq[:, 1] - tip[1]))])
-        lo, hi = (qt - inner - 4, qt + outer + 4) if o > 0 else (qt - outer - 4, qt + inner + 4)
-        qq = np.arange(lo, hi + 1e-9, 0.25)
-        P = spl(qq)
-        T = der(qq)
-        T /= np.hypot(T[:, 0], T[:, 1])[:, None]
-        px = _end_pixels(img, P, T, qq, qt, o, sigma, inner, outer)
-        if px is None:
-            continue
-        q, d, u, v = px
-        qe, _, c = _levenberg_marquardt(q, d, np.stack([np.ones_like(u), u / inner], -1), v, qt, sigma, o,
-                                        np.array([3.0, 3.0]))
-        if not math.isfinite(qe):
-            continue
-        t = der(qt)
-        t /= math.hypot(t[0], t[1])
-        out[e] = spl(qt) + c[0] * np.array([-t[1], t[0]])
-    return out
 
 
 def resample(x: np.ndarray, y: np.ndarray, q_a: float, q_b: float, n_points: int,

@@ -23,8 +23,7 @@ the raw pixels). A frame is flagged, never kept, when:
 Across frames (after the checks): the ends placed for the median body length, their position
 along the body smoothed in time (:mod:`flutterswim.tracking.temporal`), and, for a movie verified
 periodic (a settled stroke), every frame replaced by the stroke's shape template at its phase in
-its own rigid placement, its ends refitted across the template on a second pass over the raw
-frames (:mod:`flutterswim.tracking.periodic`).
+its own rigid placement (:mod:`flutterswim.tracking.periodic`).
 
 Coordinates: x = column, y = row (image axes, y pointing down), pixel centres at integers,
 converted to mm by ``px_per_mm``; times = frame index / fps.
@@ -236,9 +235,8 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     0: off; the ends' paths are never smoothed); periodic: when the movie is verified periodic
     (a settled stroke: >= 3 strokes, no drift of the shape in the body frame), every frame
     becomes the stroke's shape template at its phase (fitted over all cycles), placed by the
-    frame's own rigid motion (:func:`flutterswim.tracking.periodic.periodic_shape`: mirror-
-    symmetric unless the data reject it, and with ``refine`` both ends refitted across the
-    placed template on a second pass over the raw frames; the raw per-frame lengths stay in the record; ``meta["temporal"]["periodic"]`` says whether and
+    frame's own rigid motion (:func:`flutterswim.tracking.periodic.periodic_shape`; the raw
+    per-frame lengths stay in the record; ``meta["temporal"]["periodic"]`` says whether and
     why (not)). Per-frame results (all frames, failed ones NaN, with their reasons) are in
     ``track.meta["frames"]``; see the module docstring for the checks.
     """
@@ -368,20 +366,8 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     if periodic and np.count_nonzero(ok) >= 2:
         from .periodic import periodic_shape
 
-        def refine_ends(frame_idx: np.ndarray, curves: np.ndarray, ends: np.ndarray) -> np.ndarray:
-            # a second pass over the raw frames: both ends refitted across the placed template
-            from .tips import end_offsets
-
-            out = np.full(ends.shape, np.nan)
-            where = {int(i): k for k, i in enumerate(frame_idx)}
-            for i, img in enumerate(frames):
-                k = where.get(i)
-                if k is not None:
-                    out[k] = end_offsets(img, curves[k, :, 0], curves[k, :, 1], ends[k], sigma=sig)
-            return out
-
         try:
-            X, Y, pinfo = periodic_shape(X, Y, ok, per_stroke, refine_ends=refine_ends if refine else None)
+            X, Y, pinfo = periodic_shape(X, Y, ok, per_stroke)
         except (np.linalg.LinAlgError, ValueError) as exc:  # a degenerate movie: the frames stay as they are
             pinfo = {"done": False, "reason": f"not done: the template fit failed ({exc})"}
         temporal["periodic"] = pinfo["reason"]
