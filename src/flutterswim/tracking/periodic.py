@@ -22,8 +22,8 @@ The tracked centrelines of a settled stroke repeat, cycle after cycle, up to a r
    the along-body coordinate then holds only the constant and even harmonics and the
    across-body coordinate only odd ones, half the coefficients. The symmetric template is
    used unless the data reject it (nested F test of the full template against it, as for the
-   drift, ``max_f`` and ``floor_px``): a tilted field or an unsteady turn makes the stroke
-   asymmetric and keeps the full template;
+   drift, ``max_f`` and ``floor_px``): a stroke made asymmetric (a field tilted from the
+   swimmer's axis, a bent body) keeps the full template;
 
 This is only valid for a periodic movie. :func:`periodic_shape` therefore refuses (returns
 the input, with the reason) unless the good frames span at least ``min_cycles`` strokes and the
@@ -31,8 +31,8 @@ template passes a drift test: the same template with its coefficients changing l
 not fit significantly better (F statistic of the nested fit <= ``max_f``, or its systematic part
 below ``floor_px`` RMS). A stroke still growing (onset), an unsteady turn or a changing stroke fails it and is
 left to the per-frame estimates. On the paper's settled stroke rendered at SNR 3 (50 fps, 14 um/px,
-5.3 cycles) the tip error falls from 0.46-0.57 px RMS to about 0.2 px (0.19 px over 16 movies) and the centreline error
-halves; without noise the result moves by < 0.01 px (benchmarks/RESULTS.md).
+5.3 cycles) the tip error falls from 0.46-0.57 px RMS to about 0.2 px (0.19 px over 16 movies)
+and the centreline error halves; without noise the result moves by < 0.01 px (benchmarks/RESULTS.md).
 """
 
 from __future__ import annotations
@@ -159,8 +159,8 @@ def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: 
 
     X, Y (T, P) [px], equal arc-length samples, NaN on frames not ``ok``; period_frames: the
     stroke's period estimate [frames]; symmetric: use the mirror symmetry of the stroke when
-    the data do not reject it (module docstring, step 4). Returns (X, Y, info): info["done"] (bool), info["reason"] (why not, or a summary), and when tested
-    "period_frames", "harmonics", "drift_f", "drift_px" (the systematic part of the drift
+    the data do not reject it (module docstring, step 4). Returns (X, Y, info): info["done"]
+    (bool), info["reason"] (why not, or a summary), and when tested "period_frames", "harmonics", "drift_f", "drift_px" (the systematic part of the drift
     model's improvement, RMS over samples), "symmetric", "symmetry_f" and "symmetry_px"."""
     ok = np.asarray(ok, bool)
     idx = np.nonzero(ok)[0]
