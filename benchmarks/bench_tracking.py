@@ -1,7 +1,7 @@
 """Tracking benchmarks (not a test): speed per 512 x 512 frame and per 5-cycle movie, and the
 accuracy on movies rendered from the paper's settled stroke (50 fps, 14 um/px).
 
-    OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_tracking.py [--repeat 5] [--seeds 4] [--json out.json] [--no-periodic]
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_tracking.py [--repeat 5] [--seeds 4] [--json out.json] [--no-periodic] [--degraded]
 
 Speed: one core; min and median over repeats. ``scratch``: one frame tracked with no previous
 frame (coarse 4x-reduced localisation, then the window around it); ``whole frame``: the
@@ -12,7 +12,9 @@ centreline RMS distance to the true curve and tip RMS error [px], frames flagged
 tip outliers), whether the ends' offsets were smoothed in time, whether the periodic shape
 template was used (and its drift test's F statistic), and the relative error of
 the descriptors of :func:`describe` against those of the simulated centrelines on the same
-frames.
+frames (all complete cycles). ``--degraded``: the same accuracy on degraded and longer movies
+of the settled stroke (defocus, background gradient, uint16, wider PSF, other pixel sizes, a
+dim background, 3 and 10 cycles; ``DEGRADED``) and nothing else.
 """
 
 from __future__ import annotations
@@ -35,10 +37,11 @@ FPS = 50.0
 KEYS = ("period_s", "advance_per_cycle_mm", "leading_lateral_p2p_mm", "trailing_lateral_p2p_mm")
 
 
-def stroke(n_frames: int = 101):
+def stroke(n_frames: int = 101, t_end: float = 10.0):
+    """The last ``n_frames`` frames (50 fps) of the paper's swimmer simulated for ``t_end`` s."""
     import flutterswim as fs
 
-    r = fs.simulate(fs.PAPER, 10.0, n_segments=24, frame_dt=1.0 / FPS)
+    r = fs.simulate(fs.PAPER, t_end, n_segments=24, frame_dt=1.0 / FPS)
     sl = slice(r.t.size - n_frames, r.t.size)
     return SimpleNamespace(t=r.t[sl], x=r.x[sl], y=r.y[sl])
 
@@ -79,32 +82,68 @@ def speed(sim, repeat: int) -> dict:
             "movie_shape": list(small.frames.shape), "n_failed_512": int(tr.meta["n_failed"])}
 
 
-def accuracy(sim, seeds: int) -> list[dict]:
+def measure(mv, **labels) -> dict:
+    """Track a rendered movie and compare with its truth: pixel errors and the descriptors'
+    relative errors [%] (``labels`` are copied into the row)."""
     from flutterswim.analysis.descriptors import describe
-    from flutterswim.tracking import render, track
+    from flutterswim.tracking import track
     from flutterswim.tracking.evaluate import pixel_errors, truth_track
 
+    tr = track(mv, px_per_mm=mv.px_per_mm, fps=FPS, t0=float(mv.t[0]))
+    D, E, _ = pixel_errors(tr, mv)
+    truth = truth_track(mv, 3.7)
+    dt, dm = describe(truth, n_last=100), describe(tr, n_last=100)
+    row = {**labels, "failed": int(tr.meta["n_failed"]),
+           "centreline_rms_px": float(np.sqrt(np.mean(D**2))),
+           "worst_frame_rms_px": float(np.sqrt(np.mean(D**2, axis=1)).max()),
+           "tip_rms_px": float(np.sqrt(np.mean(E**2))), "tip_max_px": float(E.max()),
+           "length_spread": tr.meta["length_spread"], "cycles": dm.n_cycles_used,
+           "tip_outliers": sum(r.startswith("tip outlier") for r in tr.meta["frames"]["reason"]),
+           "smoothing": tr.meta["temporal"]["smoothing"].split(",")[0],
+           "periodic": tr.meta["temporal"]["periodic"].split(":")[0],
+           "periodic_drift_f": tr.meta["temporal"].get("periodic_info", {}).get("drift_f")}
+    for k in KEYS:
+        row[k + "_rel_err_pct"] = 100 * (getattr(dm, k) - getattr(dt, k)) / getattr(dt, k)
+    print(json.dumps(row), flush=True)
+    return row
+
+
+def accuracy(sim, seeds: int) -> list[dict]:
+    from flutterswim.tracking import render
+
+    return [measure(render(sim, um_per_px=14.0, snr=snr, seed=seed), snr=snr, seed=seed)
+            for snr in (math.inf, 10.0, 5.0, 3.0) for seed in range(1 if math.isinf(snr) else seeds)]
+
+
+# degraded and longer movies of the settled stroke: (label, frames, render options)
+DEGRADED = (
+    ("reference, SNR 5", 101, {"snr": 5.0}),
+    ("defocus 1.5 px, SNR 5", 101, {"snr": 5.0, "defocus": 1.5}),
+    ("background gradient 100 %, SNR 5", 101, {"snr": 5.0, "gradient": 1.0}),
+    ("uint16 frames, SNR 5", 101, {"snr": 5.0, "dtype": "uint16"}),
+    ("PSF sigma 2 px, SNR 5", 101, {"snr": 5.0, "psf_sigma": 2.0}),
+    ("10 um/px, SNR 5", 101, {"snr": 5.0, "um_per_px": 10.0}),
+    ("20 um/px, SNR 5", 101, {"snr": 5.0, "um_per_px": 20.0}),
+    ("20 um/px, SNR 3", 101, {"snr": 3.0, "um_per_px": 20.0}),
+    ("dim: background 10, read noise 5, SNR 5", 101, {"snr": 5.0, "background": 10.0, "read_noise": 5.0}),
+    ("3.2 cycles (60 frames), SNR 5", 60, {"snr": 5.0}),
+    ("10.7 cycles (201 frames), SNR 3", 201, {"snr": 3.0}),
+)
+
+
+def degraded(seeds: int) -> list[dict]:
+    """Every condition of DEGRADED on the stroke settled at 14 s (the last 10.7 cycles of it
+    are periodic to the drift test), ``seeds`` noise draws each. ``snr_effective``: the line's
+    peak over the background noise after defocus (photons conserved, the peak drops)."""
+    from flutterswim.tracking import render
+
     rows = []
-    for snr in (math.inf, 10.0, 5.0, 3.0):
-        for seed in range(1 if math.isinf(snr) else seeds):
-            mv = render(sim, um_per_px=14.0, snr=snr, seed=seed)
-            tr = track(mv, px_per_mm=mv.px_per_mm, fps=FPS, t0=float(mv.t[0]))
-            D, E, _ = pixel_errors(tr, mv)
-            truth = truth_track(mv, 3.7)
-            dt, dm = describe(truth), describe(tr)
-            row = {"snr": snr, "seed": seed, "failed": int(tr.meta["n_failed"]),
-                   "centreline_rms_px": float(np.sqrt(np.mean(D**2))),
-                   "worst_frame_rms_px": float(np.sqrt(np.mean(D**2, axis=1)).max()),
-                   "tip_rms_px": float(np.sqrt(np.mean(E**2))), "tip_max_px": float(E.max()),
-                   "length_spread": tr.meta["length_spread"], "cycles": dm.n_cycles_used,
-                   "tip_outliers": sum(r.startswith("tip outlier") for r in tr.meta["frames"]["reason"]),
-                   "smoothing": tr.meta["temporal"]["smoothing"].split(",")[0],
-                   "periodic": tr.meta["temporal"]["periodic"].split(":")[0],
-                   "periodic_drift_f": tr.meta["temporal"].get("periodic_info", {}).get("drift_f")}
-            for k in KEYS:
-                row[k + "_rel_err_pct"] = 100 * (getattr(dm, k) - getattr(dt, k)) / getattr(dt, k)
-            rows.append(row)
-            print(json.dumps(row), flush=True)
+    for label, n, opts in DEGRADED:
+        sim = stroke(n, t_end=14.0)
+        for seed in range(seeds):
+            mv = render(sim, seed=seed, **{"um_per_px": 14.0, **opts})
+            eff = mv.meta["amplitude"] / math.sqrt(mv.meta["background"] + mv.meta["read_noise"] ** 2)
+            rows.append(measure(mv, condition=label, seed=seed, snr_effective=eff))
     return rows
 
 
@@ -146,12 +185,19 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=4)
     ap.add_argument("--json", default=None)
     ap.add_argument("--no-periodic", action="store_true", help="track without the periodic shape template (before/after)")
+    ap.add_argument("--degraded", action="store_true", help="only the accuracy on degraded and longer movies (DEGRADED)")
     args = ap.parse_args()
     if args.no_periodic:  # the functions above import track from the package when they run
         import flutterswim.tracking as pkg
 
         orig = pkg.track
         pkg.track = lambda *a, **k: orig(*a, **{**k, "periodic": False})
+    if args.degraded:
+        res = {"machine": machine(), "degraded": degraded(args.seeds)}
+        if args.json:
+            with open(args.json, "w") as f:
+                json.dump(res, f, indent=1)
+        return
     sim = stroke()
     res = {"machine": machine(), "speed": speed(sim, args.repeat)}
     print(json.dumps(res, indent=1), flush=True)

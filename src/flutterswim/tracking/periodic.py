@@ -26,8 +26,9 @@ The tracked centrelines of a settled stroke repeat, cycle after cycle, up to a r
    swimmer's axis, a bent body) keeps the full template;
 
 This is only valid for a periodic movie. :func:`periodic_shape` therefore refuses (returns
-the input, with the reason) unless the good frames span at least ``min_cycles`` strokes and the
-template passes a drift test: the same template with its coefficients changing linearly in time must
+the input, with the reason) unless the good frames span at least ``min_cycles`` strokes, number
+at least twice the drift model's coefficients per coordinate (2 (2 H + 1) of them: 52 frames for 6
+harmonics, 2.8 strokes at 50 fps), and the template passes a drift test: the same template with its coefficients changing linearly in time must
 not fit significantly better (F statistic of the nested fit <= ``max_f``, or its systematic part
 below ``floor_px`` RMS). A stroke still growing (onset), an unsteady turn or a changing stroke fails it and is
 left to the per-frame estimates. On the paper's settled stroke rendered at SNR 3 (50 fps, 14 um/px,
@@ -174,8 +175,8 @@ def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: 
         info["reason"] = f"not done: the good frames span {span:.1f} strokes (needs >= {min_cycles:g})"
         return X, Y, info
     p_drift = 2 * (2 * H + 1)
-    if idx.size < 3 * p_drift:
-        info["reason"] = f"not done: {idx.size} good frames, too few for {H} harmonics (needs >= {3 * p_drift})"
+    if idx.size < 2 * p_drift:
+        info["reason"] = f"not done: {idx.size} good frames, too few for {H} harmonics (needs >= {2 * p_drift})"
         return X, Y, info
     pts = np.stack([X[idx], Y[idx]], -1)  # (n, P, 2)
     n, P, _ = pts.shape
