@@ -161,9 +161,9 @@ def test_refused_on_a_drifting_stroke_and_on_too_few_cycles(settled):
 
 
 def test_a_short_movie_of_3_strokes_gets_the_template_and_the_onset_is_still_refused(run, settled):
-    """60 frames (3.2 strokes, 13 frames more than the drift model's 26 coefficients per sample
-    need twice): without noise the template is unbiased; with the injected errors its ends are
-    at least twice as close to the truth; 60 frames of the onset are refused."""
+    """60 frames (3.2 strokes; the template needs 52, twice the drift model's 26 coefficients per
+    sample coordinate): without noise the template is unbiased; with the injected errors its
+    ends are at least twice as close to the truth; 60 frames of the onset are refused."""
     X, Y = settled[0][-60:], settled[1][-60:]
     Xp, Yp, info = _periodic(X, Y)
     assert info["done"], info["reason"]

@@ -27,9 +27,9 @@ The tracked centrelines of a settled stroke repeat, cycle after cycle, up to a r
 
 This is only valid for a periodic movie. :func:`periodic_shape` therefore refuses (returns
 the input, with the reason) unless the good frames span at least ``min_cycles`` strokes, number
-at least twice the drift model's coefficients per coordinate (2 (2 H + 1) of them: 52 frames for 6
-harmonics, 2.8 strokes at 50 fps), and the template passes a drift test: the same template with its coefficients changing linearly in time must
-not fit significantly better (F statistic of the nested fit <= ``max_f``, or its systematic part
+at least twice the drift model's 2 (2 H + 1) coefficients per coordinate (52 frames for 6
+harmonics), and the template passes a drift test: the same template with its coefficients
+changing linearly in time must not fit significantly better (F statistic of the nested fit <= ``max_f``, or its systematic part
 below ``floor_px`` RMS). A stroke still growing (onset), an unsteady turn or a changing stroke fails it and is
 left to the per-frame estimates. On the paper's settled stroke rendered at SNR 3 (50 fps, 14 um/px,
 5.3 cycles) the tip error falls from 0.46-0.57 px RMS to about 0.2 px (0.19 px over 16 movies)
