@@ -213,3 +213,32 @@ def test_parallel_finite_differences_give_the_serial_fit():
     a, b = np.array([ser.B, ser.tau, ser.kappa_E]), np.array([par.B, par.tau, par.kappa_E])
     assert np.allclose(a, b, rtol=1e-7) and np.allclose(ser.sigma_rel, par.sigma_rel, rtol=1e-5)
     assert np.allclose(a, truth, rtol=5e-3)
+
+
+def test_fig3e_draws_every_trial_beside_its_voltage_and_the_mean_with_its_sem():
+    from flutterswim.fitting import plot_trials
+    from flutterswim.fitting.data import Trials
+
+    rng = np.random.default_rng(3)
+    v = np.repeat([60.0, 72.5, 85.0], 4)
+    vals = np.column_stack([0.4 + 0.01 * rng.standard_normal(12), 0.3 + 0.02 * rng.standard_normal(12),
+                            1.1 + 0.05 * rng.standard_normal(12)])
+    tr = Trials(v, np.array(["s"] * 12), vals)
+    sm = summarise(tr)
+    fig = plot_trials(sm, None, trials=tr)
+    for k, ax in enumerate(fig.axes[:3]):
+        dots = next(ln for ln in ax.lines if ln.get_label() == "trials")
+        x, y = np.asarray(dots.get_xdata(), float), np.asarray(dots.get_ydata(), float)
+        np.testing.assert_array_equal(y, vals[:, k])
+        # beside its voltage (not hidden under the mean's error bar), nearer to it than to any other
+        off = x - v
+        assert np.all(off != 0) and np.all(np.abs(off) < 0.25 * 12.5)
+        mean_line = ax.containers[0].lines[0]
+        np.testing.assert_allclose(mean_line.get_ydata(), sm.mean[:, k])
+        np.testing.assert_allclose(mean_line.get_xdata(), sm.voltage_V)
+        # the error bars span mean +- SEM
+        seg = ax.containers[0].lines[2][0].get_segments()
+        np.testing.assert_allclose([s[1, 1] - s[0, 1] for s in seg], 2 * sm.sem[:, k], rtol=1e-12)
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)

@@ -124,7 +124,7 @@ def test_raw_kymographs_follow_the_simulated_crossings(movie, tracked, tmp_path)
     assert np.unique(img.reshape(-1, img.shape[-1]), axis=0).shape[0] > 50
 
 
-def test_batch_csv_sidecar_pattern_failures_and_figure(movie, tmp_path):
+def test_batch_csv_sidecar_pattern_failures_and_figure(movie, tmp_path, capsys):
     from flutterswim.fitting.data import read_trials
 
     folder = tmp_path / "trials"
@@ -153,6 +153,9 @@ def test_batch_csv_sidecar_pattern_failures_and_figure(movie, tmp_path):
                "--quiet"])
     assert rc == 0
     assert read_trials(out).values == pytest.approx(tr.values)
+    said = capsys.readouterr()
+    assert "tracked 3 of 4 trials" in said.out and "trials_failed.csv" in said.out
+    assert "90V_sample9" in said.err and "lost contrast" in said.err
 
 
 def test_batch_needs_voltage_and_sample(tmp_path, movie):

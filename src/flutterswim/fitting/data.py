@@ -101,11 +101,16 @@ def plot_trials(summary: Summary, path=None, *, trials: Trials | None = None, mo
     fig, axs = plt.subplots(1, 3, figsize=(10, 3.4), constrained_layout=True)
     labels = (("period_s", "period [s]"), ("advance_mm", "advance per cycle [mm]"),
               ("lateral_mm", "lateral peak-to-peak [mm]"))
+    # the trials drawn just left of their voltage, so the mean's error bar does not hide them
+    v = np.asarray(summary.voltage_V, float)
+    u = np.unique(v)
+    shift = 0.06 * (float(np.min(np.diff(u))) if u.size > 1 else max(abs(float(u[0])), 1.0))
     for k, (ax, (_, lab)) in enumerate(zip(axs, labels)):
         if trials is not None:
-            ax.plot(trials.voltage_V, trials.values[:, k], ".", color="0.6", ms=4, label="trials")
+            ax.plot(np.asarray(trials.voltage_V, float) - shift, trials.values[:, k], ".", color="0.5", ms=4,
+                    label="trials")
         ax.errorbar(summary.voltage_V, summary.mean[:, k], yerr=summary.sem[:, k], fmt="o", color="tab:red",
-                    capsize=3, label="mean +- SEM")
+                    capsize=3, label="mean \u00b1 SEM")
         if model is not None:
             ax.plot(summary.voltage_V, np.asarray(model)[:, k], "s", mfc="none", color="k", label="model")
         ax.set_xlabel("voltage [V]")

@@ -86,5 +86,7 @@ def _cmd_batch(args) -> int:
                                     progress=not args.quiet)
     for trial, why in failed:
         print(f"flutterswim track-batch: {trial}: {why}", file=sys.stderr)
-    print(f"tracked {len(rows)} of {len(rows) + len(failed)} trials; wrote {out}" + (f" and {args.plot}" if args.plot and rows else ""))
+    failed_csv = f"; the failures and their reasons in {out.with_name(out.stem + '_failed.csv')}" if failed else ""
+    print(f"tracked {len(rows)} of {len(rows) + len(failed)} trials; wrote {out}" + (f" and {args.plot}" if args.plot and rows else "")
+          + failed_csv)
     return 0 if rows else 1
