@@ -44,10 +44,54 @@ def _source_hash(root=None) -> str:
     return h.hexdigest()[:16]
 
 
+#: The file that marks a kernel cache directory as flutterswim's; its mtime is the last use.
+CACHE_MARKER = "flutterswim-kernels.txt"
+#: Kernel caches of other source versions unused for this many days are removed.
+STALE_DAYS = 30.0
+
+
+def prune_kernel_caches(base, keep, *, max_age_days: float = STALE_DAYS, now: float | None = None) -> list:
+    """Remove the kernel caches under ``base``, other than ``keep``, that are provably ours and
+    stale. A directory is removed only if it is named ``kernels-<16 hex digits>``, holds
+    :data:`CACHE_MARKER` last touched more than ``max_age_days`` ago, and holds nothing but
+    numba's cache files (``.nbi``, ``.nbc``) in plain folders (no symbolic links). Anything
+    else is left alone, and an error leaves that directory as it is. Returns the removed
+    directories."""
+    import re
+    import time
+    from pathlib import Path
+
+    now = time.time() if now is None else float(now)
+    removed = []
+    for d in sorted(Path(base).glob("kernels-*")):
+        if d == Path(keep) or d.is_symlink() or not d.is_dir() or not re.fullmatch(r"kernels-[0-9a-f]{16}", d.name):
+            continue
+        marker = d / CACHE_MARKER
+        try:
+            if not marker.is_file() or now - marker.stat().st_mtime < max_age_days * 86400.0:
+                continue
+            entries = list(d.rglob("*"))
+            if any(e.is_symlink() for e in entries):
+                continue
+            files = [e for e in entries if not e.is_dir()]
+            if any(f != marker and f.suffix not in (".nbi", ".nbc") for f in files):
+                continue
+            for f in files:
+                f.unlink()
+            for sub in sorted((e for e in entries if e.is_dir()), key=lambda e: len(e.parts), reverse=True):
+                sub.rmdir()
+            d.rmdir()
+            removed.append(d)
+        except OSError:
+            continue
+    return removed
+
+
 def _set_cache_dir() -> None:
     """Point numba's cache at a directory keyed by :func:`_source_hash` (under the user's
     NUMBA_CACHE_DIR if set, else the user cache directory); left as it is if that cannot be
-    made."""
+    made. The directory is marked as used now (:data:`CACHE_MARKER`), and the caches of other
+    kernel versions unused for :data:`STALE_DAYS` are removed (:func:`prune_kernel_caches`)."""
     import os
     from pathlib import Path
 
@@ -61,6 +105,16 @@ def _set_cache_dir() -> None:
     except OSError:
         return
     config.CACHE_DIR = str(path)
+    marker = path / CACHE_MARKER
+    try:
+        if marker.is_file():
+            os.utime(marker)
+        else:
+            marker.write_text("numba's cache of flutterswim's compiled kernels; flutterswim removes it when "
+                              f"unused for {STALE_DAYS:g} days\n")
+        prune_kernel_caches(path.parent, path)
+    except OSError:
+        pass
 
 
 def compile_module(module: ModuleType | str, names: tuple[str, ...]) -> bool:
