@@ -31,7 +31,7 @@ from typing import Any
 from .._validate import ParameterError
 from .io import FRAME_SUFFIXES, MOVIE_SUFFIXES, STACK_SUFFIXES
 
-__all__ = ["DEFAULT_PATTERN", "CSV_COLUMNS", "Trial", "find_trials", "track_batch"]
+__all__ = ["DEFAULT_PATTERN", "CSV_COLUMNS", "Trial", "failures_path", "find_trials", "track_batch"]
 
 DEFAULT_PATTERN = r"(?P<voltage>\d+(?:[.p]\d+)?)\s*V.*?sample[-_ ]?(?P<sample>[A-Za-z0-9]+)"
 CSV_COLUMNS = ("voltage_V", "sample", "period_s", "advance_mm", "lateral_mm", "leading_lateral_mm",
@@ -109,6 +109,13 @@ def _fmt(v: Any) -> str:
     return str(v)
 
 
+def failures_path(out: str | os.PathLike) -> Path:
+    """Where :func:`track_batch` lists the trials that failed, with their reasons: next to the
+    CSV ``out``, as ``<stem>_failed.csv``."""
+    out = Path(out)
+    return out.with_name(out.stem + "_failed.csv")
+
+
 def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm: float | None = None,
                 fps: float | None = None, pattern: str = DEFAULT_PATTERN, n_last: int = 5, plot: str | None = None,
                 progress: bool = False, **track_kwargs: Any) -> tuple[Path, list[dict], list[tuple[str, str]]]:
@@ -123,7 +130,7 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
     out_p = check_output_file(out, (".csv",), what="out")
     if plot is not None:
         check_output_file(plot, (".png", ".pdf", ".svg"), what="plot")
-    failed_p = out_p.with_name(out_p.stem + "_failed.csv")
+    failed_p = failures_path(out_p)
     trials = find_trials(folder, pattern)
     rows: list[dict] = []
     failed: list[tuple[str, str]] = []

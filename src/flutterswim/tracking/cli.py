@@ -79,14 +79,14 @@ def _cmd_track(args) -> int:
 
 
 def _cmd_batch(args) -> int:
-    from .batch import DEFAULT_PATTERN, track_batch
+    from .batch import DEFAULT_PATTERN, failures_path, track_batch
 
     out, rows, failed = track_batch(args.folder, args.out, px_per_mm=args.px_per_mm, fps=args.fps,
                                     pattern=args.pattern or DEFAULT_PATTERN, n_last=args.last, plot=args.plot,
                                     progress=not args.quiet)
     for trial, why in failed:
         print(f"flutterswim track-batch: {trial}: {why}", file=sys.stderr)
-    failed_csv = f"; the failures and their reasons in {out.with_name(out.stem + '_failed.csv')}" if failed else ""
+    failed_csv = f"; the failures and their reasons in {failures_path(out)}" if failed else ""
     print(f"tracked {len(rows)} of {len(rows) + len(failed)} trials; wrote {out}" + (f" and {args.plot}" if args.plot and rows else "")
           + failed_csv)
     return 0 if rows else 1
