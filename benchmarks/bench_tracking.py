@@ -137,9 +137,10 @@ def degraded(seeds: int) -> list[dict]:
     peak over the background noise after defocus (photons conserved, the peak drops)."""
     from flutterswim.tracking import render
 
+    full = stroke(max(n for _, n, _ in DEGRADED), t_end=14.0)  # simulated once; each movie its last n frames
     rows = []
     for label, n, opts in DEGRADED:
-        sim = stroke(n, t_end=14.0)
+        sim = SimpleNamespace(t=full.t[-n:], x=full.x[-n:], y=full.y[-n:])
         for seed in range(seeds):
             mv = render(sim, seed=seed, **{"um_per_px": 14.0, **opts})
             eff = mv.meta["amplitude"] / math.sqrt(mv.meta["background"] + mv.meta["read_noise"] ** 2)
