@@ -102,8 +102,7 @@ def plot_trials(summary: Summary, path=None, *, trials: Trials | None = None, mo
     labels = (("period_s", "period [s]"), ("advance_mm", "advance per cycle [mm]"),
               ("lateral_mm", "lateral peak-to-peak [mm]"))
     # the trials drawn just left of their voltage, so the mean's error bar does not hide them
-    v = np.asarray(summary.voltage_V, float)
-    u = np.unique(v)
+    u = np.unique(np.asarray(summary.voltage_V, float))
     shift = 0.06 * (float(np.min(np.diff(u))) if u.size > 1 else max(abs(float(u[0])), 1.0))
     for k, (ax, (_, lab)) in enumerate(zip(axs, labels)):
         if trials is not None:
