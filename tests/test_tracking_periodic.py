@@ -161,7 +161,7 @@ def test_refused_on_a_drifting_stroke_and_on_too_few_cycles(settled):
 
 
 def test_a_short_movie_of_3_strokes_gets_the_template_and_the_onset_is_still_refused(run, settled):
-    """60 frames (3.2 strokes; the template needs 52, twice the drift model's 26 coefficients per
+    """60 frames (3.2 strokes; from 52 frames the drift of all 6 harmonics is tested, twice the drift model's 26 coefficients per
     sample coordinate): without noise the template is unbiased; with the injected errors its
     ends are at least twice as close to the truth; 60 frames of the onset are refused."""
     X, Y = settled[0][-60:], settled[1][-60:]
@@ -236,3 +236,46 @@ def test_the_mirror_symmetry_is_used_only_when_the_stroke_has_it(settled):
     assert np.hypot(Xs - Xa, Ys - Ya).max() > 0.5
     _, _, info_off = periodic_shape(X, Y, ok, per, symmetric=False)
     assert not info_off["symmetric"]
+
+
+@pytest.mark.parametrize("step", [2, 3])
+def test_a_lower_frame_rate_gets_the_full_template_and_the_onset_is_still_refused(run, settled, step):
+    """The paper's stroke at 25 and 16.7 fps (every 2nd or 3rd frame: 51 or 34 frames, 9.4 or
+    6.3 per stroke). Harmonics up to 6 are still resolved (the period is not a whole number of
+    frames, so the cycles sample every phase), while fewer than 52 frames test the drift of the
+    low harmonics only: without noise the template is unbiased (4 harmonics would be 0.24 px off),
+    with the injected errors its ends are at least twice as close to the truth, and the onset
+    at the same frame rate is refused, with and without noise."""
+    X, Y = settled[0][::step], settled[1][::step]
+    ok = np.ones(X.shape[0], bool)
+    per = frames_per_stroke(X, Y, ok)
+    assert abs(per - 18.88 / step) < 0.3
+    Xp, Yp, info = periodic_shape(X, Y, ok, per)
+    assert info["done"], info["reason"]
+    assert info["harmonics"] == 6 and 1 <= info["drift_harmonics"] < 6
+    assert np.hypot(Xp - X, Yp - Y).max() < 0.05
+    Xn, Yn = _noisy(X, Y, np.random.default_rng(7))
+    Xq, Yq, info = periodic_shape(Xn, Yn, ok, frames_per_stroke(Xn, Yn, ok))
+    assert info["done"], info["reason"]
+    assert _ends_rms(Xq, Yq, X, Y) < 0.5 * _ends_rms(Xn, Yn, X, Y)
+    for start_s in (3.0, 4.0, 5.0):
+        i0 = int(round(start_s * FPS))
+        Xo, Yo = _pixels(run, slice(i0, i0 + step * X.shape[0], step))
+        for Xi, Yi in ((Xo, Yo), _noisy(Xo, Yo, np.random.default_rng(2))):
+            _, _, info = _periodic(Xi, Yi)
+            assert not info["done"] and "not periodic" in info["reason"], (start_s, info["reason"])
+
+
+def test_a_movie_at_25_fps_tracked_at_snr3_gets_the_template(run):
+    """Tracked at 25 fps and SNR 3 (51 frames): the template is used and the tips are within
+    the 0.5 px target (0.72 px when the 51 frames were refused the template)."""
+    pytest.importorskip("skimage")
+    from flutterswim.tracking import render, track
+    from flutterswim.tracking.evaluate import pixel_errors
+
+    sl = slice(run.t.size - 101, run.t.size, 2)
+    mv = render(SimpleNamespace(t=run.t[sl], x=run.x[sl], y=run.y[sl]), um_per_px=UM_PER_PX, snr=3.0, seed=0)
+    tr = track(mv, px_per_mm=mv.px_per_mm, fps=FPS / 2, t0=float(mv.t[0]))
+    assert tr.meta["temporal"]["periodic"].startswith("done"), tr.meta["temporal"]["periodic"]
+    D, E, idx = pixel_errors(tr, mv)
+    assert idx.size == 51 and math.sqrt(np.mean(E**2)) <= 0.45

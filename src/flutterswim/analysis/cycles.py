@@ -210,7 +210,7 @@ def detect_cycles(
     tq = (starts[:-1, None] + periods[:, None] * (np.arange(n_shape) / n_shape)[None, :]).ravel()
     j = np.clip(np.searchsorted(t, tq) - 1, 0, t.size - 2)
     wq = np.clip((tq - t[j]) / (t[j + 1] - t[j]), 0.0, 1.0)[:, None]
-    stacked = ((1 - wq) * th[j] + wq * th[j + 1]).reshape(K, n_shape, -1)
+    stacked = ((1 - wq) * th[j] + wq * th[j + 1]).reshape(K, n_shape, th.shape[1])
     shapes = list(stacked)
     if K >= 2 and n_shape_modes:
         # compare strokes in the space of the leading principal shape modes (filters noise)

@@ -230,7 +230,9 @@ def section_crossings(
     for it in range(max(1, iterations + 1) + 1):
         d = u - running_mean(t, u, W)
         amp = np.sqrt(2.0 * np.maximum(running_mean(t, d * d, W), 0.0))
-        h = np.maximum(hysteresis * amp, noise_factor * _noise_sigma(t, u, W))
+        # the noise floor at most half the amplitude: a coarsely sampled stroke (a few frames
+        # per period) has large second differences of its own, not noise
+        h = np.maximum(hysteresis * amp, np.minimum(noise_factor * _noise_sigma(t, u, W), 0.5 * amp))
         cross = upward_crossings(t, d, h, half_window=W / 12.0 if final else 0.0)
         # drop crossings closer than half a period to the previous one (harmonics)
         if cross.size > 1:
