@@ -216,3 +216,23 @@ def test_a_coarsely_sampled_stroke_is_still_cut_into_cycles(frames_per_period):
     assert d.period_s == pytest.approx(T, rel=3e-3)
     assert d.advance_per_cycle_mm == pytest.approx(U * T * 1e3, rel=3e-3)
     assert d.tip_lateral_p2p_mm == pytest.approx(2 * A * 1e3, rel=1e-3)
+
+
+def test_cycles_with_missing_frames_are_not_described():
+    """A track from a movie holds only the tracked frames. A cycle with frames missing over more
+    than a quarter period is left out: the window is the last run of cycles without such a gap
+    (here the 2 whole periods after a gap at 3.0-3.15 s of a 4 s track), and its descriptors
+    are exact. With frames missing in every cycle (one frame kept every 0.3 period, the sampled
+    tip aliased), describe refuses with the reason instead of returning wrong numbers."""
+    full = wave_track(period=T, speed=U, amplitude=A, duration=4.0, n_frames=1001)
+    keep = (full.t <= 3.0) | (full.t >= 3.15)
+    tr = Track(t=full.t[keep], x=full.x[keep], y=full.y[keep], s=full.s, length=full.length)
+    d = describe(tr, n_last=5)
+    assert 1 <= d.n_cycles_used <= 2
+    _check(d)
+    sparse = np.arange(0, 1001, 30)  # 30 frames of 0.004 s: 0.3 period between frames
+    tr = Track(t=full.t[sparse], x=full.x[sparse], y=full.y[sparse], s=full.s, length=full.length)
+    with pytest.raises(ParameterError, match="max_gap|period between frames"):
+        describe(tr)
+    with pytest.raises(ParameterError, match="max_gap"):
+        describe(full, max_gap=0.0)

@@ -116,6 +116,21 @@ class Cycles:
         """Indices of the last n cycles (fewer if fewer exist)."""
         return np.arange(max(0, self.n_cycles - n), self.n_cycles)
 
+    def frame_gaps(self, t: np.ndarray) -> np.ndarray:
+        """(K,) the longest interval between consecutive frame times ``t`` that overlaps each
+        cycle, as a fraction of that cycle's period (frames missing from a track, such as
+        frames that failed tracking, show as long intervals)."""
+        t = np.asarray(t, float)
+        out = np.zeros(self.n_cycles)
+        if t.size < 2:
+            return out
+        dt = np.diff(t)
+        for k in range(self.n_cycles):
+            a, b = self.starts[k], self.starts[k + 1]
+            over = (t[1:] > a) & (t[:-1] < b)
+            out[k] = float(dt[over].max()) / (b - a) if np.any(over) else math.inf
+        return out
+
     def to_dict(self) -> dict[str, Any]:
         f = lambda v: None if not np.isfinite(v) else float(v)  # noqa: E731
         return {
