@@ -15,7 +15,9 @@ the raw pixels). A frame is flagged, never kept, when:
   ``length_tol`` (a partial or merged body);
 - tip not found: the line-end fit failed at an end;
 - jump: the centreline moved more than ``jump_tol`` body lengths since the last good frame,
-  or head and tail cannot be told apart (both assignments about equally close);
+  or head and tail cannot be told apart (both assignments about equally close, by the whole
+  curves and by the two ends alone: after lost frames a strongly bending body can change too
+  much for the curves, while its ends have moved far less than their distance apart);
 - tip outlier: an end leaves the path of its neighbouring frames (across the body, by more
   than ``tip_k`` robust standard deviations and ``tip_floor_px``), see
   :mod:`flutterswim.tracking.temporal`.
@@ -45,7 +47,7 @@ from .io import open_frames
 from .segment import segment
 from .tips import refine_tips
 
-__all__ = ["track", "track_frame", "track_image", "coarse_box", "orient", "failures", "START_ENDS"]
+__all__ = ["track", "track_frame", "track_image", "coarse_box", "orient", "orient_ends", "failures", "START_ENDS"]
 
 START_ENDS = ("left", "right", "top", "bottom")
 
@@ -211,6 +213,14 @@ def orient(x: np.ndarray, y: np.ndarray, ref_x: np.ndarray, ref_y: np.ndarray) -
     return (d_flip < d_keep), min(d_keep, d_flip), max(d_keep, d_flip)
 
 
+def orient_ends(x: np.ndarray, y: np.ndarray, ref_x: np.ndarray, ref_y: np.ndarray) -> tuple[bool, float, float]:
+    """:func:`orient` by the two ends only: (flip, summed distance of the ends to the
+    reference's in the chosen order, that in the other order)."""
+    d = lambda i, j: math.hypot(x[i] - ref_x[j], y[i] - ref_y[j])  # noqa: E731
+    keep, flip = d(0, 0) + d(-1, -1), d(0, -1) + d(-1, 0)
+    return (flip < keep), min(keep, flip), max(keep, flip)
+
+
 def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any = None,
           n_points: int = 49, start_end: str = "left", field_angle: float = 0.0, sigma: float | None = None,
           min_contrast: float = 4.0, length_tol: float = 0.03, jump_tol: float = 0.25,
@@ -298,6 +308,15 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
                         x, y = x[::-1], y[::-1]
                     match[i] = d_best
                     Lr = r["length"]
+                    if d_other < 2.0 * d_best:
+                        # the whole curves do not tell (a body that changed much since a last
+                        # good frame some frames back): the ends alone may
+                        flip_e, e_best, e_other = orient_ends(x, y, *ref)
+                        if e_other >= 2.0 * e_best:
+                            if flip_e:
+                                x, y = x[::-1], y[::-1]
+                            d_best = float(np.mean(np.hypot(x - ref[0], y - ref[1])))
+                            d_other = math.inf
                     if d_best > jump_tol * Lr:
                         r["ok"], r["reason"] = False, (f"jump: the body moved {d_best:.1f} px since the last good "
                                                        f"frame (> {jump_tol:g} body lengths)")
