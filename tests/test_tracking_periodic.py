@@ -279,3 +279,33 @@ def test_a_movie_at_25_fps_tracked_at_snr3_gets_the_template(run):
     assert tr.meta["temporal"]["periodic"].startswith("done"), tr.meta["temporal"]["periodic"]
     D, E, idx = pixel_errors(tr, mv)
     assert idx.size == 51 and math.sqrt(np.mean(E**2)) <= 0.45
+
+
+def test_a_turn_of_the_field_within_the_movie_is_refused_the_template(settled):
+    """The field turned by 5 degrees 1.5 s into a 2 s movie: the stroke changes (the swimmer
+    turns to follow), and the template, which would miss every frame by about 3.5 px, is
+    refused on its residual (the drift test's F statistic, relative to the residual, missed
+    it). One frame of the settled stroke bent over its last third (20 px at the end, a
+    transient) is refused too (4.3 px RMS from the template, over 8 times the median frame's),
+    while the settled stroke itself, with or without the injected tracker-like errors, is not."""
+    field = fs.Field(direction=lambda t: math.radians(5.0) if t > 10.5 else 0.0)
+    r = fs.simulate(fs.PAPER, 12.0, n_segments=24, frame_dt=1.0 / FPS, field=field)
+    X, Y = _pixels(r, slice(r.t.size - 101, r.t.size))
+    for Xi, Yi in ((X, Y), _noisy(X, Y, np.random.default_rng(3))):
+        Xp, Yp, info = _periodic(Xi, Yi)
+        assert not info["done"] and "misses the frames" in info["reason"], info["reason"]
+        assert info["frame_residual_px"] > 1.0
+        assert np.array_equal(Xp, Xi)
+    X, Y = settled
+    for Xi, Yi in ((X, Y), _noisy(X, Y, np.random.default_rng(3))):
+        _, _, info = _periodic(Xi, Yi)
+        assert info["done"], info["reason"]
+        assert info["frame_residual_max_px"] < 8 * info["frame_residual_px"]
+        Xb, Yb = Xi.copy(), Yi.copy()
+        w = 20.0 * np.clip(np.arange(X.shape[1]) - (X.shape[1] - 17), 0, None) / 16.0  # last 16 samples, to 20 px
+        tx, ty = np.gradient(Xb[50]), np.gradient(Yb[50])
+        h = np.hypot(tx, ty)
+        Xb[50] -= ty / h * w
+        Yb[50] += tx / h * w
+        _, _, info = _periodic(Xb, Yb)
+        assert not info["done"] and "(frame 50 is" in info["reason"], info["reason"]

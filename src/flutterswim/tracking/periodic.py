@@ -35,7 +35,12 @@ coordinate as there are frames: the drift of all H harmonics from 2 (2 (2 H + 1)
 the paper's stroke at 25 fps gives 51 frames in 5.4 strokes), and no template below
 2 (2 H + 4) frames. The harmonics are not limited by the frame rate's Nyquist limit: a stroke
 period that is not a whole number of frames samples every phase over the cycles. A stroke still growing (onset), an unsteady turn or a changing stroke fails it and is
-left to the per-frame estimates. On the paper's settled stroke rendered at SNR 3 (50 fps, 14 um/px,
+left to the per-frame estimates. Because the F statistic is relative to the residual, a stroke
+changed abruptly (the field turned within the movie) can pass it while the template misses every
+frame by pixels: the template is also refused when it misses the frames by more than
+``max_residual_px`` (median over frames of a frame's RMS distance to it; 0.13-0.28 px on the
+settled stroke at SNR 5-3, 1.6 px after a 2 degree turn of the field), or one frame by more than
+``max_frame_ratio`` times that (3-5 times on the settled stroke). On the paper's settled stroke rendered at SNR 3 (50 fps, 14 um/px,
 5.3 cycles) the tip error falls from 0.46-0.57 px RMS to about 0.2 px (0.19 px over 16 movies)
 and the centreline error halves; without noise the result moves by < 0.01 px (benchmarks/RESULTS.md).
 """
@@ -159,12 +164,17 @@ def _refine_period(U: np.ndarray, frame: np.ndarray, period0: float, harmonics: 
 def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: float, *, harmonics: int = 6,
                    iterations: int = 3, end_weight: float = 0.15, end_samples: int = 3, min_cycles: float = 3.0,
                    max_f: float = 3.0, floor_px: float = 0.02, symmetric: bool = True,
+                   max_residual_px: float = 1.0, max_frame_ratio: float = 8.0,
                    ) -> tuple[np.ndarray, np.ndarray, dict]:
     """The periodic template of a settled stroke placed in every good frame (module docstring).
 
     X, Y (T, P) [px], equal arc-length samples, NaN on frames not ``ok``; period_frames: the
     stroke's period estimate [frames]; symmetric: use the mirror symmetry of the stroke when
-    the data do not reject it (module docstring, step 4). Returns (X, Y, info): info["done"]
+    the data do not reject it (module docstring, step 4); max_residual_px, max_frame_ratio: the
+    template is refused when it misses the frames by more than max_residual_px (median over
+    frames of each frame's RMS distance to it), or one frame by more than max_frame_ratio times
+    that median and max_residual_px (a stroke changed by a turn of the field: the drift test's
+    F statistic, relative to the residual, can miss it). Returns (X, Y, info): info["done"]
     (bool), info["reason"] (why not, or a summary), and when tested "period_frames", "harmonics", "drift_f", "drift_px" (the systematic part of the drift
     model's improvement, RMS over samples), "symmetric", "symmetry_f" and "symmetry_px"."""
     ok = np.asarray(ok, bool)
@@ -202,7 +212,11 @@ def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: 
 
     c, R = settle(pts, c, R, False)
     U = _to_body(pts, c, R)
-    rss0 = float(np.sum((U - _fit(U, B, False)) ** 2))
+    res = U - _fit(U, B, False)
+    rss0 = float(np.sum(res**2))
+    # each frame's RMS distance to the template at its phase [px]
+    e_frame = np.sqrt(np.sum(res**2, axis=1) / P)
+    e_med, k_max = float(np.median(e_frame)), int(np.argmax(e_frame))
     tau = (2.0 * frame / max(frame[-1], 1.0) - 1.0)[:, None]
     drift = np.r_[0, 1:H_d + 1, H + 1:H + H_d + 1]  # columns 1, cos and sin of harmonics 1..H_d
     B1 = np.hstack([B, B[:, drift] * tau])
@@ -211,10 +225,19 @@ def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: 
     f_stat = ((rss0 - rss1) / drift.size) / (rss1 / dof) if rss1 > 0 else math.inf
     drift_px = math.sqrt(max(rss0 - rss1, 0.0) / (n * P))
     info.update(period_frames=period, harmonics=H, drift_harmonics=H_d, drift_f=float(f_stat), drift_px=drift_px,
-                residual_px=math.sqrt(rss0 / (n * P)))
+                residual_px=math.sqrt(rss0 / (n * P)), frame_residual_px=e_med,
+                frame_residual_max_px=float(e_frame[k_max]))
     if not (f_stat <= max_f or drift_px <= floor_px):
         info["reason"] = (f"not done: the stroke is not periodic (a drifting template fits better: F = {f_stat:.3g} "
                           f"> {max_f:g}, {drift_px:.3f} px > {floor_px:g} px)")
+        return X, Y, info
+    if e_med > max_residual_px:
+        info["reason"] = (f"not done: the stroke is not periodic (the template misses the frames by {e_med:.2f} px, "
+                          f"median over frames, > {max_residual_px:g} px)")
+        return X, Y, info
+    if e_frame[k_max] > max(max_frame_ratio * e_med, max_residual_px):
+        info["reason"] = (f"not done: the stroke is not periodic (frame {int(idx[k_max])} is {e_frame[k_max]:.2f} px "
+                          f"from the template, median {e_med:.2f} px)")
         return X, Y, info
     # the mirror symmetry: the full template must not fit significantly better (nested F)
     rss_sym = float(np.sum((U - _fit(U, B, True)) ** 2))
