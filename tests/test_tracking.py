@@ -213,6 +213,21 @@ def test_hot_pixels_are_removed_and_a_line_is_never_touched(sim):
         assert getattr(dd, k) == pytest.approx(getattr(dc, k), rel=1e-3), k
 
 
+def test_pixels_that_are_not_finite_do_not_cost_a_frame(sim):
+    """Float frames with masked pixels (10 NaN pixels in every frame, a row of inf): every
+    frame is tracked, as on the clean frames to 0.03 px RMS (before, all were flagged 'lost
+    contrast': the NaN spread through the filters)."""
+    mv = render(sim, um_per_px=UM_PER_PX, snr=5.0, seed=0)
+    frames = mv.frames[:30].copy()
+    rng = np.random.default_rng(0)
+    frames[:, rng.integers(0, frames.shape[1], 10), rng.integers(0, frames.shape[2], 10)] = np.nan
+    frames[:, 0, :] = np.inf
+    clean, masked = (track(f, px_per_mm=mv.px_per_mm, fps=FPS) for f in (mv.frames[:30], frames))
+    assert not failures(masked)
+    d = np.hypot(masked.x - clean.x, masked.y - clean.y) * mv.px_per_mm
+    assert math.sqrt(np.mean(d**2)) < 0.03 and d.max() < 0.15  # the centreline's own noise: 0.07 px
+
+
 def test_bad_input_is_a_parameter_error(tmp_path):
     with pytest.raises(ParameterError, match="px_per_mm"):
         track(np.zeros((3, 32, 32)), px_per_mm=-1, fps=50)

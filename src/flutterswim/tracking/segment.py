@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage as ndi
 
-__all__ = ["Segmentation", "matched_filter", "robust_noise", "segment", "clean_hot_pixels"]
+__all__ = ["Segmentation", "matched_filter", "robust_noise", "segment", "clean_hot_pixels", "clean_frame"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -84,6 +84,18 @@ def clean_hot_pixels(img: np.ndarray, k: float = 8.0) -> np.ndarray:
     out = a.copy()
     out[r[hot], c[hot]] = nb[hot]
     return out
+
+
+def clean_frame(img: np.ndarray) -> np.ndarray:
+    """The frame made fit for segmentation: pixels that are not finite (NaN or inf, masked
+    pixels of a float image) set to the median of the finite ones, then
+    :func:`clean_hot_pixels`. A frame with no finite pixel is returned as zeros (no contrast)."""
+    a = np.asarray(img)
+    if a.dtype.kind == "f":
+        good = np.isfinite(a)
+        if not good.all():
+            a = np.where(good, a, np.median(a[good]) if good.any() else 0.0).astype(np.float32)
+    return clean_hot_pixels(a)
 
 
 def robust_noise(f: np.ndarray) -> tuple[float, float]:

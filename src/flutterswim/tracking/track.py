@@ -1,7 +1,8 @@
 """Tracking a movie: per-frame centreline, head and tail kept by temporal continuity, and
 failure flags with their reasons; the result is the analysis' :class:`Track`.
 
-Per frame: hot pixels removed (:func:`~flutterswim.tracking.segment.clean_hot_pixels`) ->
+Per frame: pixels that are not finite and hot pixels removed
+(:func:`~flutterswim.tracking.segment.clean_frame`) ->
 :func:`segment` (matched filter, hysteresis) -> :func:`fit_centreline` (skeleton,
 spline, ridge refinement, half-maximum tips) -> :func:`refine_tips` (line-end model fitted to
 the raw pixels). A frame is flagged, never kept, when:
@@ -45,7 +46,7 @@ from .._validate import ParameterError, positive, positive_int
 from ..analysis.track import Track
 from .centreline import fit_centreline
 from .io import open_frames
-from .segment import clean_hot_pixels, segment
+from .segment import clean_frame, segment
 from .tips import refine_tips
 
 __all__ = ["track", "track_frame", "track_image", "coarse_box", "orient", "orient_ends", "failures", "START_ENDS"]
@@ -80,7 +81,7 @@ def track_frame(img: np.ndarray, *, n_points: int = 49, sigma: float = 1.2, k_lo
     nan = np.full(n_points, np.nan)
     out: dict[str, Any] = {"x": nan, "y": nan, "length": math.nan, "contrast": math.nan, "ok": False,
                            "reason": ""}
-    img = clean_hot_pixels(img)
+    img = clean_frame(img)
     seg = segment(img, sigma=sigma, k_low=k_low, k_high=k_high)
     if not seg.ok:
         out["reason"] = f"lost contrast: {seg.reason}"
@@ -186,7 +187,7 @@ def track_image(img: np.ndarray, ref: tuple[np.ndarray, np.ndarray] | None, wind
     or without one the box of :func:`coarse_box`) plus ``window_px``; on the whole frame if
     anything fails in the window, so no verdict depends on it."""
     if window_px > 0:
-        box = (ref[0], ref[1]) if ref is not None else coarse_box(img)
+        box = (ref[0], ref[1]) if ref is not None else coarse_box(clean_frame(img))
         if box is not None:
             Hf, Wf = img.shape
             c0 = int(max(np.floor(np.min(box[0])) - window_px, 0))
@@ -292,7 +293,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
             if sigma is None and not blur_known and r["ok"]:
                 # the blur of this movie, from its first good frame; that frame again if it is
                 # more than 15 % off the default
-                est = estimate_blur(clean_hot_pixels(img), r["x"], r["y"], sig)
+                est = estimate_blur(clean_frame(img), r["x"], r["y"], sig)
                 blur_known = True
                 if math.isfinite(est) and abs(est - sig) > 0.15 * sig:
                     sig = float(np.clip(est, 0.6, 6.0))
