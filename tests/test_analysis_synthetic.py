@@ -222,17 +222,23 @@ def test_cycles_with_missing_frames_are_not_described():
     """A track from a movie holds only the tracked frames. A cycle with frames missing over more
     than a quarter period is left out: the window is the last run of cycles without such a gap
     (here the 2 whole periods after a gap at 3.0-3.15 s of a 4 s track), and its descriptors
-    are exact. With frames missing in every cycle (one frame kept every 0.3 period, the sampled
-    tip aliased), describe refuses with the reason instead of returning wrong numbers."""
+    are exact. With 0.3 period of frames missing in every cycle, describe refuses with the
+    reason instead of returning wrong numbers; evenly spaced frames are never a gap, however
+    coarse (one every 0.2 period: described as the full track)."""
     full = wave_track(period=T, speed=U, amplitude=A, duration=4.0, n_frames=1001)
     keep = (full.t <= 3.0) | (full.t >= 3.15)
     tr = Track(t=full.t[keep], x=full.x[keep], y=full.y[keep], s=full.s, length=full.length)
     d = describe(tr, n_last=5)
     assert 1 <= d.n_cycles_used <= 2
     _check(d)
-    sparse = np.arange(0, 1001, 30)  # 30 frames of 0.004 s: 0.3 period between frames
-    tr = Track(t=full.t[sparse], x=full.x[sparse], y=full.y[sparse], s=full.s, length=full.length)
-    with pytest.raises(ParameterError, match="max_gap|period between frames"):
+    holes = ((full.t / T) % 1.0 < 0.4) | ((full.t / T) % 1.0 > 0.7)
+    tr = Track(t=full.t[holes], x=full.x[holes], y=full.y[holes], s=full.s, length=full.length)
+    with pytest.raises(ParameterError, match="misses frames over more than 0.25 period"):
         describe(tr)
+    even = np.arange(0, 1001, 20)  # 0.08 s = 0.2 period between frames
+    tr = Track(t=full.t[even], x=full.x[even], y=full.y[even], s=full.s, length=full.length)
+    d = describe(tr, n_last=5)
+    assert d.n_cycles_used == 5
+    assert d.period_s == pytest.approx(T, rel=3e-3)
     with pytest.raises(ParameterError, match="max_gap"):
         describe(full, max_gap=0.0)

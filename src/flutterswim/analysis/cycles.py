@@ -117,18 +117,20 @@ class Cycles:
         return np.arange(max(0, self.n_cycles - n), self.n_cycles)
 
     def frame_gaps(self, t: np.ndarray) -> np.ndarray:
-        """(K,) the longest interval between consecutive frame times ``t`` that overlaps each
-        cycle, as a fraction of that cycle's period (frames missing from a track, such as
-        frames that failed tracking, show as long intervals)."""
+        """(K,) the longest interval with frames missing (longer than 1.5 times the median
+        interval between consecutive frame times ``t``) that overlaps each cycle, as a fraction
+        of that cycle's period; 0 where none is missing (a track from a movie holds only the
+        frames that were tracked). Evenly sampled frames, however coarse, have no gap."""
         t = np.asarray(t, float)
         out = np.zeros(self.n_cycles)
         if t.size < 2:
             return out
         dt = np.diff(t)
+        dt = np.where(dt > 1.5 * float(np.median(dt)), dt, 0.0)
         for k in range(self.n_cycles):
             a, b = self.starts[k], self.starts[k + 1]
             over = (t[1:] > a) & (t[:-1] < b)
-            out[k] = float(dt[over].max()) / (b - a) if np.any(over) else math.inf
+            out[k] = float(dt[over].max()) / (b - a) if np.any(over) else 0.0
         return out
 
     def to_dict(self) -> dict[str, Any]:

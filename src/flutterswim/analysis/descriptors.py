@@ -271,8 +271,9 @@ def describe(
     **cycle_kwargs: Any,
 ) -> Descriptors:
     """Descriptors averaged over the last ``n_last`` detected cycles (consecutive cycles without
-    missing frames: no interval between frames longer than ``max_gap`` periods; the last such
-    run, fewer cycles if it is shorter, ``n_cycles_used``).
+    missing frames over more than ``max_gap`` periods: no interval between frames longer than
+    1.5 median intervals and ``max_gap`` periods; the last such run, fewer cycles if it is
+    shorter, ``n_cycles_used``).
 
     Swimming direction: net centroid displacement over those cycles; advancement: its
     projection on the field direction (per cycle, field at mid-cycle; the total uses the mean
@@ -294,7 +295,7 @@ def describe(
             f"the track ({tr.n_frames} frames over {tr.t[-1] - tr.t[0]:.4g} s) holds no complete "
             "stroke cycle; at least one cycle (two section crossings) is required"
         )
-    # the last n_last consecutive cycles without missing frames: no interval between frames
+    # the last n_last consecutive cycles without missing frames: no interval with frames missing
     # longer than max_gap periods (a track from a movie holds only the frames that were tracked)
     if not (isinstance(max_gap, (int, float)) and max_gap > 0):
         raise ParameterError(f"max_gap={max_gap!r} must be a number > 0 (periods)")
@@ -302,9 +303,9 @@ def describe(
     good = gaps <= max_gap
     if not np.any(good):
         raise ParameterError(
-            f"every one of the track's {K} stroke cycles holds an interval of more than {max_gap:g} period "
-            f"between frames (the shortest such interval {np.min(gaps):.2f} periods): frames are "
-            "missing, for example frames that failed tracking; descriptors need cycles without such gaps")
+            f"every one of the track's {K} stroke cycles misses frames over more than {max_gap:g} period "
+            f"(the shortest such gap {np.min(gaps):.2f} periods), for example frames that failed tracking; "
+            "descriptors need cycles without such gaps")
     k1 = int(np.nonzero(good)[0][-1])
     k0 = k1
     while k0 > 0 and good[k0 - 1] and k1 - k0 + 1 < n_last:
