@@ -311,7 +311,6 @@ def describe(
     while k0 > 0 and good[k0 - 1] and k1 - k0 + 1 < n_last:
         k0 -= 1
     idx = np.arange(k0, k1 + 1)
-    k0, k1 = int(idx[0]), int(idx[-1])
     sub = Cycles(**{**cyc.__dict__, "starts": cyc.starts[k0 : k1 + 2]})
     # swimming direction over the window
     xc, yc = tr.centroid()

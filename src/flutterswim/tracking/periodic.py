@@ -34,15 +34,18 @@ coordinate as there are frames: the drift of all H harmonics from 2 (2 (2 H + 1)
 6 harmonics), of the constant and harmonics 1..H_d only on fewer (as at a lower frame rate:
 the paper's stroke at 25 fps gives 51 frames in 5.4 strokes), and no template below
 2 (2 H + 4) frames. The harmonics are not limited by the frame rate's Nyquist limit: a stroke
-period that is not a whole number of frames samples every phase over the cycles. A stroke still growing (onset), an unsteady turn or a changing stroke fails it and is
-left to the per-frame estimates. Because the F statistic is relative to the residual, a stroke
-changed abruptly (the field turned within the movie) can pass it while the template misses every
-frame by pixels: the template is also refused when it misses the frames by more than
+period that is not a whole number of frames samples every phase over the cycles. A stroke still
+growing (onset), an unsteady turn or a changing stroke fails the drift test and is left to the
+per-frame estimates. Because the F statistic is relative to the residual, a stroke changed
+abruptly (the field turned within the movie) can pass it while the template misses every frame
+by pixels: the template is also refused when it misses the frames by more than
 ``max_residual_px`` (median over frames of a frame's RMS distance to it; 0.13-0.28 px on the
 settled stroke at SNR 5-3, 1.6 px after a 2 degree turn of the field), or one frame by more than
-``max_frame_ratio`` times that (3-5 times on the settled stroke). On the paper's settled stroke rendered at SNR 3 (50 fps, 14 um/px,
-5.3 cycles) the tip error falls from 0.46-0.57 px RMS to about 0.2 px (0.19 px over 16 movies)
-and the centreline error halves; without noise the result moves by < 0.01 px (benchmarks/RESULTS.md).
+``max_frame_ratio`` times that (3-5 times on the settled stroke).
+
+On the paper's settled stroke rendered at SNR 3 (50 fps, 14 um/px, 5.3 cycles) the tip error
+falls from 0.46-0.57 px RMS to about 0.2 px (0.19 px over 16 movies) and the centreline error
+halves; without noise the result moves by < 0.01 px (benchmarks/RESULTS.md).
 """
 
 from __future__ import annotations
@@ -175,8 +178,10 @@ def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: 
     frames of each frame's RMS distance to it), or one frame by more than max_frame_ratio times
     that median and max_residual_px (a stroke changed by a turn of the field: the drift test's
     F statistic, relative to the residual, can miss it). Returns (X, Y, info): info["done"]
-    (bool), info["reason"] (why not, or a summary), and when tested "period_frames", "harmonics", "drift_f", "drift_px" (the systematic part of the drift
-    model's improvement, RMS over samples), "symmetric", "symmetry_f" and "symmetry_px"."""
+    (bool), info["reason"] (why not, or a summary), and when tested "period_frames",
+    "harmonics", "drift_harmonics", "drift_f", "drift_px" (the systematic part of the drift
+    model's improvement, RMS over samples), "residual_px", "frame_residual_px" (median over
+    frames), "frame_residual_max_px", "symmetric", "symmetry_f" and "symmetry_px"."""
     ok = np.asarray(ok, bool)
     idx = np.nonzero(ok)[0]
     info: dict = {"done": False, "reason": ""}

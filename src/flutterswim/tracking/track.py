@@ -309,7 +309,6 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
                     flip, d_best, d_other = orient(x, y, *ref)
                     if flip:
                         x, y = x[::-1], y[::-1]
-                    match[i] = d_best
                     Lr = r["length"]
                     if d_other < 2.0 * d_best:
                         # the whole curves do not tell (a body that changed much since a last
@@ -320,6 +319,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
                                 x, y = x[::-1], y[::-1]
                             d_best = float(np.mean(np.hypot(x - ref[0], y - ref[1])))
                             d_other = math.inf
+                    match[i] = d_best
                     if d_best > jump_tol * Lr:
                         r["ok"], r["reason"] = False, (f"jump: the body moved {d_best:.1f} px since the last good "
                                                        f"frame (> {jump_tol:g} body lengths)")
