@@ -167,3 +167,25 @@ def test_batch_needs_voltage_and_sample(tmp_path, movie):
     with pytest.raises(fs.ParameterError, match="named groups"):
         track_batch(folder, tmp_path / "x.csv", px_per_mm=70, fps=50, pattern=r"(\d+)V")
     assert math.isfinite(movie.px_per_mm)
+
+
+def test_cli_describe_names_missing_frames_and_takes_max_gap(movie, tmp_path, capsys):
+    """A movie with 6 blank frames (0.32 period) in every stroke: the track is saved, and
+    `describe` exits 2 with one line naming the gap and the option; with --max-gap 0.4 it
+    describes the track (period within 1 % of the simulated one), and a bad --max-gap is named."""
+    frames = movie.frames.copy()
+    blank = (np.arange(frames.shape[0]) % 19) >= 13
+    frames[blank] = np.median(frames[0])
+    tifffile.imwrite(tmp_path / "gappy.tif", frames, photometric="minisblack")
+    out = tmp_path / "gappy.nc"
+    assert main(["track", str(tmp_path / "gappy.tif"), "--px-per-mm", str(movie.px_per_mm), "--fps", "50",
+                 "--out", str(out), "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["describe", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "misses frames over more than 0.25 period" in err[0] and "--max-gap" in err[0]
+    assert main(["describe", str(out), "--max-gap", "0.4", "--json"]) == 0
+    period = describe(truth(movie)).period_s
+    assert json.loads(capsys.readouterr().out)["period_s"] == pytest.approx(period, rel=1e-2)
+    assert main(["describe", str(out), "--max-gap", "-1"]) == 2
+    assert "max_gap=-1" in capsys.readouterr().err

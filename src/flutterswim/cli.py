@@ -95,7 +95,7 @@ def _load_run_or_track(path: str):
 def _describe(args: argparse.Namespace) -> int:
     from .analysis.descriptors import describe
 
-    desc = describe(_load_run_or_track(args.run), n_last=args.last)
+    desc = describe(_load_run_or_track(args.run), n_last=args.last, max_gap=args.max_gap)
     d = desc.to_dict()
     if args.json:
         print(json.dumps(d, indent=2))
@@ -180,6 +180,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("describe", help="stroke descriptors of a saved run")
     p.add_argument("run")
     p.add_argument("--last", type=int, default=defaults.N_CYCLES, help="average over the last N cycles")
+    p.add_argument("--max-gap", type=float, default=0.25,
+                   help="leave out cycles missing frames over more than this many periods (tracked movies; default 0.25)")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=_describe)
 

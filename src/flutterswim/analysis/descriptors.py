@@ -305,7 +305,7 @@ def describe(
         raise ParameterError(
             f"every one of the track's {K} stroke cycles misses frames over more than {max_gap:g} period "
             f"(the shortest such gap {np.min(gaps):.2f} periods), for example frames that failed tracking; "
-            "descriptors need cycles without such gaps")
+            "descriptors need cycles without such gaps (max_gap, describe --max-gap)")
     k1 = int(np.nonzero(good)[0][-1])
     k0 = k1
     while k0 > 0 and good[k0 - 1] and k1 - k0 + 1 < n_last:
