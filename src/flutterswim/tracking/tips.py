@@ -178,7 +178,7 @@ def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float =
     14 px on rendered strokes, 0.46-0.54 px RMS at SNR 3 against 0.57-0.63, and less bias
     without noise). The last ``trim`` px at each end (twice that for an end hooked by more
     than ``hook_deg`` over its last ``hook`` px) are first rebuilt by the polynomial of
-    ``degree`` in arc length fitted over the next ``span`` px: a skeleton spline is least
+    ``degree`` in arc length fitted over the next ``span`` px (at most the body's length / 5): a skeleton spline is least
     certain, and often hooked, at a noisy tip. At least cubic, because the curvature of a
     free end falls linearly to zero (no bending moment there): a quadratic overshoots the
     lateral excursions by ~0.5 %; quartic over 40 px had the least bias on rendered strokes. Returns (x, y) resampled at P equal steps
@@ -188,6 +188,10 @@ def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float =
     x = np.asarray(x, float)
     y = np.asarray(y, float)
     L0 = float(np.sum(np.hypot(np.diff(x), np.diff(y))))
+    # on a body shorter in pixels (coarser pixels) the span is at most L0 / 5, which leaves the
+    # paper's 264 px body at 14 um/px its 40 px: the polynomial must follow the end, not a third
+    # of the body (benchmarks/RESULTS.md: 20-40 um/px)
+    span = min(float(span), L0 / 5.0)
     if L0 < 2 * (2 * trim + span) + 4:
         return x, y, math.nan, math.nan
     s0, spl0 = _curve(x, y)

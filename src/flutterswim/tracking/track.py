@@ -341,9 +341,9 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         dev = np.abs(length - med) / med
         bad = ok & (dev > length_tol)
         n_ok, n_agree = int(np.count_nonzero(ok)), int(np.count_nonzero(ok & ~bad))
-        if n_agree < 0.5 * n_ok:
-            # no consensus: most frames are partial or merged bodies, and the median is not the
-            # body's length (a movie near the noise floor); none of them is kept
+        if 2 * n_agree <= n_ok:
+            # no consensus (at most half of the frames agree): partial or merged bodies, and the
+            # median is not the body's length (a movie near the noise floor); none of them is kept
             for i in np.nonzero(ok)[0]:
                 reason[i] = (f"length: no consistent body length (only {n_agree} of {n_ok} frames within "
                              f"{100 * length_tol:g}% of their median {med:.1f} px)")
