@@ -14,7 +14,8 @@ the raw pixels). A frame is flagged, never kept, when:
 - crossing: the body encloses a hole (it loops over itself) or its skeleton branches;
 - out of view: the body touches the edge of the frame or ROI;
 - length: the body length differs from the median of the good frames by more than
-  ``length_tol`` (a partial or merged body);
+  ``length_tol`` (a partial or merged body), or at most half of the good frames agree on a
+  length within it (no consensus: every frame is flagged);
 - tip not found: the line-end fit failed at an end;
 - jump: the centreline moved more than ``jump_tol`` body lengths since the last good frame,
   or head and tail cannot be told apart (both assignments about equally close, by the whole
