@@ -65,8 +65,8 @@ def clean_hot_pixels(img: np.ndarray, k: float = 8.0) -> np.ndarray:
     blurred by the optics has neighbours as bright as itself along it, so it is never touched.
     Returns ``img`` itself when nothing is hot."""
     a = np.asarray(img, dtype=np.float32)
-    d = np.diff(a[:: max(1, a.size // 16384)], axis=1).ravel()  # about 16k differences
-    sd = float(1.4826 * np.median(np.abs(d - np.median(d)))) / np.sqrt(2.0)
+    d = np.diff(a[:: max(1, a.size // 16384)], axis=1)  # about 16k differences
+    sd = robust_noise(d)[1] / np.sqrt(2.0)
     if not sd > 0:
         return img
     med = float(np.median(a[::4, ::4]))

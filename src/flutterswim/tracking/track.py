@@ -50,7 +50,7 @@ from .io import open_frames
 from .segment import clean_frame, segment
 from .tips import refine_tips
 
-__all__ = ["track", "track_frame", "track_image", "coarse_box", "orient", "orient_ends", "failures", "START_ENDS"]
+__all__ = ["track", "track_frame", "track_image", "coarse_box", "orient", "failures", "START_ENDS"]
 
 START_ENDS = ("left", "right", "top", "bottom")
 
@@ -217,14 +217,6 @@ def orient(x: np.ndarray, y: np.ndarray, ref_x: np.ndarray, ref_y: np.ndarray) -
     return (d_flip < d_keep), min(d_keep, d_flip), max(d_keep, d_flip)
 
 
-def orient_ends(x: np.ndarray, y: np.ndarray, ref_x: np.ndarray, ref_y: np.ndarray) -> tuple[bool, float, float]:
-    """:func:`orient` by the two ends only: (flip, summed distance of the ends to the
-    reference's in the chosen order, that in the other order)."""
-    d = lambda i, j: math.hypot(x[i] - ref_x[j], y[i] - ref_y[j])  # noqa: E731
-    keep, flip = d(0, 0) + d(-1, -1), d(0, -1) + d(-1, 0)
-    return (flip < keep), min(keep, flip), max(keep, flip)
-
-
 def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any = None,
           n_points: int = 49, start_end: str = "left", field_angle: float = 0.0, sigma: float | None = None,
           min_contrast: float = 4.0, length_tol: float = 0.03, jump_tol: float = 0.25,
@@ -314,7 +306,8 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
                     if d_other < 2.0 * d_best:
                         # the whole curves do not tell (a body that changed much since a last
                         # good frame some frames back): the ends alone may
-                        flip_e, e_best, e_other = orient_ends(x, y, *ref)
+                        e = [0, -1]
+                        flip_e, e_best, e_other = orient(x[e], y[e], ref[0][e], ref[1][e])
                         if e_other >= 2.0 * e_best:
                             if flip_e:
                                 x, y = x[::-1], y[::-1]
