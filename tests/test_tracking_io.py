@@ -86,6 +86,16 @@ def test_cli_track_json_and_errors(movie, tmp_path, capsys):
     rc = main(["track", str(tmp_path / "missing.tif"), "--px-per-mm", "70", "--fps", "50", "--out",
                str(tmp_path / "c.nc"), "--quiet"])
     assert rc == 2
+    # bright field: the line darker than the background; one line naming --dark-line, then tracked
+    tifffile.imwrite(tmp_path / "dark.tif", (60000 - movie.frames.astype(np.int64)).astype(np.uint16),
+                     photometric="minisblack")
+    args = ["track", str(tmp_path / "dark.tif"), "--px-per-mm", str(movie.px_per_mm), "--fps", "50", "--quiet"]
+    capsys.readouterr()
+    assert main(args + ["--out", str(tmp_path / "d.nc")]) == 2
+    cap = capsys.readouterr()
+    assert "--dark-line" in cap.err and len(cap.err.strip().splitlines()) == 1
+    assert main(args + ["--out", str(tmp_path / "d.nc"), "--dark-line"]) == 0
+    assert "tracked 45 of 45 frames" in capsys.readouterr().out
 
 
 def test_raw_kymographs_follow_the_simulated_crossings(movie, tracked, tmp_path):

@@ -6,7 +6,7 @@ columns), and the per-voltage mean +- SEM figure (the paper's Fig. 3e, drawn by
 A trial is a TIFF stack or a movie in the folder, or a subfolder of frames. Its voltage and
 sample come from a sidecar JSON (``<trial>.json`` next to it, or ``trial.json`` inside a
 frame folder; keys ``voltage_V``, ``sample`` and optionally ``px_per_mm``, ``fps``, ``roi``,
-``field_angle_deg``, ``start_end``) or else from the file name by a regular expression with
+``field_angle_deg``, ``start_end``, ``dark_line``) or else from the file name by a regular expression with
 the named groups ``voltage`` and ``sample`` (default :data:`DEFAULT_PATTERN`, e.g.
 ``85V_sample3_trial2.tif``; a ``p`` may stand for the decimal point, ``72p5V``).
 
@@ -86,7 +86,8 @@ def find_trials(folder: str | os.PathLike, pattern: str = DEFAULT_PATTERN) -> li
             smp = meta.get("sample")
             if v is None or smp is None:
                 raise ParameterError(f"the sidecar of trial {str(p)!r} needs the keys voltage_V and sample")
-            opts = {k: meta[k] for k in ("px_per_mm", "fps", "roi", "field_angle_deg", "start_end") if k in meta}
+            opts = {k: meta[k] for k in ("px_per_mm", "fps", "roi", "field_angle_deg", "start_end",
+                                             "dark_line") if k in meta}
         else:
             m = rx.search(p.stem if p.is_file() else p.name)
             if m is None:

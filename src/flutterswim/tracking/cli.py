@@ -25,6 +25,8 @@ def register(subparsers) -> None:
                    help="side of the s = 0 end in the first tracked frame (default left)")
     p.add_argument("--field-angle-deg", type=float, default=0.0,
                    help="field direction in the image [deg] from +x towards +y (rows down); default 0")
+    p.add_argument("--dark-line", action="store_true",
+                   help="the filament is darker than its background (bright field); default: brighter (fluorescence)")
     p.add_argument("--kymograph", default=None, help="also draw the raw-frame kymographs (Fig. 3c) to this PNG")
     p.add_argument("--json", action="store_true", help="print the descriptors (as flutterswim describe --json)")
     p.add_argument("--last", type=int, default=5, help="descriptors over the last N cycles (default 5)")
@@ -42,6 +44,8 @@ def register(subparsers) -> None:
     q.add_argument("--pattern", default=None, help="regular expression with groups (?P<voltage>) and (?P<sample>)")
     q.add_argument("--plot", default=None, help="per-voltage mean +- SEM figure (Fig. 3e) to this PNG")
     q.add_argument("--last", type=int, default=5, help="descriptors over the last N cycles (default 5)")
+    q.add_argument("--dark-line", action="store_true",
+                   help="the filaments are darker than their background (unless a sidecar says dark_line)")
     q.add_argument("--quiet", action="store_true", help="no progress bar")
     q.set_defaults(func=_cmd_batch)
 
@@ -55,7 +59,8 @@ def _cmd_track(args) -> int:
     if args.kymograph:
         check_output_file(args.kymograph, (".png", ".pdf", ".svg"), what="--kymograph")
     tr = track(args.input, px_per_mm=args.px_per_mm, fps=args.fps, roi=args.roi, n_points=args.points,
-               start_end=args.start_end, field_angle=math.radians(args.field_angle_deg), progress=not args.quiet)
+               start_end=args.start_end, field_angle=math.radians(args.field_angle_deg), dark_line=args.dark_line,
+               progress=not args.quiet)
     save_track(tr, out)
     m = tr.meta
     fails = failures(tr)
@@ -83,7 +88,7 @@ def _cmd_batch(args) -> int:
 
     out, rows, failed = track_batch(args.folder, args.out, px_per_mm=args.px_per_mm, fps=args.fps,
                                     pattern=args.pattern or DEFAULT_PATTERN, n_last=args.last, plot=args.plot,
-                                    progress=not args.quiet)
+                                    progress=not args.quiet, dark_line=args.dark_line)
     for trial, why in failed:
         print(f"flutterswim track-batch: {trial}: {why}", file=sys.stderr)
     failed_csv = f"; the failures and their reasons in {failures_path(out)}" if failed else ""

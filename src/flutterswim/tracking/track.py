@@ -222,7 +222,8 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
           min_contrast: float = 4.0, length_tol: float = 0.03, jump_tol: float = 0.25,
           gap_fraction: float = 0.2, refine: bool = True, window_px: float = 40.0,
           fixed_length: bool = True, tip_check: bool = True, tip_k: float = 6.0, tip_floor_px: float = 2.0,
-          smooth_frames: int = 7, periodic: bool = True, t0: float = 0.0, progress: bool = False) -> Track:
+          smooth_frames: int = 7, periodic: bool = True, dark_line: bool = False, t0: float = 0.0,
+          progress: bool = False) -> Track:
     """Track the filament in a movie and return its :class:`Track` (good frames only, mm, s).
 
     source: TIFF stack, folder of PNG/TIFF frames, MP4/AVI movie (path), an array (T, H, W)
@@ -243,7 +244,8 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     becomes the stroke's shape template at its phase (fitted over all cycles), placed by the
     frame's own rigid motion (:func:`flutterswim.tracking.periodic.periodic_shape`; the raw
     per-frame lengths stay in the record; ``meta["temporal"]["periodic"]`` says whether and
-    why (not)). Per-frame results (all frames, failed ones NaN, with their reasons) are in
+    why (not)); dark_line: the filament is darker than its background (bright field, a
+    shadow): every frame is tracked negated. Per-frame results (all frames, failed ones NaN, with their reasons) are in
     ``track.meta["frames"]``; see the module docstring for the checks.
     """
     px_per_mm = positive("px_per_mm", px_per_mm)
@@ -253,6 +255,9 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     if smooth_frames != 0 and not (isinstance(smooth_frames, (int, np.integer)) and smooth_frames >= 7):
         raise ParameterError(f"smooth_frames={smooth_frames!r} is not allowed; give 0 (off) or a whole number "
                              "of frames >= 7 (the window of a quartic in time)")
+    if not isinstance(dark_line, (bool, np.bool_)):
+        raise ParameterError(f"dark_line={dark_line!r} is not allowed; give True (a line darker than its background) "
+                             "or False (brighter)")
     if start_end not in START_ENDS:
         raise ParameterError(f"start_end={start_end!r} is not allowed; choose one of {', '.join(START_ENDS)}")
     frames = open_frames(source, roi)
@@ -281,6 +286,8 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     blur_known = sigma is not None
     try:
         for i, img in enumerate(frames):
+            if dark_line:
+                img = np.negative(img)
             r = track_image(img, ref, window_px, n_points=n_points, sigma=sig, min_contrast=min_contrast,
                             gap_fraction=gap_fraction, refine=refine)
             if sigma is None and not blur_known and r["ok"]:
@@ -404,8 +411,12 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
             key = rsn.split(":")[0]
             counts[key] = counts.get(key, 0) + 1
         why = ", ".join(f"{k} ({v})" for k, v in counts.items() if k)
+        hint = ""
+        if counts.get("lost contrast", 0) > T // 2:
+            hint = ("; if the filament is brighter than its background, leave out dark_line (--dark-line)"
+                    if dark_line else "; if the filament is darker than its background, give dark_line=True (--dark-line)")
         raise ParameterError(f"input={frames.source!r}: {n_ok} of {T} frames were tracked; at least 2 are required "
-                             f"(failures: {why or 'none'})")
+                             f"(failures: {why or 'none'}){hint}")
     Lgood = length[ok]
     L_px = float(np.median(Lgood))
     t_all = t0 + np.arange(T) / fps
