@@ -242,3 +242,17 @@ def test_cycles_with_missing_frames_are_not_described():
     assert d.period_s == pytest.approx(T, rel=3e-3)
     with pytest.raises(ParameterError, match="max_gap"):
         describe(full, max_gap=0.0)
+
+
+@pytest.mark.parametrize("n_periods", [1.3, 1.6, 1.9])
+def test_a_record_shorter_than_two_periods_is_refused(n_periods):
+    """Under two periods the spectral peak of the period estimate lies below its search band
+    (at least two periods), whose maximum is then the flank of that peak or a harmonic: before,
+    1.6 periods of the rendered stroke were described with the period 11 % short. It is
+    refused, saying why; from two periods on the description is exact."""
+    n = int(round(n_periods * T / 0.004)) + 1
+    tr = wave_track(period=T, speed=U, amplitude=A, duration=(n - 1) * 0.004, n_frames=n)
+    with pytest.raises(ParameterError, match="fewer than two periods"):
+        describe(tr)
+    n = int(round(2.1 * T / 0.004)) + 1
+    _check(describe(wave_track(period=T, speed=U, amplitude=A, duration=(n - 1) * 0.004, n_frames=n)))

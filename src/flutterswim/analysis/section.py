@@ -49,14 +49,23 @@ def estimate_period(t: np.ndarray, u: np.ndarray) -> float:
     nfft = 1 << int(np.ceil(np.log2(max(8 * m, 64))))
     spec = np.abs(np.fft.rfft(du * np.hanning(m), nfft))
     freqs = np.fft.rfftfreq(nfft, dt)
-    fmin = 2.0 / (t[-1] - t[0])
+    dur = float(t[-1] - t[0])
+    fmin = 2.0 / dur
     ok = freqs >= fmin
     if not np.any(ok) or not np.any(spec[ok] > 0):
         raise ParameterError(
-            f"signal of duration {t[-1] - t[0]:.4g} s has no detectable oscillation; "
+            f"signal of duration {dur:.4g} s has no detectable oscillation; "
             "at least two periods are required"
         )
     i = int(np.argmax(np.where(ok, spec, -np.inf)))
+    # the strongest oscillation with at least one period in the record: if it has fewer than
+    # two (a short record), the peak above fmin is its lobe's flank or a harmonic: refuse
+    j = int(np.argmax(np.where(freqs >= 1.0 / dur, spec, -np.inf)))
+    if freqs[j] < fmin:
+        raise ParameterError(
+            f"signal of duration {dur:.4g} s holds fewer than two periods of its oscillation "
+            f"(about {dur * freqs[j]:.2g}); at least two periods are required"
+        )
     if 0 < i < spec.size - 1:
         a, b, c = np.log(spec[i - 1 : i + 2] + 1e-300)
         den = a - 2 * b + c
