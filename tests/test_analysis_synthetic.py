@@ -256,3 +256,19 @@ def test_a_record_shorter_than_two_periods_is_refused(n_periods):
         describe(tr)
     n = int(round(2.1 * T / 0.004)) + 1
     _check(describe(wave_track(period=T, speed=U, amplitude=A, duration=(n - 1) * 0.004, n_frames=n)))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_body_at_rest_is_not_described(seed):
+    """A bent body at rest with measurement noise has no stroke: describe refuses it (before, the
+    noise's strongest 'period' of a few frames was described as a stroke). The same noise on the
+    travelling wave leaves its description as without noise."""
+    wave = wave_track(period=T, speed=U, amplitude=A, duration=2.0, n_frames=101)
+    rng = np.random.default_rng(seed)
+    x = np.repeat(wave.x[7:8], 101, 0) + rng.normal(0.0, 5e-3, wave.x.shape)
+    y = np.repeat(wave.y[7:8], 101, 0) + rng.normal(0.0, 5e-3, wave.y.shape)
+    with pytest.raises(ParameterError, match="no detectable oscillation"):
+        describe(Track(t=wave.t, x=x, y=y, s=wave.s, length=wave.length))
+    noisy = Track(t=wave.t, x=wave.x + rng.normal(0.0, 5e-3, wave.x.shape),
+                  y=wave.y + rng.normal(0.0, 5e-3, wave.y.shape), s=wave.s, length=wave.length)
+    assert describe(noisy).period_s == pytest.approx(T, rel=2e-2)

@@ -309,3 +309,27 @@ def test_a_turn_of_the_field_within_the_movie_is_refused_the_template(settled):
         Yb[50] += tx / h * w
         _, _, info = _periodic(Xb, Yb)
         assert not info["done"] and "(frame 50 is" in info["reason"], info["reason"]
+
+
+@pytest.mark.parametrize("k", [5, 12])
+def test_a_body_at_rest_gets_no_template_and_is_not_described(settled, k):
+    """A filament that does not swim (below threshold, or trapped bent): one frame of the stroke
+    held for 101 frames, with the tracker's noise. The noise alone picks a 'period' of a few
+    frames; before, a template at it was accepted (nothing drifts) and `describe` then found
+    25 'strokes' of 0.07 s and a lateral excursion of 2 mm. Now the template is refused (it
+    fits no better than the one static shape) and describe refuses the track (no
+    oscillation). The same noise on the stroke itself changes neither."""
+    X0, Y0 = settled
+    rng = np.random.default_rng(k)
+    X, Y = _noisy(np.repeat(X0[k:k + 1], 101, 0), np.repeat(Y0[k:k + 1], 101, 0), rng)
+    Xp, Yp, info = _periodic(X, Y)
+    assert not info["done"] and "no stroke" in info["reason"], info["reason"]
+    assert info["stroke_f"] < 3.0
+    t = np.arange(101) / FPS
+    with pytest.raises(fs.ParameterError, match="no detectable oscillation"):
+        _describe(Xp, Yp, t)
+    Xs, Ys = _noisy(X0, Y0, rng)
+    Xp, Yp, info = _periodic(Xs, Ys)
+    assert info["done"] and info["stroke_f"] > 1e3, info["reason"]
+    d0, d1 = _describe(X0, Y0, t), _describe(Xp, Yp, t)
+    assert abs(d1.period_s / d0.period_s - 1) < 5e-3

@@ -8,6 +8,8 @@ polynomial fit.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .._validate import ParameterError
@@ -73,7 +75,30 @@ def estimate_period(t: np.ndarray, u: np.ndarray) -> float:
         f = freqs[i] + float(np.clip(shift, -0.5, 0.5)) * (freqs[1] - freqs[0])
     else:
         f = freqs[i]
+    _check_oscillation(t, u, 1.0 / f)
     return 1.0 / f
+
+
+def _check_oscillation(t: np.ndarray, u: np.ndarray, period: float, harmonics: int = 3, min_f: float = 10.0) -> None:
+    """Refuse a signal without a real oscillation at ``period``: its variation about the running
+    mean over one period (slow drifts and turns removed) must be explained by a periodic series
+    of ``harmonics`` harmonics significantly better than by nothing (F statistic >= ``min_f``;
+    white noise, its best period chosen, gives about 1-4; a stroke at SNR 3, 10^3 or more)."""
+    d = u - running_mean(t, u, period)
+    ph = 2.0 * np.pi * (t - t[0]) / period
+    B = np.column_stack([np.ones_like(t)] + [f(h * ph) for h in range(1, harmonics + 1) for f in (np.cos, np.sin)])
+    coef, _, rank, _ = np.linalg.lstsq(B, d, rcond=None)
+    rss1 = float(np.sum((d - B @ coef) ** 2))
+    rss0 = float(np.sum((d - d.mean()) ** 2))
+    dof = t.size - rank
+    if rss0 <= 0.0 or dof <= 0:
+        raise ParameterError(f"signal of duration {t[-1] - t[0]:.4g} s has no detectable oscillation; "
+                             "at least two periods are required")
+    F = ((rss0 - rss1) / max(rank - 1, 1)) / (rss1 / dof) if rss1 > 0 else math.inf
+    if F < min_f:
+        raise ParameterError(f"signal of duration {t[-1] - t[0]:.4g} s has no detectable oscillation: a periodic "
+                             f"fit at its strongest period ({period:.4g} s) explains its variation no better than "
+                             f"noise (F = {F:.2g} < {min_f:g}); is the filament swimming?")
 
 
 def _local_root(t: np.ndarray, d: np.ndarray, m: int, half_window: float, deg: int) -> float:

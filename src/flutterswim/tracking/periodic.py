@@ -41,7 +41,10 @@ abruptly (the field turned within the movie) can pass it while the template miss
 by pixels: the template is also refused when it misses the frames by more than
 ``max_residual_px`` (median over frames of a frame's RMS distance to it; 0.13-0.28 px on the
 settled stroke at SNR 5-3, 1.6 px after a 2 degree turn of the field), or one frame by more than
-``max_frame_ratio`` times that (3-5 times on the settled stroke).
+``max_frame_ratio`` times that (3-5 times on the settled stroke). A body at rest (below the
+threshold, or trapped in a bent equilibrium) has no stroke: its frames' noise picks a period of
+a few frames, and a template at it is refused unless it fits significantly better than one
+static shape (F >= ``min_stroke_f``).
 
 On the paper's settled stroke rendered at SNR 3 (50 fps, 14 um/px, 5.3 cycles) the tip error
 falls from 0.46-0.57 px RMS to about 0.2 px (0.19 px over 16 movies) and the centreline error
@@ -167,7 +170,7 @@ def _refine_period(U: np.ndarray, frame: np.ndarray, period0: float, harmonics: 
 def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: float, *, harmonics: int = 6,
                    iterations: int = 3, end_weight: float = 0.15, end_samples: int = 3, min_cycles: float = 3.0,
                    max_f: float = 3.0, floor_px: float = 0.02, symmetric: bool = True,
-                   max_residual_px: float = 1.0, max_frame_ratio: float = 8.0,
+                   max_residual_px: float = 1.0, max_frame_ratio: float = 8.0, min_stroke_f: float = 10.0,
                    ) -> tuple[np.ndarray, np.ndarray, dict]:
     """The periodic template of a settled stroke placed in every good frame (module docstring).
 
@@ -177,11 +180,13 @@ def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: 
     template is refused when it misses the frames by more than max_residual_px (median over
     frames of each frame's RMS distance to it), or one frame by more than max_frame_ratio times
     that median and max_residual_px (a stroke changed by a turn of the field: the drift test's
-    F statistic, relative to the residual, can miss it). Returns (X, Y, info): info["done"]
+    F statistic, relative to the residual, can miss it); min_stroke_f: the template is refused
+    unless it fits significantly better than one static shape (F of the nested fit; a body at
+    rest). Returns (X, Y, info): info["done"]
     (bool), info["reason"] (why not, or a summary), and when tested "period_frames",
     "harmonics", "drift_harmonics", "drift_f", "drift_px" (the systematic part of the drift
     model's improvement, RMS over samples), "residual_px", "frame_residual_px" (median over
-    frames), "frame_residual_max_px", "symmetric", "symmetry_f" and "symmetry_px"."""
+    frames), "frame_residual_max_px", "stroke_f", "symmetric", "symmetry_f" and "symmetry_px"."""
     ok = np.asarray(ok, bool)
     idx = np.nonzero(ok)[0]
     info: dict = {"done": False, "reason": ""}
@@ -229,9 +234,14 @@ def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: 
     dof = n - B1.shape[1]
     f_stat = ((rss0 - rss1) / drift.size) / (rss1 / dof) if rss1 > 0 else math.inf
     drift_px = math.sqrt(max(rss0 - rss1, 0.0) / (n * P))
+    # a stroke at all: the template must fit far better than one static shape (a body at rest
+    # gives F of about 1; the settled stroke at SNR 3, about 10^4)
+    rss_static = float(np.sum((U - U.mean(axis=0)) ** 2))
+    f_stroke = (((rss_static - rss0) / (2 * P * (B.shape[1] - 1))) / (rss0 / (2 * P * (n - B.shape[1])))
+                if rss0 > 0 else math.inf)
     info.update(period_frames=period, harmonics=H, drift_harmonics=H_d, drift_f=float(f_stat), drift_px=drift_px,
                 residual_px=math.sqrt(rss0 / (n * P)), frame_residual_px=e_med,
-                frame_residual_max_px=float(e_frame[k_max]))
+                frame_residual_max_px=float(e_frame[k_max]), stroke_f=float(f_stroke))
     if not (f_stat <= max_f or drift_px <= floor_px):
         info["reason"] = (f"not done: the stroke is not periodic (a drifting template fits better: F = {f_stat:.3g} "
                           f"> {max_f:g}, {drift_px:.3f} px > {floor_px:g} px)")
@@ -243,6 +253,10 @@ def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: 
     if e_frame[k_max] > max(max_frame_ratio * e_med, max_residual_px):
         info["reason"] = (f"not done: the stroke is not periodic (frame {int(idx[k_max])} is {e_frame[k_max]:.2f} px "
                           f"from the template, median {e_med:.2f} px)")
+        return X, Y, info
+    if f_stroke < min_stroke_f:
+        info["reason"] = (f"not done: no stroke (the periodic template fits the body no better than one static "
+                          f"shape: F = {f_stroke:.3g} < {min_stroke_f:g})")
         return X, Y, info
     # the mirror symmetry: the full template must not fit significantly better (nested F)
     rss_sym = float(np.sum((U - _fit(U, B, True)) ** 2))
