@@ -124,10 +124,11 @@ def _pooled_p2p(series: list, H: int) -> tuple[float, float, int]:
 def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmonics: int) -> np.ndarray:
     """Per cycle: peak-to-peak of point ``i_end`` across direction ang[k] (Fourier fit of the
     cycle's frames, at most (frames - 1) / 4 harmonics). A cycle of too few frames for
-    min(harmonics, 4) harmonics (below about 17 frames per stroke) gets the peak-to-peak its
-    missing harmonics add, measured on all the cycles together (one steady phase, an offset per
-    cycle), when the pooled data hold them (nested F test >= 10; not noise or timing jitter): at
-    25 fps the paper's trailing end was 5.8 % short, now as at 50 fps (4 harmonics)."""
+    min(harmonics, 4) harmonics (below about 17 frames per stroke) gets the share of the
+    peak-to-peak its missing harmonics add, measured on all the cycles together (one steady
+    phase, an offset per cycle), when the pooled data hold them (nested F test >= 10; not noise
+    or timing jitter; a stroke still growing fails it and keeps its own fits): at 25 fps the
+    paper's trailing end was 5.8 % short, now as at 50 fps (4 harmonics)."""
     series = _lateral_series(tr, st, i_end, ang)
     out = np.array([_fourier_p2p(*c, harmonics) if c is not None else np.nan for c in series])
     need = min(int(harmonics), _POOLED_HARMONICS)
@@ -145,8 +146,8 @@ def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmoni
                     low, rss_h, _ = _pooled_p2p(steady, h)
                     # only harmonics the data hold (nested F test), not noise or timing jitter
                     F = ((rss_h - rss) / (2 * (need - h))) / (rss / dof) if rss > 0 else math.inf
-                    if F >= _POOLED_MIN_F:
-                        out[k] += full - low
+                    if F >= _POOLED_MIN_F and low > 0:
+                        out[k] *= full / low  # in proportion: a growing stroke keeps its shape
     return out
 
 
