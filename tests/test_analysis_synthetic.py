@@ -258,6 +258,29 @@ def test_a_record_shorter_than_two_periods_is_refused(n_periods):
     _check(describe(wave_track(period=T, speed=U, amplitude=A, duration=(n - 1) * 0.004, n_frames=n)))
 
 
+@pytest.mark.parametrize("amplitude, turns", [(0.03, 1.0), (0.02, 1.0), (0.03, 0.5)])
+def test_a_swimmer_turning_once_in_the_record_is_described(amplitude, turns):
+    """A swimmer that turns steadily, ``turns`` full turns over 8 s (20 strokes): its body frame
+    follows a circle, body tangent to it. The turn puts about one period of a slow oscillation
+    in the lateral signal, stronger than a small stroke; that is not a record of fewer than two
+    periods (before, it was refused as one). The stroke seen in the turning body frame is the
+    straight swimmer's: the same period and leading end."""
+    dur = 8.0
+    n = int(dur / 0.004) + 1
+    straight = wave_track(period=T, amplitude=amplitude, duration=dur, n_frames=n)
+    body = wave_track(period=T, amplitude=amplitude, duration=dur, n_frames=n, speed=0.0)
+    om = 2 * math.pi * turns / dur
+    phi = om * body.t
+    px, py = U * np.sin(phi) / om, U * (1 - np.cos(phi)) / om  # heading phi, speed U
+    c, s = np.cos(phi)[:, None], np.sin(phi)[:, None]
+    X, Y = body.x - 0.5 * body.length, body.y
+    turning = Track(t=body.t, x=px[:, None] + c * X - s * Y, y=py[:, None] + s * X + c * Y, s=body.s,
+                    length=body.length, field_angle=phi)
+    d, ref = describe(turning), describe(straight)
+    assert d.period_s == pytest.approx(T, rel=1e-3)
+    assert d.leading_lateral_p2p_mm == pytest.approx(ref.leading_lateral_p2p_mm, rel=5e-3)
+
+
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_a_body_at_rest_is_not_described(seed):
     """A bent body at rest with measurement noise has no stroke: describe refuses it (before, the

@@ -102,12 +102,19 @@ def _lateral_series(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray) -> l
 # missing ones from all the cycles together
 _POOLED_HARMONICS = 4
 _POOLED_MIN_F = 10.0
+# the pooled phases must resolve the harmonics: the smallest eigenvalue of the harmonic block's
+# normalised Gram matrix (1 for phases spread evenly over the cycle, 0 when a whole number of
+# frames per stroke puts every cycle's frames at the same few phases) at least this
+_POOLED_MIN_COVERAGE = 0.25
+# and the missing harmonics may change a cycle's peak-to-peak by at most this factor (the
+# paper's trailing end needs 1.06; more is a fit gone wrong, not a waveform)
+_POOLED_MAX_FACTOR = 1.25
 
 
 def _pooled_p2p(series: list, H: int) -> tuple[float, float, int]:
     """Peak-to-peak of one Fourier series of H harmonics fitted to all cycles' (phase, q) at
     once, with an offset per cycle, its residual sum of squares and degrees of freedom; NaN if
-    the pooled samples are too few."""
+    the pooled samples are too few or their phases do not resolve H harmonics."""
     cyc = [c for c in series if c is not None]
     n = sum(c[0].size for c in cyc)
     if not cyc or n - len(cyc) - 1 < 4 * H:
@@ -116,7 +123,13 @@ def _pooled_p2p(series: list, H: int) -> tuple[float, float, int]:
     q = np.concatenate([c[1] for c in cyc])
     who = np.repeat(np.arange(len(cyc)), [c[0].size for c in cyc])
     arg = np.outer(ph, 2 * np.pi * np.arange(1, H + 1))
-    A = np.hstack([(who[:, None] == np.arange(len(cyc))[None, :]).astype(float), np.cos(arg), np.sin(arg)])
+    harm = np.hstack([np.cos(arg), np.sin(arg)])
+    # coverage: the harmonic columns with each cycle's mean removed (what the offsets leave)
+    means = np.stack([np.bincount(who, col) for col in harm.T], 1) / np.bincount(who)[:, None]
+    centred = harm - means[who]
+    if np.linalg.eigvalsh(centred.T @ centred / (0.5 * n))[0] < _POOLED_MIN_COVERAGE:
+        return math.nan, math.nan, 0
+    A = np.hstack([(who[:, None] == np.arange(len(cyc))[None, :]).astype(float), harm])
     coef = np.linalg.lstsq(A, q, rcond=None)[0]
     return _waveform_p2p(coef[len(cyc):], H), float(np.sum((q - A @ coef) ** 2)), n - A.shape[1]
 
@@ -126,9 +139,11 @@ def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmoni
     cycle's frames, at most (frames - 1) / 4 harmonics). A cycle of too few frames for
     min(harmonics, 4) harmonics (below about 17 frames per stroke) gets the share of the
     peak-to-peak its missing harmonics add, measured on all the cycles together (one steady
-    phase, an offset per cycle), when the pooled data hold them (nested F test >= 10; not noise
-    or timing jitter; a stroke still growing fails it and keeps its own fits): at 25 fps the
-    paper's trailing end was 5.8 % short, now as at 50 fps (4 harmonics)."""
+    phase, an offset per cycle), when the pooled data hold them: their phases resolve the
+    harmonics (not a whole number of frames per stroke), the nested F test is >= 10 (not noise
+    or timing jitter; a stroke still growing fails it and keeps its own fits) and the factor
+    lies within 1/1.25 .. 1.25. At 25 fps the paper's trailing end was 5.8 % short, now as at
+    50 fps (4 harmonics)."""
     series = _lateral_series(tr, st, i_end, ang)
     out = np.array([_fourier_p2p(*c, harmonics) if c is not None else np.nan for c in series])
     need = min(int(harmonics), _POOLED_HARMONICS)
@@ -141,13 +156,15 @@ def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmoni
                   for k, c in enumerate(series)]
         full, rss, dof = _pooled_p2p(steady, need)
         if math.isfinite(full):
+            factor = {}
+            for h in sorted(set(h for h in own if h < need)):
+                low, rss_h, _ = _pooled_p2p(steady, h)
+                # only harmonics the data hold (nested F test), not noise or timing jitter
+                F = ((rss_h - rss) / (2 * (need - h))) / (rss / dof) if rss > 0 else math.inf
+                if F >= _POOLED_MIN_F and low > 0 and 1 / _POOLED_MAX_FACTOR <= full / low <= _POOLED_MAX_FACTOR:
+                    factor[h] = full / low
             for k, h in enumerate(own):
-                if h < need:
-                    low, rss_h, _ = _pooled_p2p(steady, h)
-                    # only harmonics the data hold (nested F test), not noise or timing jitter
-                    F = ((rss_h - rss) / (2 * (need - h))) / (rss / dof) if rss > 0 else math.inf
-                    if F >= _POOLED_MIN_F and low > 0:
-                        out[k] *= full / low  # in proportion: a growing stroke keeps its shape
+                out[k] *= factor.get(h, 1.0)  # in proportion: a growing stroke keeps its shape
     return out
 
 

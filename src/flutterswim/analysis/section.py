@@ -60,23 +60,41 @@ def estimate_period(t: np.ndarray, u: np.ndarray) -> float:
             "at least two periods are required"
         )
     i = int(np.argmax(np.where(ok, spec, -np.inf)))
-    # the strongest oscillation with at least one period in the record: if it has fewer than
-    # two (a short record), the peak above fmin is its lobe's flank or a harmonic: refuse
+    # the strongest oscillation with at least one period in the record
     j = int(np.argmax(np.where(freqs >= 1.0 / dur, spec, -np.inf)))
     if freqs[j] < fmin:
-        raise ParameterError(
-            f"signal of duration {dur:.4g} s holds fewer than two periods of its oscillation "
-            f"(about {dur * freqs[j]:.2g}); at least two periods are required"
-        )
+        # it has fewer than two periods. A short record: the band's maximum is that lobe's flank
+        # or one of its harmonics: refuse. A swimmer turning slowly (about one turn in the
+        # record) beside its stroke: the stroke is the strongest peak of its own, away from both
+        short = ParameterError(
+            f"signal of duration {dur:.4g} s ({t.size} samples) holds fewer than two periods of its "
+            f"oscillation (about {dur * freqs[j]:.2g}); at least two periods are required")
+        inner = np.zeros_like(ok)
+        inner[1:-1] = (spec[1:-1] > spec[:-2]) & (spec[1:-1] > spec[2:])
+        harmonic = np.zeros_like(ok)
+        for k in (2, 3):  # a lobe's position is known to about a quarter of the resolution 1/dur
+            harmonic |= np.abs(freqs - k * freqs[j]) <= (0.5 + 0.25 * k) / dur
+        own = ok & inner & ~harmonic & (freqs >= fmin + 0.5 / dur)
+        if not np.any(own):
+            raise short
+        i = int(np.argmax(np.where(own, spec, -np.inf)))
+        try:
+            _check_oscillation(t, u, 1.0 / _refine(freqs, spec, i))
+        except ParameterError:
+            raise short from None
+    f = _refine(freqs, spec, i)
+    _check_oscillation(t, u, 1.0 / f)
+    return 1.0 / f
+
+
+def _refine(freqs: np.ndarray, spec: np.ndarray, i: int) -> float:
+    """Frequency of the spectral peak at bin i, from a parabola through the log of its three bins."""
     if 0 < i < spec.size - 1:
         a, b, c = np.log(spec[i - 1 : i + 2] + 1e-300)
         den = a - 2 * b + c
         shift = 0.5 * (a - c) / den if den != 0 else 0.0
-        f = freqs[i] + float(np.clip(shift, -0.5, 0.5)) * (freqs[1] - freqs[0])
-    else:
-        f = freqs[i]
-    _check_oscillation(t, u, 1.0 / f)
-    return 1.0 / f
+        return float(freqs[i] + float(np.clip(shift, -0.5, 0.5)) * (freqs[1] - freqs[0]))
+    return float(freqs[i])
 
 
 def _check_oscillation(t: np.ndarray, u: np.ndarray, period: float, harmonics: int = 3, min_f: float = 10.0) -> None:
