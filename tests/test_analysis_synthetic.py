@@ -256,6 +256,9 @@ def test_a_record_shorter_than_two_periods_is_refused(n_periods):
         describe(tr)
     n = int(round(2.1 * T / 0.004)) + 1
     _check(describe(wave_track(period=T, speed=U, amplitude=A, duration=(n - 1) * 0.004, n_frames=n)))
+    # 7 frames over 6 periods' worth of time: the frames, not the periods, are too few
+    with pytest.raises(ParameterError, match="7 samples is too short"):
+        describe(wave_track(period=T, speed=U, amplitude=A, duration=6 * T, n_frames=7))
 
 
 @pytest.mark.parametrize("amplitude, turns", [(0.03, 1.0), (0.02, 1.0), (0.03, 0.5)])
@@ -279,6 +282,21 @@ def test_a_swimmer_turning_once_in_the_record_is_described(amplitude, turns):
     d, ref = describe(turning), describe(straight)
     assert d.period_s == pytest.approx(T, rel=1e-3)
     assert d.leading_lateral_p2p_mm == pytest.approx(ref.leading_lateral_p2p_mm, rel=5e-3)
+
+
+@pytest.mark.parametrize("noise", [3e-3, 1e-2])
+def test_a_record_mostly_at_rest_is_described_by_its_strokes(noise):
+    """7 s at rest, then 3 s (7.5 strokes) of swimming, with measurement noise: the noise
+    derivative's spectrum outweighs the stroke's, and the noise at rest crossed the section
+    everywhere (before: refused as 'no oscillation', or the period 1.6 % long). The rest gives
+    no cycles, and the strokes are described with their period."""
+    w = wave_track(period=T, speed=U, amplitude=A, duration=10.0, n_frames=2501)
+    rng = np.random.default_rng(1)
+    on = (w.t > 7.0).astype(float)[:, None]
+    tr = Track(t=w.t, x=w.x + rng.normal(0, noise, w.x.shape), y=w.y * on + rng.normal(0, noise, w.y.shape),
+               s=w.s, length=w.length)
+    assert np.all(detect_cycles(tr).starts > 7.0 - 0.5 * T)
+    assert describe(tr).period_s == pytest.approx(T, rel=5e-3)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])

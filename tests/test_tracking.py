@@ -229,7 +229,7 @@ def test_pixels_that_are_not_finite_do_not_cost_a_frame(sim):
 
 
 
-def test_a_dark_line_on_a_bright_background(sim):
+def test_a_dark_line_on_a_bright_background(sim, tmp_path):
     """A bright-field movie (uint16, the line darker than its background, the same noise):
     by default every frame is lost and the error names the option; with dark_line=True the
     centreline is within 0.25 px of the truth in every frame."""
@@ -241,6 +241,13 @@ def test_a_dark_line_on_a_bright_background(sim):
     D, E, idx = pixel_errors(tr, mv)
     assert idx.size == 30, failures(tr)
     assert np.sqrt(np.mean(D**2, axis=1)).max() <= 0.25
+    # the track says how it was made, also once saved and loaded
+    assert tr.meta["dark_line"] is True
+    assert track(mv.frames, px_per_mm=mv.px_per_mm, fps=FPS).meta["dark_line"] is False
+    pytest.importorskip("xarray")
+    from flutterswim.tracking.netcdf import load_track, save_track
+
+    assert load_track(save_track(tr, tmp_path / "dark.nc")).meta["dark_line"] is True
     with pytest.raises(ParameterError, match="dark_line"):
         track(dark, px_per_mm=mv.px_per_mm, fps=FPS, dark_line="yes")
 

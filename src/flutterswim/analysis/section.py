@@ -41,6 +41,9 @@ def estimate_period(t: np.ndarray, u: np.ndarray) -> float:
     drifts), on a uniform resampling; at least two periods must fit in the record."""
     t = np.asarray(t, float)
     u = np.asarray(u, float)
+    if t.size < 9:
+        raise ParameterError(f"signal of {t.size} samples is too short for a period: two periods of at least "
+                             "4 samples each are required (9 samples or more)")
     dt = float(np.median(np.diff(t)))
     n = int(np.floor((t[-1] - t[0]) / dt)) + 1
     tu = t[0] + dt * np.arange(n)
@@ -83,7 +86,24 @@ def estimate_period(t: np.ndarray, u: np.ndarray) -> float:
         except ParameterError:
             raise short from None
     f = _refine(freqs, spec, i)
-    _check_oscillation(t, u, 1.0 / f)
+    try:
+        _check_oscillation(t, u, 1.0 / f)
+    except ParameterError as err:
+        # the derivative weighs noise by its frequency: a stroke over a small part of a noisy
+        # record loses to a noise peak near the Nyquist frequency. The spectrum of u itself
+        # (trend removed), its strongest peak of its own in the band, is the second opinion
+        vv = uu - np.polyval(np.polyfit(tu - tu[0], uu, 1), tu - tu[0])
+        spec_u = np.abs(np.fft.rfft(vv * np.hanning(vv.size), nfft))
+        own = ok & (freqs >= fmin + 0.5 / dur)
+        own[1:-1] &= (spec_u[1:-1] > spec_u[:-2]) & (spec_u[1:-1] > spec_u[2:])
+        own[[0, -1]] = False
+        if not np.any(own):
+            raise
+        f = _refine(freqs, spec_u, int(np.argmax(np.where(own, spec_u, -np.inf))))
+        try:
+            _check_oscillation(t, u, 1.0 / f)
+        except ParameterError:
+            raise err from None
     return 1.0 / f
 
 
@@ -116,7 +136,8 @@ def _check_oscillation(t: np.ndarray, u: np.ndarray, period: float, harmonics: i
     if F < min_f:
         raise ParameterError(f"signal of duration {t[-1] - t[0]:.4g} s has no detectable oscillation: a periodic "
                              f"fit at its strongest period ({period:.4g} s) explains its variation no better than "
-                             f"noise (F = {F:.2g} < {min_f:g}); is the filament swimming?")
+                             f"noise (F = {F:.2g} < {min_f:g}); is the filament swimming? If it is, give its period "
+                             "(describe(..., period=...))")
 
 
 def _local_root(t: np.ndarray, d: np.ndarray, m: int, half_window: float, deg: int) -> float:
@@ -284,7 +305,13 @@ def section_crossings(
         amp = np.sqrt(2.0 * np.maximum(running_mean(t, d * d, W), 0.0))
         # the noise floor at most half the amplitude: a coarsely sampled stroke (a few frames
         # per period) has large second differences of its own, not noise
-        h = np.maximum(hysteresis * amp, np.minimum(noise_factor * _noise_sigma(t, u, W), 0.5 * amp))
+        sigma = _noise_sigma(t, u, W)
+        h = np.maximum(hysteresis * amp, np.minimum(noise_factor * sigma, 0.5 * amp))
+        if W >= 10.0 * float(np.median(np.diff(t))):
+            # finely sampled (the stroke's own second differences are then under a tenth of its
+            # amplitude): where the variation is no larger than the noise (amplitude under 2.5
+            # sigma; noise alone gives 1.4 sigma), the filament is at rest: no crossings there
+            h = np.where(amp < 2.5 * sigma, np.inf, h)
         cross = upward_crossings(t, d, h, half_window=W / 12.0 if final else 0.0)
         # drop crossings closer than half a period to the previous one (harmonics)
         if cross.size > 1:

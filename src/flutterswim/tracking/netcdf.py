@@ -64,6 +64,8 @@ def to_xarray(tr: Track):
         "body_length_std": float(m["length_std_px"]) * mm, "body_length_std_units": "mm",
         "body_length_spread": float(m["length_spread"]), "body_length_spread_units": "1",
         "n_frames": int(m["n_frames"]), "n_failed": int(m["n_failed"]),
+        # NetCDF has no boolean attribute: 1 for a line darker than its background
+        "dark_line": int(bool(m.get("dark_line", False))),
     })
     return ds
 
@@ -98,7 +100,7 @@ def load_track(path: str | os.PathLike) -> Track:
               "length_px": ds["body_length"].values * a["px_per_mm"], "contrast": ds["contrast"].values, "ok": ok,
               "reason": [str(r) for r in ds["failure_reason"].values], "match_px": ds["match_distance"].values * a["px_per_mm"]}
     meta = {"source": a.get("input", ""), "px_per_mm": float(a["px_per_mm"]), "fps": float(a["fps"]),
-            "roi": json.loads(a.get("roi", "null")), "n_frames": int(a["n_frames"]), "n_failed": int(a["n_failed"]),
+            "roi": json.loads(a.get("roi", "null")), "dark_line": bool(a.get("dark_line", 0)), "n_frames": int(a["n_frames"]), "n_failed": int(a["n_failed"]),
             "length_px": float(a["body_length"]) * a["px_per_mm"],
             "length_std_px": float(a["body_length_std"]) * a["px_per_mm"],
             "length_spread": float(a["body_length_spread"]), "frames": frames}

@@ -427,7 +427,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     }
     meta = {
         "source": frames.source, "px_per_mm": px_per_mm, "fps": fps, "roi": frames.roi,
-        "frame_shape": frames.shape, "n_frames": T, "psf_sigma_px": sig, "n_failed": T - n_ok,
+        "frame_shape": frames.shape, "dark_line": bool(dark_line), "n_frames": T, "psf_sigma_px": sig, "n_failed": T - n_ok,
         "length_px": L_px, "length_std_px": float(np.std(Lgood, ddof=1)) if n_ok > 1 else 0.0,
         "length_spread": float((Lgood.max() - Lgood.min()) / L_px), "wall_time_s": wall,
         "frames": frames_info, "temporal": temporal,
