@@ -86,24 +86,7 @@ def estimate_period(t: np.ndarray, u: np.ndarray) -> float:
         except ParameterError:
             raise short from None
     f = _refine(freqs, spec, i)
-    try:
-        _check_oscillation(t, u, 1.0 / f)
-    except ParameterError as err:
-        # the derivative weighs noise by its frequency: a stroke over a small part of a noisy
-        # record loses to a noise peak near the Nyquist frequency. The spectrum of u itself
-        # (trend removed), its strongest peak of its own in the band, is the second opinion
-        vv = uu - np.polyval(np.polyfit(tu - tu[0], uu, 1), tu - tu[0])
-        spec_u = np.abs(np.fft.rfft(vv * np.hanning(vv.size), nfft))
-        own = ok & (freqs >= fmin + 0.5 / dur)
-        own[1:-1] &= (spec_u[1:-1] > spec_u[:-2]) & (spec_u[1:-1] > spec_u[2:])
-        own[[0, -1]] = False
-        if not np.any(own):
-            raise
-        f = _refine(freqs, spec_u, int(np.argmax(np.where(own, spec_u, -np.inf))))
-        try:
-            _check_oscillation(t, u, 1.0 / f)
-        except ParameterError:
-            raise err from None
+    _check_oscillation(t, u, 1.0 / f)
     return 1.0 / f
 
 
@@ -136,8 +119,8 @@ def _check_oscillation(t: np.ndarray, u: np.ndarray, period: float, harmonics: i
     if F < min_f:
         raise ParameterError(f"signal of duration {t[-1] - t[0]:.4g} s has no detectable oscillation: a periodic "
                              f"fit at its strongest period ({period:.4g} s) explains its variation no better than "
-                             f"noise (F = {F:.2g} < {min_f:g}); is the filament swimming? If it is, give its period "
-                             "(describe(..., period=...))")
+                             f"noise (F = {F:.2g} < {min_f:g}); is the filament swimming? If it swims in part of the "
+                             "record only, give its approximate period (describe(..., period=...))")
 
 
 def _local_root(t: np.ndarray, d: np.ndarray, m: int, half_window: float, deg: int) -> float:
