@@ -139,8 +139,8 @@ def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmoni
     cycle's frames, at most (frames - 1) / 4 harmonics). A cycle of too few frames for
     min(harmonics, 4) harmonics (below about 17 frames per stroke) gets the share of the
     peak-to-peak its missing harmonics add, measured on all the cycles together (one steady
-    phase, an offset per cycle), when the pooled data hold them: their phases resolve the
-    harmonics (not a whole number of frames per stroke), the nested F test is >= 10 (not noise
+    phase, an offset per cycle), when the pooled data hold them: as many harmonics as their
+    phases resolve (a whole number n of frames per stroke resolves (n - 1) / 2), the nested F test is >= 10 (not noise
     or timing jitter; a stroke still growing fails it and keeps its own fits) and the factor
     lies within 1/1.25 .. 1.25. At 25 fps the paper's trailing end was 5.8 % short, now as at
     50 fps (4 harmonics)."""
@@ -154,13 +154,19 @@ def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmoni
         mean_period = (st[-1] - st[0]) / (st.size - 1)
         steady = [None if c is None else ((st[k] + c[0] * (st[k + 1] - st[k]) - st[0]) / mean_period, c[1])
                   for k, c in enumerate(series)]
-        full, rss, dof = _pooled_p2p(steady, need)
+        # as many harmonics as the pooled phases resolve: a whole number n of frames per
+        # stroke puts them on n phases, which resolve (n - 1) / 2 harmonics
+        top, full = need, math.nan
+        while top > min(own) and not math.isfinite(full):
+            full, rss, dof = _pooled_p2p(steady, top)
+            top -= 1
+        top += 1
         if math.isfinite(full):
             factor = {}
-            for h in sorted(set(h for h in own if h < need)):
+            for h in sorted(set(h for h in own if h < top)):
                 low, rss_h, _ = _pooled_p2p(steady, h)
                 # only harmonics the data hold (nested F test), not noise or timing jitter
-                F = ((rss_h - rss) / (2 * (need - h))) / (rss / dof) if rss > 0 else math.inf
+                F = ((rss_h - rss) / (2 * (top - h))) / (rss / dof) if rss > 0 else math.inf
                 if F >= _POOLED_MIN_F and low > 0 and 1 / _POOLED_MAX_FACTOR <= full / low <= _POOLED_MAX_FACTOR:
                     factor[h] = full / low
             for k, h in enumerate(own):
@@ -425,9 +431,15 @@ def describe(
         "no limit cycle: the stroke is still changing from cycle to cycle (onset or transient), so the "
         "averages describe unsettled cycles and the limit-cycle time, transient duration and onset time "
         "are unknown; simulate longer (run_to_limit_cycle)")
+    if not np.any(np.isfinite(p2p)):
+        per_stroke = float(np.mean(per)) / float(np.median(np.diff(tr.t)))
+        note = (note + "; " if note else "") + (
+            f"the lateral excursions are not measured: {per_stroke:.2g} frames per stroke, a cycle needs at "
+            "least 4 (a higher frame rate)")
     adv_total = (xc[-1] - xc[0]) * math.cos(float(np.mean(tr.field_angle))) + (yc[-1] - yc[0]) * math.sin(
         float(np.mean(tr.field_angle))
     )
+    p2p_mean = float(np.nanmean(p2p)) if np.any(np.isfinite(p2p)) else math.nan
     from ..steering.turning import turning_summary
 
     turn = turning_summary(tr.t, tr.x.mean(axis=1), tr.y.mean(axis=1), tr.field_angle, float(np.mean(per)))
@@ -458,9 +470,9 @@ def describe(
         speed_std_mm_s=_std(spd) * mm,
         speed_bl_s=float(np.mean(spd)) / L,
         speed_std_bl_s=_std(spd) / L,
-        tip_lateral_p2p_mm=float(np.nanmean(p2p)) * mm,
+        tip_lateral_p2p_mm=p2p_mean * mm,
         tip_lateral_p2p_std_mm=_std(p2p[np.isfinite(p2p)]) * mm,
-        tip_lateral_p2p_bl=float(np.nanmean(p2p)) / L,
+        tip_lateral_p2p_bl=p2p_mean / L,
         swim_direction_deg=math.degrees(swim),
         swim_direction_std_deg=dir_spread,
         field_direction_deg=math.degrees(fa),
