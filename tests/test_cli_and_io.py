@@ -46,6 +46,16 @@ def test_cli_json_matches_python_api(short_run):
     out = subprocess.run([sys.executable, "-m", "flutterswim.cli", "describe", str(path), "--json", "--last", "3"],
                          capture_output=True, text=True, check=True)
     assert json.loads(out.stdout) == json.loads(json.dumps(describe(fs.load(path), n_last=3).to_dict()))
+    # an approximate period (10 % off) is refined from the data: the same cycles, as in Python
+    rough = 1.1 * json.loads(out.stdout)["period_s"]
+    given = subprocess.run([sys.executable, "-m", "flutterswim.cli", "describe", str(path), "--json", "--last", "3",
+                            "--period", repr(rough)], capture_output=True, text=True, check=True)
+    d = json.loads(given.stdout)
+    assert d == json.loads(json.dumps(describe(fs.load(path), n_last=3, period=rough).to_dict()))
+    assert d["period_s"] == pytest.approx(json.loads(out.stdout)["period_s"], rel=1e-3)
+    bad = subprocess.run([sys.executable, "-m", "flutterswim.cli", "describe", str(path), "--period", "-1"],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and "period=-1" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
 
 
 def test_cli_reports_bad_input_by_name(tmp_path):

@@ -95,7 +95,8 @@ def _load_run_or_track(path: str):
 def _describe(args: argparse.Namespace) -> int:
     from .analysis.descriptors import describe
 
-    desc = describe(_load_run_or_track(args.run), n_last=args.last, max_gap=args.max_gap)
+    kw = {} if args.period is None else {"period": args.period}
+    desc = describe(_load_run_or_track(args.run), n_last=args.last, max_gap=args.max_gap, **kw)
     d = desc.to_dict()
     if args.json:
         print(json.dumps(d, indent=2))
@@ -182,6 +183,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--last", type=int, default=defaults.N_CYCLES, help="average over the last N cycles")
     p.add_argument("--max-gap", type=float, default=0.25,
                    help="leave out cycles missing frames over more than this many periods (tracked movies; default 0.25)")
+    p.add_argument("--period", type=float, default=None, metavar="SECONDS",
+                   help="approximate stroke period, refined from the data (default: estimated; give it for a "
+                        "record that swims in part only)")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=_describe)
 

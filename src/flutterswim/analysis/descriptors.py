@@ -140,9 +140,9 @@ def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmoni
     min(harmonics, 4) harmonics (below about 17 frames per stroke) gets the share of the
     peak-to-peak its missing harmonics add, measured on all the cycles together (one steady
     phase, an offset per cycle), when the pooled data hold them: as many harmonics as their
-    phases resolve (a whole number n of frames per stroke resolves (n - 1) / 2), the nested F test is >= 10 (not noise
-    or timing jitter; a stroke still growing fails it and keeps its own fits) and the factor
-    lies within 1/1.25 .. 1.25. At 25 fps the paper's trailing end was 5.8 % short, now as at
+    phases resolve (a whole number n of frames per stroke resolves (n - 1) / 2), a nested F
+    test >= 10 (not noise or timing jitter; a stroke still growing fails it and keeps its own
+    fits), and a factor within 1/1.25 .. 1.25. At 25 fps the paper's trailing end was 5.8 % short, now as at
     50 fps (4 harmonics)."""
     series = _lateral_series(tr, st, i_end, ang)
     out = np.array([_fourier_p2p(*c, harmonics) if c is not None else np.nan for c in series])

@@ -120,7 +120,7 @@ def _check_oscillation(t: np.ndarray, u: np.ndarray, period: float, harmonics: i
         raise ParameterError(f"signal of duration {t[-1] - t[0]:.4g} s has no detectable oscillation: a periodic "
                              f"fit at its strongest period ({period:.4g} s) explains its variation no better than "
                              f"noise (F = {F:.2g} < {min_f:g}); is the filament swimming? If it swims in part of the "
-                             "record only, give its approximate period (describe(..., period=...))")
+                             "record only, give its approximate period (describe --period, or describe(..., period=...))")
 
 
 def _local_root(t: np.ndarray, d: np.ndarray, m: int, half_window: float, deg: int) -> float:
