@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from .._validate import ParameterError
-from .section import estimate_period, running_mean, section_crossings
+from .section import _noise_sigma, estimate_period, running_mean, section_crossings
 from .track import Track, as_track
 
 __all__ = ["Cycles", "body_axis_angle", "local_axis_angle", "lateral_signal", "detect_cycles", "sample_cycle", "tip_index"]
@@ -154,6 +154,25 @@ def _rel(a: np.ndarray) -> np.ndarray:
     return out
 
 
+def _envelope_onset(t: np.ndarray, d: np.ndarray, var: np.ndarray, W: float, t_final: float, fraction: float) -> float:
+    """Time the stroke's envelope (root mean square of d over one period, the noise's variance
+    taken off) rises through ``fraction`` of its median after ``t_final`` for the last time
+    before it (log-linear between frames; the record start if it is above all along): noise
+    under that level crosses it early and falls back."""
+    env = np.sqrt(2.0 * np.maximum(running_mean(t, d * d, W) - var, 0.0))
+    late = env[t >= t_final]
+    if late.size == 0 or not np.median(late) > 0:
+        return math.nan
+    thr = fraction * float(np.median(late))
+    below = np.nonzero((env < thr) & (t < t_final))[0]
+    if below.size == 0:
+        return float(t[0])
+    i = int(below[-1]) + 1
+    a, b = float(env[i - 1]), float(env[i])
+    frac = math.log(thr / a) / math.log(b / a) if a > 0 and b > a else (thr - a) / (b - a) if b > a else 0.0
+    return float(t[i - 1] + frac * (t[i] - t[i - 1]))
+
+
 def detect_cycles(
     obj: Any,
     *,
@@ -217,9 +236,19 @@ def detect_cycles(
     amps = np.empty(K)
     lo = np.searchsorted(t, starts[:-1], side="left")  # frames of cycle k: starts[k] <= t <= starts[k+1]
     hi = np.searchsorted(t, starts[1:], side="right")
+    # the measurement noise's variance (second differences, over one period): the growth fit
+    # and the envelope use amplitudes corrected for it (the root mean square of d less the
+    # noise's: unbiased, where the peak to peak grows with the noise)
+    var = _noise_sigma(t, u, W) ** 2
+    ramps = np.zeros(K)
+    noise_amp = np.zeros(K)
     for k in range(K):
         seg = d[lo[k] : hi[k]] if hi[k] > lo[k] else np.zeros(1)
         amps[k] = 0.5 * (seg.max() - seg.min())
+        if hi[k] > lo[k]:
+            v = float(np.mean(var[lo[k] : hi[k]]))
+            ramps[k] = math.sqrt(2.0 * max(float(np.mean(seg * seg)) - v, 0.0))
+            noise_amp[k] = math.sqrt(v)
     # shapes: tangent angle minus mean along s, sampled at n_shape phases
     _, th = tr.tangent_angle()
     th = th - th.mean(axis=1, keepdims=True)
@@ -261,13 +290,19 @@ def detect_cycles(
     onset = math.nan
     rate = rate_err = math.nan
     win = (math.nan, math.nan)
+    # a quiet stretch before the first cycle: the filament at rest or its stroke under the
+    # noise (the section finds no crossings there); the onset is in it, or at the record start
+    quiet = K >= 1 and float(starts[0] - t[0]) > 1.5 * W
     if K >= 1:
         a_final = float(np.median(amps[-min(K, max(n_consecutive, 3)) :]))
+        r_final = float(np.median(ramps[-min(K, max(n_consecutive, 3)) :]))
         above = np.nonzero(amps >= onset_fraction * a_final)[0]
         if above.size:
             k = int(above[0])
-            if k == 0:
-                onset = float(t[0]) if amps[0] >= onset_fraction * a_final else float(mids[0])
+            if k == 0 and quiet:
+                onset = _envelope_onset(t, d, var, W, float(starts[max(K - 3, 0)]), onset_fraction)
+            elif k == 0:
+                onset = float(t[0])
             else:
                 la, lb = math.log(amps[k - 1]), math.log(amps[k])
                 lt = math.log(onset_fraction * a_final)
@@ -275,16 +310,20 @@ def detect_cycles(
                 onset = float(mids[k - 1] + frac * (mids[k] - mids[k - 1]))
         if fit_after is None:
             tau = tr.tau
-            t_after = float(t[0]) + 2.0 * tau if tau is not None else (float(starts[min(2, K)]) if K else math.inf)
+            # the first cycles carry the initial condition's transient, unless a quiet
+            # stretch held it
+            t_after = float(t[0]) + 2.0 * tau if tau is not None else (
+                float(t[0]) if quiet else float(starts[min(2, K)]))
         else:
             t_after = float(t[0]) + float(fit_after)
-        sel = (mids >= t_after) & (amps <= fit_max_fraction * a_final) & (amps > 0)
+        # cycles above twice the noise, below the cut
+        sel = (mids >= t_after) & (ramps <= fit_max_fraction * r_final) & (ramps > 2.0 * noise_amp) & (ramps > 0)
         # only the growing part before the envelope first reaches the cut
-        first_big = np.nonzero(amps > fit_max_fraction * a_final)[0]
+        first_big = np.nonzero(ramps > fit_max_fraction * r_final)[0]
         if first_big.size:
             sel &= np.arange(K) < first_big[0]
         if np.count_nonzero(sel) >= 3:
-            tm, la = mids[sel], np.log(amps[sel])
+            tm, la = mids[sel], np.log(ramps[sel])
             A = np.vstack([tm - tm.mean(), np.ones_like(tm)]).T
             coef, res, *_ = np.linalg.lstsq(A, la, rcond=None)
             rate = float(coef[0])

@@ -109,6 +109,9 @@ _POOLED_MIN_COVERAGE = 0.25
 # and the missing harmonics may change a cycle's peak-to-peak by at most this factor (the
 # paper's trailing end needs 1.06; more is a fit gone wrong, not a waveform)
 _POOLED_MAX_FACTOR = 1.25
+# harmonics the pooled phases may leave unresolved: a whole number n of frames per stroke
+# resolves (n - 1) / 2 and folds the ones above onto them, which the data cannot tell apart
+_POOLED_MAX_UNRESOLVED = 1
 
 
 def _pooled_p2p(series: list, H: int) -> tuple[float, float, int]:
@@ -156,11 +159,11 @@ def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmoni
                   for k, c in enumerate(series)]
         # as many harmonics as the pooled phases resolve: a whole number n of frames per
         # stroke puts them on n phases, which resolve (n - 1) / 2 harmonics
-        top, full = need, math.nan
-        while top > min(own) and not math.isfinite(full):
+        full = math.nan
+        for top in range(need, max(min(own), need - 1 - _POOLED_MAX_UNRESOLVED), -1):
             full, rss, dof = _pooled_p2p(steady, top)
-            top -= 1
-        top += 1
+            if math.isfinite(full):
+                break
         if math.isfinite(full):
             factor = {}
             for h in sorted(set(h for h in own if h < top)):

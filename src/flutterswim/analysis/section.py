@@ -75,7 +75,7 @@ def estimate_period(t: np.ndarray, u: np.ndarray) -> float:
         inner = np.zeros_like(ok)
         inner[1:-1] = (spec[1:-1] > spec[:-2]) & (spec[1:-1] > spec[2:])
         harmonic = np.zeros_like(ok)
-        for k in (2, 3):  # a lobe's position is known to about a quarter of the resolution 1/dur
+        for k in range(2, 9):  # a lobe's position is known to about a quarter of the resolution 1/dur
             harmonic |= np.abs(freqs - k * freqs[j]) <= (0.5 + 0.25 * k) / dur
         own = ok & inner & ~harmonic & (freqs >= fmin + 0.5 / dur)
         if not np.any(own):
@@ -245,6 +245,9 @@ def upward_crossings(
     return _local_roots(t, d, np.array(ms), half_window, deg)
 
 
+_REST_CONTRAST = 0.3  # "small beside the stroke": under this fraction of the record's largest amplitude
+
+
 def _noise_sigma(t: np.ndarray, u: np.ndarray, window: float) -> np.ndarray:
     """Local standard deviation of white measurement noise from second differences."""
     e = np.zeros_like(u)
@@ -290,12 +293,14 @@ def section_crossings(
         # per period) has large second differences of its own, not noise
         sigma = _noise_sigma(t, u, W)
         h = np.maximum(hysteresis * amp, np.minimum(noise_factor * sigma, 0.5 * amp))
-        if W >= 10.0 * float(np.median(np.diff(t))):
-            # finely sampled (the stroke's own second differences are then under a tenth of its
-            # amplitude): where the variation is no larger than the noise (amplitude under 2.5
-            # sigma; noise alone gives 1.4 sigma), the filament is at rest: no crossings there
-            h = np.where(amp < 2.5 * sigma, np.inf, h)
-        cross = upward_crossings(t, d, h, half_window=W / 12.0 if final else 0.0)
+        # at rest: where the variation is no larger than the noise (amplitude under 2.5 sigma;
+        # noise alone gives 1.4 sigma) and small beside the record's stroke, no crossings. Both:
+        # second differences also grow with a coarse, sharp or unevenly sampled stroke's own
+        # curvature, which is never small beside itself
+        rest = (amp < 2.5 * sigma) & (amp < _REST_CONTRAST * float(np.max(amp)))
+        cross = upward_crossings(t, d, np.where(rest, np.inf, h), half_window=W / 12.0 if final else 0.0)
+        if cross.size < 3 and np.any(rest):  # never fewer than three crossings for the rule
+            cross = upward_crossings(t, d, h, half_window=W / 12.0 if final else 0.0)
         # drop crossings closer than half a period to the previous one (harmonics)
         if cross.size > 1:
             keep = [0]
