@@ -248,21 +248,23 @@ def test_a_sharp_coarsely_sampled_or_unevenly_sampled_stroke_keeps_its_cycles(fr
         assert W == pytest.approx(T, rel=2e-2)
 
 
-@pytest.mark.parametrize("noise, fps", [(3e-3, 25.0), (3e-3, 250.0), (1e-3, 50.0)])
+@pytest.mark.parametrize("noise, fps", [(3e-3, 25.0), (3e-3, 250.0), (1e-3, 50.0), (2e-2, 50.0), (3e-2, 50.0)])
 def test_the_onset_of_a_stroke_growing_out_of_the_noise_is_in_the_record(noise, fps):
     """A stroke growing (Landau, rate 1.5 from 1e-3 of its amplitude) under measurement noise
     of 1-3 % of that amplitude: no cycle is found while it is under the noise, so the first
     cycle found is above a tenth of the final amplitude. The onset is where the noise-free
-    envelope reaches that tenth (within 0.4 s; before, t = 0: the record start); the growth
-    rate is 1.5 within its 3 standard errors where three cycles between the noise and a tenth
-    of the amplitude hold it, and not known (NaN) where they do not."""
+    envelope reaches that tenth (within 0.4 s; before, t = 0: the record start), or not known
+    (NaN) where the noise hides a tenth of the amplitude (20-30 % noise; never at 3 % or
+    less); the growth rate is 1.5 within its 3 standard errors where four cycles between the
+    noise and a tenth of the amplitude hold it, and not known (NaN) where they do not."""
     rate, a0 = 1.5, 1e-3
     t_on = math.log((1 / a0**2 - 1) / (1 / 0.01 - 1)) / (2 * rate)
     for seed in (0, 1):
         tr = wave_track(period=T, amplitude=A, duration=10.0, n_frames=int(10 * fps) + 1, noise=noise * A / 0.1,
                         envelope=(a0, rate), seed=seed)
         c = detect_cycles(tr)
-        assert abs(c.onset_time - t_on) < 0.4
+        if noise <= 3e-3 or math.isfinite(c.onset_time):
+            assert abs(c.onset_time - t_on) < 0.4
         if math.isfinite(c.growth_rate):
             assert abs(c.growth_rate - rate) < 3 * c.growth_rate_stderr + 0.05
 
@@ -329,14 +331,16 @@ def test_a_record_shorter_than_two_periods_is_refused(n_periods):
         describe(wave_track(period=T, speed=U, amplitude=A, duration=6 * T, n_frames=7))
 
 
-@pytest.mark.parametrize("amplitude, turns", [(0.03, 1.0), (0.02, 1.0), (0.03, 0.5)])
-def test_a_swimmer_turning_once_in_the_record_is_described(amplitude, turns):
-    """A swimmer that turns steadily, ``turns`` full turns over 8 s (20 strokes): its body frame
-    follows a circle, body tangent to it. The turn puts about one period of a slow oscillation
-    in the lateral signal, stronger than a small stroke; that is not a record of fewer than two
-    periods (before, it was refused as one). The stroke seen in the turning body frame is the
-    straight swimmer's: the same period and leading end."""
-    dur = 8.0
+@pytest.mark.parametrize("amplitude, turns, dur", [(0.03, 1.0, 8.0), (0.02, 1.0, 8.0), (0.03, 0.5, 8.0),
+                                                   (0.1, 1.5, 4.0), (0.1, 1.9, 4.0)])
+def test_a_swimmer_turning_once_in_the_record_is_described(amplitude, turns, dur):
+    """A swimmer that turns steadily, ``turns`` full turns over ``dur`` (20 or 10 strokes): its
+    body frame follows a circle, body tangent to it. The turn puts about one period of a slow
+    oscillation in the lateral signal, stronger than a small stroke; that is not a record of
+    fewer than two periods (before, it was refused as one; and with 1.5-1.9 turns in 4 s when
+    the masks of the turn's 4th to 8th harmonics were wide enough to join over the stroke).
+    The stroke seen in the turning body frame is the straight swimmer's: the same period and
+    leading end."""
     n = int(dur / 0.004) + 1
     straight = wave_track(period=T, amplitude=amplitude, duration=dur, n_frames=n)
     body = wave_track(period=T, amplitude=amplitude, duration=dur, n_frames=n, speed=0.0)
@@ -402,43 +406,97 @@ def _three_harmonic_stroke(fps: float, growth: float = 0.5) -> Track:
     return Track(t=t, x=s[None, :] + U * t[:, None], y=y, s=s, length=1.0)
 
 
-@pytest.mark.parametrize("fps", [20.0, 25.0])
+@pytest.mark.parametrize("fps", [15.0, 20.0, 25.0])
 def test_a_whole_number_of_frames_per_stroke_borrows_what_its_phases_resolve(fps):
-    """8 and 10 frames per stroke put every cycle's frames on the same 8, 10 phases: pooled,
-    they resolve 3 and 4 harmonics, not always the 4 asked (the guard alone left -10 % at 8).
-    A 3-harmonic stroke whose amplitude grows by a factor 2: both ends as at 500 fps within
-    0.5 %; a cycle's own fit holds 1 or 2."""
+    """6, 8 and 10 frames per stroke put every cycle's frames on the same 6, 8, 10 phases:
+    pooled, they resolve 2, 3 and 4 harmonics, not always the 4 asked (before: +87 % and
+    +112 % at 6; the guard alone left -10 % at 8). A 3-harmonic stroke whose amplitude grows by
+    a factor 2: both ends as at 500 fps within 0.5 %; a cycle's own fit holds 1 or 2."""
     ref = describe(_three_harmonic_stroke(500.0))
     d = describe(_three_harmonic_stroke(fps))
     for key in ("leading_lateral_p2p_mm", "trailing_lateral_p2p_mm"):
         assert getattr(d, key) == pytest.approx(getattr(ref, key), rel=5e-3), key
 
 
-def _four_harmonic_stroke(fps: float) -> Track:
-    """A steady travelling wave with harmonics 2, 3 and 4 (0.3, 0.15, 0.08) over 10 strokes."""
-    t = np.linspace(0.0, 4.0, int(round(4.0 * fps)) + 1)
+def _enveloped_stroke(envelope, fps: float, duration: float, noise: float = 0.0, seed: int = 0,
+                      harmonics: tuple = ((1, 1.0, 0.7),)) -> Track:
+    """A travelling wave (period T, tip amplitude A) of the given harmonics (order, amplitude,
+    phase), its amplitude multiplied by ``envelope(t)``, with white noise on x and y."""
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0.0, duration, int(round(duration * fps)) + 1)
     s = np.linspace(0.0, 1.0, 41)
     th = 2 * np.pi / 0.8 * s[None, :] - 2 * np.pi * t[:, None] / T
-    y = A * (0.4 + 0.6 * s)[None, :] * (np.sin(th) + 0.3 * np.sin(2 * th + 0.7) + 0.15 * np.sin(3 * th + 0.3)
-                                        + 0.08 * np.sin(4 * th + 1.1))
-    return Track(t=t, x=s[None, :] + U * t[:, None], y=y, s=s, length=1.0)
+    wave = sum(a * np.sin(k * th + p) for k, a, p in harmonics)
+    y = A * (0.4 + 0.6 * s)[None, :] * wave * np.asarray(envelope(t), float)[:, None]
+    x = s[None, :] + U * t[:, None]
+    if noise:
+        x, y = x + rng.normal(0.0, noise, x.shape), y + rng.normal(0.0, noise, y.shape)
+    return Track(t=t, x=x, y=y, s=s, length=1.0)
 
 
 @pytest.mark.parametrize("fps", [12.5, 15.0])
-def test_phases_that_fold_two_harmonics_or_more_are_not_pooled(fps, monkeypatch):
-    """5 and 6 frames per stroke resolve 2 harmonics; the 4 the stroke has fold onto them
-    (4 onto 1 and 3 onto 2 at 5), which no fit can tell apart: borrowing them put the leading
-    end 16 % long at 5 (a cycle's own fit: 1 %). Now no end is further from the truth at
-    500 fps than the cycles' own fits leave it."""
-    from flutterswim.analysis import descriptors as D
+def test_a_two_harmonic_stroke_at_a_whole_number_of_frames_is_borrowed_whole(fps):
+    """5 and 6 frames per stroke resolve 2 harmonics, all a 2-harmonic stroke has: pooled, both
+    ends as at 500 fps within 1.5 % for any phase of the 2nd harmonic (a cap that refused to
+    borrow when 2 of the 4 asked were unresolved left them 6.5 % short on average, 11.7 % at
+    worst, over 12 random phases)."""
+    rng = np.random.default_rng(7)
+    for phase in rng.uniform(0.0, 2 * np.pi, 4):
+        wave = ((1, 1.0, 0.0), (2, 0.3, float(phase)))
+        ref = describe(_enveloped_stroke(np.ones_like, 500.0, 4.0, harmonics=wave))
+        d = describe(_enveloped_stroke(np.ones_like, fps, 4.0, harmonics=wave))
+        for key in ("leading_lateral_p2p_mm", "trailing_lateral_p2p_mm"):
+            assert getattr(d, key) == pytest.approx(getattr(ref, key), rel=1.5e-2), (key, phase)
 
-    ref = describe(_four_harmonic_stroke(500.0))
-    pooled = describe(_four_harmonic_stroke(fps))
-    monkeypatch.setattr(D, "_POOLED_HARMONICS", 0)
-    own = describe(_four_harmonic_stroke(fps))
-    for key in ("leading_lateral_p2p_mm", "trailing_lateral_p2p_mm"):
-        err = abs(getattr(pooled, key) / getattr(ref, key) - 1)
-        assert err <= abs(getattr(own, key) / getattr(ref, key) - 1) + 1e-3, key
+
+@pytest.mark.parametrize("fps, wave", [(12.5, "tanh"), (15.0, "sawtooth"), (25.0, "sawtooth")])
+def test_a_clean_coarsely_sampled_growth_keeps_its_cycles_and_rate(fps, wave):
+    """Without noise, a sharp stroke (tanh(3 sin), or a 7-term sawtooth) growing at rate 1.5
+    from 1e-3, at 5-10 frames per stroke: its second differences are its own curvature, in
+    proportion to its size at any size, so no part of the growth is at rest (the cycles start
+    within the first period) and the growth rate is 1.5 within 1 % (a rest rule and noise
+    floor that took that curvature for noise left it unmeasured)."""
+    rate, a0 = 1.5, 1e-3
+    s = np.linspace(0.0, 1.0, 41)
+    t = np.linspace(0.0, 10.0, int(round(10.0 * fps)) + 1)
+    ph = 2 * np.pi / 0.8 * s[None, :] - 2 * np.pi * t[:, None] / T
+    f = np.tanh(3 * np.sin(ph)) if wave == "tanh" else sum(np.sin(k * ph) / k for k in range(1, 8))
+    y = A * (0.4 + 0.6 * s)[None, :] * f * landau_envelope(t, a0, 1.0, rate)[:, None]
+    c = detect_cycles(Track(t=t, x=s[None, :] + U * t[:, None], y=y, s=s, length=1.0))
+    assert c.starts[0] < T
+    assert c.growth_rate == pytest.approx(rate, rel=1e-2)
+
+
+def test_noise_in_a_rest_after_the_strokes_is_not_counted():
+    """10 strokes, then 6 s at rest with noise of 20 % of the stroke's amplitude, the period
+    given as 0.4 s: the rest is no stroke (its amplitude, the noise's share taken off, is small
+    beside the stroke's), the cycles end with the strokes and the period is within 3 % (a rule
+    on the raw amplitude counted 13-15 cycles and gave 0.70-0.95 s)."""
+    for seed in (0, 1):
+        tr = _enveloped_stroke(lambda t: (t < 4.0).astype(float), 250.0, 10.0, noise=0.02, seed=seed)
+        c = detect_cycles(tr, period=T)
+        assert c.starts[-1] < 4.2
+        assert describe(tr, period=T).period_s == pytest.approx(T, rel=3e-2)
+
+
+@pytest.mark.parametrize("fps", [25.0, 50.0, 250.0])
+def test_a_stroke_fading_into_the_noise_is_described_by_its_whole_cycles(fps):
+    """The stroke's amplitude modulated by 1 + 0.9 sin(2 pi t / 3 s) under noise of 15 % of its
+    amplitude: in the troughs the section skips strokes, and a "cycle" of 2-3 periods was
+    averaged into the period (0.48-0.56 s for 0.4). Such cycles end the window as missing
+    frames do: the period within 4 %."""
+    for seed in (0, 1):
+        tr = _enveloped_stroke(lambda t: 1 + 0.9 * np.sin(2 * np.pi * t / 3.0), fps, 9.0, noise=0.015, seed=seed)
+        assert describe(tr).period_s == pytest.approx(T, rel=4e-2)
+
+
+@pytest.mark.parametrize("noise", [0.0, 1e-3, 5e-3])
+def test_the_onset_of_a_burst_of_strokes_is_its_start(noise):
+    """At rest, 2 s of strokes, at rest again to 8 s: the onset is at the burst's start within
+    one period, clean or noisy (the final amplitude is the last strokes', not the rest's after
+    them; was NaN clean and 0.5 s early with noise)."""
+    tr = _enveloped_stroke(lambda t: ((t >= 2.0) & (t < 4.0)).astype(float), 50.0, 8.0, noise=noise)
+    assert abs(detect_cycles(tr).onset_time - 2.0) < T
 
 
 def test_three_frames_per_stroke_say_why_there_is_no_lateral_excursion():

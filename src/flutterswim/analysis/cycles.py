@@ -154,16 +154,40 @@ def _rel(a: np.ndarray) -> np.ndarray:
     return out
 
 
-def _envelope_onset(t: np.ndarray, d: np.ndarray, var: np.ndarray, W: float, t_final: float, fraction: float) -> float:
+def _noise_variance(t: np.ndarray, u: np.ndarray, d: np.ndarray, W: float) -> float:
+    """Variance of stationary measurement noise in u. The local second-difference estimate
+    (over one period) is that variance plus a share of the stroke's own power that grows as
+    the sampling coarsens: fitted over the record against the local power (mean of d^2),
+    the intercept (relative residuals: the quiet frames weigh as much as the loud ones),
+    within [0, the record's 10th percentile]."""
+    s2 = _noise_sigma(t, u, W) ** 2
+    p = running_mean(t, d * d, W)
+    floor = float(np.percentile(s2, 10))
+    ok = s2 > 0.0
+    if np.count_nonzero(ok) < 3 or np.ptp(p[ok]) <= 0.0:
+        return floor
+    w = 1.0 / s2[ok]
+    a = float(np.linalg.lstsq(np.column_stack([w, p[ok] * w]), np.ones(w.size), rcond=None)[0][0])
+    return min(max(a, 0.0), floor)
+
+
+def _envelope_onset(t: np.ndarray, d: np.ndarray, var: np.ndarray, W: float, t_final: float, t_end: float,
+                    fraction: float) -> float:
     """Time the stroke's envelope (root mean square of d over one period, the noise's variance
-    taken off) rises through ``fraction`` of its median after ``t_final`` for the last time
-    before it (log-linear between frames; the record start if it is above all along): noise
-    under that level crosses it early and falls back."""
+    taken off) rises through ``fraction`` of its median over the last cycles [t_final, t_end]
+    for the last time before them (log-linear between frames; the record start if it is above
+    all along): noise under that level crosses it early and falls back. NaN where the noise
+    hides that level."""
     env = np.sqrt(2.0 * np.maximum(running_mean(t, d * d, W) - var, 0.0))
-    late = env[t >= t_final]
+    late = env[(t >= t_final) & (t <= t_end)]
     if late.size == 0 or not np.median(late) > 0:
         return math.nan
     thr = fraction * float(np.median(late))
+    # unresolved: the threshold's power under twice the scatter of the envelope's (2 var
+    # sqrt(2 / n) over n frames a period; 0.5 noise sigma for the paper's stroke at 200 fps)
+    n = max(W / float(np.median(np.diff(t))), 1.0)
+    if thr * thr < 2.0 * 2.0 * float(np.max(var)) * math.sqrt(2.0 / n):
+        return math.nan
     below = np.nonzero((env < thr) & (t < t_final))[0]
     if below.size == 0:
         return float(t[0])
@@ -201,10 +225,14 @@ def detect_cycles(
     converged, at the start of the trailing run of converged cycles.
 
     Onset time: when the cycle amplitude first reaches ``onset_fraction`` of the final
-    amplitude (log-linear interpolation). Growth rate: least-squares fit of log amplitude
-    against time over cycles after ``fit_after`` (default: two relaxation times when the
-    source knows tau, else after the second cycle) with amplitude below
-    ``fit_max_fraction`` of the final one.
+    amplitude (log-linear interpolation); after a quiet stretch (no cycles over more than 1.5
+    periods from the record start: at rest, or the stroke under the noise), when the envelope
+    less the noise's variance last rises through that fraction (NaN if the noise hides it).
+    Growth rate: least-squares fit of the log of the cycles' root-mean-square amplitude (less
+    the noise's variance) against time over at least 4 cycles after ``fit_after`` (default:
+    two relaxation times when the source knows tau, else after the second cycle, or from the
+    record start after a quiet stretch), above 3 noise sigma and below ``fit_max_fraction``
+    of the final amplitude.
     """
     tr = as_track(obj)
     if not 0 < tol < 1:
@@ -239,7 +267,7 @@ def detect_cycles(
     # the measurement noise's variance (second differences, over one period): the growth fit
     # and the envelope use amplitudes corrected for it (the root mean square of d less the
     # noise's: unbiased, where the peak to peak grows with the noise)
-    var = _noise_sigma(t, u, W) ** 2
+    var = np.full_like(u, _noise_variance(t, u, d, W))
     ramps = np.zeros(K)
     noise_amp = np.zeros(K)
     for k in range(K):
@@ -300,7 +328,7 @@ def detect_cycles(
         if above.size:
             k = int(above[0])
             if k == 0 and quiet:
-                onset = _envelope_onset(t, d, var, W, float(starts[max(K - 3, 0)]), onset_fraction)
+                onset = _envelope_onset(t, d, var, W, float(starts[max(K - 3, 0)]), float(starts[K]), onset_fraction)
             elif k == 0:
                 onset = float(t[0])
             else:
@@ -317,12 +345,12 @@ def detect_cycles(
         else:
             t_after = float(t[0]) + float(fit_after)
         # cycles above twice the noise, below the cut
-        sel = (mids >= t_after) & (ramps <= fit_max_fraction * r_final) & (ramps > 2.0 * noise_amp) & (ramps > 0)
+        sel = (mids >= t_after) & (ramps <= fit_max_fraction * r_final) & (ramps > 3.0 * noise_amp) & (ramps > 0)
         # only the growing part before the envelope first reaches the cut
         first_big = np.nonzero(ramps > fit_max_fraction * r_final)[0]
         if first_big.size:
             sel &= np.arange(K) < first_big[0]
-        if np.count_nonzero(sel) >= 3:
+        if np.count_nonzero(sel) >= 4:  # 2 degrees of freedom at least for its standard error
             tm, la = mids[sel], np.log(ramps[sel])
             A = np.vstack([tm - tm.mean(), np.ones_like(tm)]).T
             coef, res, *_ = np.linalg.lstsq(A, la, rcond=None)

@@ -109,9 +109,6 @@ _POOLED_MIN_COVERAGE = 0.25
 # and the missing harmonics may change a cycle's peak-to-peak by at most this factor (the
 # paper's trailing end needs 1.06; more is a fit gone wrong, not a waveform)
 _POOLED_MAX_FACTOR = 1.25
-# harmonics the pooled phases may leave unresolved: a whole number n of frames per stroke
-# resolves (n - 1) / 2 and folds the ones above onto them, which the data cannot tell apart
-_POOLED_MAX_UNRESOLVED = 1
 
 
 def _pooled_p2p(series: list, H: int) -> tuple[float, float, int]:
@@ -159,11 +156,11 @@ def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmoni
                   for k, c in enumerate(series)]
         # as many harmonics as the pooled phases resolve: a whole number n of frames per
         # stroke puts them on n phases, which resolve (n - 1) / 2 harmonics
-        full = math.nan
-        for top in range(need, max(min(own), need - 1 - _POOLED_MAX_UNRESOLVED), -1):
+        top, full = need, math.nan
+        while top > min(own) and not math.isfinite(full):
             full, rss, dof = _pooled_p2p(steady, top)
-            if math.isfinite(full):
-                break
+            top -= 1
+        top += 1
         if math.isfinite(full):
             factor = {}
             for h in sorted(set(h for h in own if h < top)):
@@ -346,8 +343,9 @@ def describe(
 ) -> Descriptors:
     """Descriptors averaged over the last ``n_last`` detected cycles (consecutive cycles without
     missing frames over more than ``max_gap`` periods: no interval between frames longer than
-    1.5 median intervals and ``max_gap`` periods; the last such run, fewer cycles if it is
-    shorter, ``n_cycles_used``).
+    1.5 median intervals and ``max_gap`` periods, and none longer than 1.5 median periods, where
+    the section skipped strokes; the last such run, fewer cycles if it is shorter,
+    ``n_cycles_used``).
 
     Swimming direction: net centroid displacement over those cycles; advancement: its
     projection on the field direction (per cycle, field at mid-cycle; the total uses the mean
@@ -374,7 +372,9 @@ def describe(
     if not (isinstance(max_gap, (int, float)) and max_gap > 0):
         raise ParameterError(f"max_gap={max_gap!r} must be a number > 0 (periods)")
     gaps = cyc.frame_gaps(tr.t)
-    good = gaps <= max_gap
+    # and no cycle over 1.5 median periods: the section skipped a stroke there (its amplitude
+    # fell into the noise)
+    good = (gaps <= max_gap) & (cyc.periods <= 1.5 * float(np.median(cyc.periods)))
     if not np.any(good):
         raise ParameterError(
             f"every one of the track's {K} stroke cycles misses frames over more than {max_gap:g} period "

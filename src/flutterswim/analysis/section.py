@@ -75,8 +75,13 @@ def estimate_period(t: np.ndarray, u: np.ndarray) -> float:
         inner = np.zeros_like(ok)
         inner[1:-1] = (spec[1:-1] > spec[:-2]) & (spec[1:-1] > spec[2:])
         harmonic = np.zeros_like(ok)
-        for k in range(2, 9):  # a lobe's position is known to about a quarter of the resolution 1/dur
-            harmonic |= np.abs(freqs - k * freqs[j]) <= (0.5 + 0.25 * k) / dur
+        # a lobe's position is known to about a quarter of the resolution 1/dur; from the 4th
+        # on, the bands would join and cover a turning swimmer's stroke: the refined lobe's
+        # multiples, half a resolution either side
+        f_slow = _refine(freqs, spec, j)
+        for k in range(2, 9):
+            tol = (0.5 + 0.25 * k) / dur if k <= 3 else 0.5 / dur
+            harmonic |= np.abs(freqs - k * (freqs[j] if k <= 3 else f_slow)) <= tol
         own = ok & inner & ~harmonic & (freqs >= fmin + 0.5 / dur)
         if not np.any(own):
             raise short
@@ -294,10 +299,15 @@ def section_crossings(
         sigma = _noise_sigma(t, u, W)
         h = np.maximum(hysteresis * amp, np.minimum(noise_factor * sigma, 0.5 * amp))
         # at rest: where the variation is no larger than the noise (amplitude under 2.5 sigma;
-        # noise alone gives 1.4 sigma) and small beside the record's stroke, no crossings. Both:
-        # second differences also grow with a coarse, sharp or unevenly sampled stroke's own
-        # curvature, which is never small beside itself
-        rest = (amp < 2.5 * sigma) & (amp < _REST_CONTRAST * float(np.max(amp)))
+        # noise alone gives 1.4 sigma), its ratio to sigma well under the full stroke's and its
+        # amplitude, the noise's share taken off, small beside the record's stroke: no crossings.
+        # Second differences also grow with a coarse, sharp or unevenly sampled stroke's own
+        # curvature, in proportion to it: a stroke of any size keeps its ratio
+        ratio = amp / np.maximum(sigma, 1e-300)
+        full = amp >= 0.5 * float(np.max(amp))
+        r_full = float(np.median(ratio[full])) if np.any(full) else math.inf
+        amp_c = np.sqrt(np.maximum(amp * amp - 2.0 * sigma * sigma, 0.0))
+        rest = (amp < 2.5 * sigma) & (ratio < 0.7 * r_full) & (amp_c < _REST_CONTRAST * float(np.max(amp_c)))
         cross = upward_crossings(t, d, np.where(rest, np.inf, h), half_window=W / 12.0 if final else 0.0)
         if cross.size < 3 and np.any(rest):  # never fewer than three crossings for the rule
             cross = upward_crossings(t, d, h, half_window=W / 12.0 if final else 0.0)
