@@ -529,3 +529,40 @@ def test_a_body_at_rest_is_not_described(seed):
     noisy = Track(t=wave.t, x=wave.x + rng.normal(0.0, 5e-3, wave.x.shape),
                   y=wave.y + rng.normal(0.0, 5e-3, wave.y.shape), s=wave.s, length=wave.length)
     assert describe(noisy).period_s == pytest.approx(T, rel=2e-2)
+
+
+@pytest.mark.parametrize("periods", [(0.4, 0.7), (0.7, 0.4), (0.25, 0.48)])
+def test_a_stroke_whose_period_changes_is_described_by_its_last_strokes(periods):
+    """The period steps (phase-continuous) from T1 to T2 halfway through the record, as when the
+    field changes: the last 5 cycles are described with T2 and the advance U T2 within 0.1 %
+    (a cycle over 1.5 median periods of the whole record ended the window, so a slower stroke
+    after a faster one was described by the old strokes: 0.40 s for 0.7 s)."""
+    T1, T2 = periods
+    ts = 15 * T1
+    t = np.linspace(0.0, ts + 10 * T2, int(round((ts + 10 * T2) * 100)) + 1)
+    phase = 2 * np.pi * np.where(t < ts, t / T1, ts / T1 + (t - ts) / T2)
+    s = np.linspace(0.0, 1.0, 41)
+    y = A * (0.4 + 0.6 * s)[None, :] * np.sin(2 * np.pi / 0.8 * s[None, :] - phase[:, None])
+    x = s[None, :] + U * t[:, None]
+    d = describe(Track(t=t, x=x, y=y, s=s, length=1.0), n_last=5)
+    assert d.n_cycles_used == 5
+    assert d.period_s == pytest.approx(T2, rel=1e-3)
+    assert d.advance_per_cycle_mm == pytest.approx(U * T2 * 1e3, rel=1e-3)
+
+
+@pytest.mark.parametrize("rate", [1.0, 2.5])
+def test_a_record_that_ends_while_the_stroke_still_grows(rate):
+    """12 periods of a Landau envelope that ends while the stroke is still at 3 % of its final
+    amplitude: the final amplitude is not in the record, so the onset (a tenth of it) is not
+    known (NaN; was the record start), and the growth has no cut from above: its rate is exact
+    within 1 % (was NaN: every cycle was above a tenth of the last ones)."""
+    dur = 12 * T
+    a0 = 0.03 * math.exp(-rate * dur)
+    t = np.linspace(0.0, dur, int(round(dur * 100)) + 1)
+    s = np.linspace(0.0, 1.0, 41)
+    y = A * (0.4 + 0.6 * s)[None, :] * np.sin(2 * np.pi / 0.8 * s[None, :] - 2 * np.pi * t[:, None] / T)
+    y = y * landau_envelope(t, a0, 1.0, rate)[:, None]
+    c = detect_cycles(Track(t=t, x=s[None, :] + U * t[:, None], y=y, s=s, length=1.0))
+    assert not c.limit_cycle
+    assert math.isnan(c.onset_time)
+    assert c.growth_rate == pytest.approx(rate, rel=1e-2)

@@ -229,10 +229,15 @@ def detect_cycles(
     periods from the record start: at rest, or the stroke under the noise), when the envelope
     less the noise's variance last rises through that fraction (NaN if the noise hides it).
     Growth rate: least-squares fit of the log of the cycles' root-mean-square amplitude (less
-    the noise's variance) against time over at least 4 cycles after ``fit_after`` (default:
-    two relaxation times when the source knows tau, else after the second cycle, or from the
-    record start after a quiet stretch), above 3 noise sigma and below ``fit_max_fraction``
-    of the final amplitude.
+    the noise's variance) against time over at least 4 cycles (3 if each is above 30 noise
+    sigma) after ``fit_after`` (default: two relaxation times when the source knows tau, from
+    the first cycle after a quiet stretch longer than that; else after the second cycle, or
+    from the record start after a quiet stretch), above 3 noise sigma, more than a period
+    from the record's ends and below ``fit_max_fraction`` of the final amplitude. A record
+    that ends while the stroke still grows exponentially (its last two cycles each grow by
+    over 10 % and at over 0.8 of the fastest growth) holds no final amplitude: no onset (NaN)
+    and no cut from above. Variation under 1e-10 of the record's largest (floating-point
+    rounding) is no stroke.
     """
     tr = as_track(obj)
     if not 0 < tol < 1:
@@ -324,7 +329,21 @@ def detect_cycles(
     if K >= 1:
         a_final = float(np.median(amps[-min(K, max(n_consecutive, 3)) :]))
         r_final = float(np.median(ramps[-min(K, max(n_consecutive, 3)) :]))
-        above = np.nonzero(amps >= onset_fraction * a_final)[0]
+        # still growing at the record's end (the last two cycles each grow by more than 10 %,
+        # at over 0.8 of the record's fastest growth): the final amplitude is not in the
+        # record, so neither is the onset, and the growth fit has no cut from above
+        # Cycles within a period of the record's ends are left out of both: the body axis is
+        # extrapolated over the last half period and the running mean's window reaches half a
+        # period further, which biases a growing stroke's amplitude there
+        inner = (starts[:-1] >= t[0] + W) & (starts[1:] <= t[-1] - W)
+        ok = (ramps > 3.0 * noise_amp) & (ramps > 0) & inner
+        growing = False
+        if not limit and np.count_nonzero(ok) >= 3 and np.all(ok[np.nonzero(inner)[0][-3:]]):
+            lg = np.diff(np.log(np.where(ok, ramps, 1.0)))[ok[1:] & ok[:-1]]
+            growing = lg.size >= 2 and bool(np.all(lg[-2:] > max(0.1, 0.8 * float(np.max(lg)))))
+        if growing:
+            r_final = math.inf
+        above = np.nonzero(amps >= onset_fraction * a_final)[0] if not growing else np.empty(0, int)
         if above.size:
             k = int(above[0])
             if k == 0 and quiet:
@@ -339,18 +358,24 @@ def detect_cycles(
         if fit_after is None:
             tau = tr.tau
             # the first cycles carry the initial condition's transient, unless a quiet
-            # stretch held it
-            t_after = float(t[0]) + 2.0 * tau if tau is not None else (
+            # stretch held it (a stroke growing out of the noise); where the source knows tau,
+            # two relaxation times after the record start or, after a quiet stretch longer
+            # than that (the field switched on late), after its first cycle
+            t_first = float(starts[0]) if quiet and tau is not None and starts[0] > t[0] + 2.0 * tau else float(t[0])
+            t_after = t_first + 2.0 * tau if tau is not None else (
                 float(t[0]) if quiet else float(starts[min(2, K)]))
         else:
             t_after = float(t[0]) + float(fit_after)
-        # cycles above twice the noise, below the cut
-        sel = (mids >= t_after) & (ramps <= fit_max_fraction * r_final) & (ramps > 3.0 * noise_amp) & (ramps > 0)
+        # cycles above 3 noise sigma, away from the ends, below the cut
+        sel = (mids >= t_after) & (ramps <= fit_max_fraction * r_final) & ok
         # only the growing part before the envelope first reaches the cut
         first_big = np.nonzero(ramps > fit_max_fraction * r_final)[0]
         if first_big.size:
             sel &= np.arange(K) < first_big[0]
-        if np.count_nonzero(sel) >= 4:  # 2 degrees of freedom at least for its standard error
+        # 4 cycles at least (2 degrees of freedom for its standard error), or 3 where each is
+        # far above the noise (a clean, fast onset: 3 cycles between the transient and the cut)
+        n_sel = np.count_nonzero(sel)
+        if n_sel >= 4 or n_sel == 3 and np.all(ramps[sel] > 30.0 * noise_amp[sel]):
             tm, la = mids[sel], np.log(ramps[sel])
             A = np.vstack([tm - tm.mean(), np.ones_like(tm)]).T
             coef, res, *_ = np.linalg.lstsq(A, la, rcond=None)

@@ -343,8 +343,8 @@ def describe(
 ) -> Descriptors:
     """Descriptors averaged over the last ``n_last`` detected cycles (consecutive cycles without
     missing frames over more than ``max_gap`` periods: no interval between frames longer than
-    1.5 median intervals and ``max_gap`` periods, and none longer than 1.5 median periods, where
-    the section skipped strokes; the last such run, fewer cycles if it is shorter,
+    1.5 median intervals and ``max_gap`` periods, and none longer than 1.5 times the median
+    period of its neighbours, 3 cycles either side, where the section skipped strokes; the last such run, fewer cycles if it is shorter,
     ``n_cycles_used``).
 
     Swimming direction: net centroid displacement over those cycles; advancement: its
@@ -372,9 +372,11 @@ def describe(
     if not (isinstance(max_gap, (int, float)) and max_gap > 0):
         raise ParameterError(f"max_gap={max_gap!r} must be a number > 0 (periods)")
     gaps = cyc.frame_gaps(tr.t)
-    # and no cycle over 1.5 median periods: the section skipped a stroke there (its amplitude
-    # fell into the noise)
-    good = (gaps <= max_gap) & (cyc.periods <= 1.5 * float(np.median(cyc.periods)))
+    # and no cycle over 1.5 times the median period of its neighbours (3 cycles either side):
+    # the section skipped a stroke there (its amplitude fell into the noise). Local, so that
+    # a record whose period changes (the field changed) is described by its own last strokes
+    near = np.array([np.median(cyc.periods[max(0, k - 3) : k + 4]) for k in range(K)])
+    good = (gaps <= max_gap) & (cyc.periods <= 1.5 * near)
     if not np.any(good):
         raise ParameterError(
             f"every one of the track's {K} stroke cycles misses frames over more than {max_gap:g} period "

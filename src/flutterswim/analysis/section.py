@@ -250,6 +250,7 @@ def upward_crossings(
     return _local_roots(t, d, np.array(ms), half_window, deg)
 
 
+_ROUNDING = 1e-10  # a variation under this fraction of the record's largest is rounding, not a stroke
 _REST_CONTRAST = 0.3  # "small beside the stroke": under this fraction of the record's largest amplitude
 
 
@@ -308,6 +309,9 @@ def section_crossings(
         r_full = float(np.median(ratio[full])) if np.any(full) else math.inf
         amp_c = np.sqrt(np.maximum(amp * amp - 2.0 * sigma * sigma, 0.0))
         rest = (amp < 2.5 * sigma) & (ratio < 0.7 * r_full) & (amp_c < _REST_CONTRAST * float(np.max(amp_c)))
+        # and, with or without noise, a variation at the floating-point rounding of the stroke
+        # (a clean simulation before its field is on): no stroke of its own
+        rest |= amp < _ROUNDING * float(np.max(amp))
         cross = upward_crossings(t, d, np.where(rest, np.inf, h), half_window=W / 12.0 if final else 0.0)
         if cross.size < 3 and np.any(rest):  # never fewer than three crossings for the rule
             cross = upward_crossings(t, d, h, half_window=W / 12.0 if final else 0.0)
