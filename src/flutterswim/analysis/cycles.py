@@ -197,6 +197,9 @@ def _envelope_onset(t: np.ndarray, d: np.ndarray, var: np.ndarray, W: float, t_f
     return float(t[i - 1] + frac * (t[i] - t[i - 1]))
 
 
+_LINEAR_ANGLE = 0.1  # rad: a shape within this of straight grows as the linearisation says
+
+
 def detect_cycles(
     obj: Any,
     *,
@@ -235,9 +238,11 @@ def detect_cycles(
     from the record start after a quiet stretch), above 3 noise sigma, more than a period
     from the record's ends and below ``fit_max_fraction`` of the final amplitude. A record
     that ends while the stroke still grows exponentially (its last two cycles each grow by
-    over 10 % and at over 0.8 of the fastest growth) holds no final amplitude: no onset (NaN)
-    and no cut from above. Variation under 1e-10 of the record's largest (floating-point
-    rounding) is no stroke.
+    over 10 % and at over 0.8 of the fastest growth, none before was larger, and the last
+    period's cycles still grow at over half that) holds no final amplitude: no onset (NaN),
+    and the fit keeps to cycles whose shape is within 0.1 rad of straight. Variation under
+    1e-10 of the record's largest (floating-point rounding) is no stroke; the fit starts after
+    the first cycle only in a clean record (the noise under 1e-6 of the stroke).
     """
     tr = as_track(obj)
     if not 0 < tol < 1:
@@ -290,6 +295,7 @@ def detect_cycles(
     j = np.clip(np.searchsorted(t, tq) - 1, 0, t.size - 2)
     wq = np.clip((tq - t[j]) / (t[j + 1] - t[j]), 0.0, 1.0)[:, None]
     stacked = ((1 - wq) * th[j] + wq * th[j + 1]).reshape(K, n_shape, th.shape[1])
+    theta_amp = np.max(np.abs(stacked), axis=(1, 2)) if K else np.empty(0)
     shapes = list(stacked)
     if K >= 2 and n_shape_modes:
         # compare strokes in the space of the leading principal shape modes (filters noise)
@@ -341,8 +347,22 @@ def detect_cycles(
         if not limit and np.count_nonzero(ok) >= 3 and np.all(ok[np.nonzero(inner)[0][-3:]]):
             lg = np.diff(np.log(np.where(ok, ramps, 1.0)))[ok[1:] & ok[:-1]]
             growing = lg.size >= 2 and bool(np.all(lg[-2:] > max(0.1, 0.8 * float(np.max(lg)))))
+            # and the stroke was never larger before: a saturated stroke whose amplitude is
+            # modulated (rising at the record's end) is not growing out of its onset
+            k_last = int(np.nonzero(ok)[0][-1])
+            growing = growing and bool(np.all(ramps[:k_last] < ramps[k_last]))
+            # and the cycles of the last period (left out of the fit: biased, but not by half)
+            # do not show the growth slowing to under half its fastest: the record ends in the
+            # saturation, its linear growth hidden under the noise
+            tail = ramps[k_last:]
+            if growing and tail.size >= 2 and np.all(tail > 3.0 * noise_amp[k_last:]):
+                growing = bool(np.all(np.diff(np.log(tail)) > 0.5 * float(np.max(lg))))
         if growing:
+            # no final amplitude to cut at: the fit keeps to cycles whose shape is still within
+            # the linear regime (tangent angle within _LINEAR_ANGLE of straight: sin and tan
+            # within 0.3 %)
             r_final = math.inf
+            ok &= theta_amp <= _LINEAR_ANGLE
         above = np.nonzero(amps >= onset_fraction * a_final)[0] if not growing else np.empty(0, int)
         if above.size:
             k = int(above[0])
@@ -361,7 +381,11 @@ def detect_cycles(
             # stretch held it (a stroke growing out of the noise); where the source knows tau,
             # two relaxation times after the record start or, after a quiet stretch longer
             # than that (the field switched on late), after its first cycle
-            t_first = float(starts[0]) if quiet and tau is not None and starts[0] > t[0] + 2.0 * tau else float(t[0])
+            # (only a clean record's quiet stretch is at rest: under noise the first cycle is
+            # where the stroke leaves the noise, long after its transient, and the cycles after
+            # it are the growth to fit)
+            clean = math.sqrt(float(var[0])) < 1e-6 * float(np.max(ramps))
+            t_first = float(starts[0]) if quiet and clean and tau is not None and starts[0] > t[0] + 2.0 * tau else float(t[0])
             t_after = t_first + 2.0 * tau if tau is not None else (
                 float(t[0]) if quiet else float(starts[min(2, K)]))
         else:

@@ -375,7 +375,13 @@ def describe(
     # and no cycle over 1.5 times the median period of its neighbours (3 cycles either side):
     # the section skipped a stroke there (its amplitude fell into the noise). Local, so that
     # a record whose period changes (the field changed) is described by its own last strokes
-    near = np.array([np.median(cyc.periods[max(0, k - 3) : k + 4]) for k in range(K)])
+    # (a full window of 7 shifted inward at the record's ends, without the cycle itself: two
+    # skipped strokes among the last four cycles must not make the median their own)
+    def _near(k: int) -> float:
+        a = min(max(0, k - 3), max(0, K - 7))
+        w = np.delete(cyc.periods[a : a + 7], k - a)
+        return float(np.median(w)) if w.size else float(cyc.periods[k])
+    near = np.array([_near(k) for k in range(K)])
     good = (gaps <= max_gap) & (cyc.periods <= 1.5 * near)
     if not np.any(good):
         raise ParameterError(
