@@ -550,8 +550,8 @@ def test_a_stroke_whose_period_changes_is_described_by_its_last_strokes(periods)
     assert d.advance_per_cycle_mm == pytest.approx(U * T2 * 1e3, rel=1e-3)
 
 
-@pytest.mark.parametrize("rate", [1.0, 2.5])
-def test_a_record_that_ends_while_the_stroke_still_grows(rate):
+@pytest.mark.parametrize("rate, bend", [(1.0, 0.0), (2.5, 0.0), (1.0, 0.2)])
+def test_a_record_that_ends_while_the_stroke_still_grows(rate, bend):
     """12 periods of a Landau envelope that ends while the stroke is still at 3 % of its final
     amplitude: the final amplitude is not in the record, so the onset (a tenth of it) is not
     known (NaN; was the record start), and the growth has no cut from above: its rate is exact
@@ -561,7 +561,10 @@ def test_a_record_that_ends_while_the_stroke_still_grows(rate):
     t = np.linspace(0.0, dur, int(round(dur * 100)) + 1)
     s = np.linspace(0.0, 1.0, 41)
     y = A * (0.4 + 0.6 * s)[None, :] * np.sin(2 * np.pi / 0.8 * s[None, :] - 2 * np.pi * t[:, None] / T)
-    y = y * landau_envelope(t, a0, 1.0, rate)[:, None]
+    # with a static bend of ``bend`` rad from straight (tangent angle 2 bend (s - 1/2)): the
+    # linear-regime cut measures the stroke's own deflection, not the bend (the largest angle
+    # from straight left no cycle: NaN)
+    y = y * landau_envelope(t, a0, 1.0, rate)[:, None] + bend * (s[None, :] - 0.5) ** 2
     c = detect_cycles(Track(t=t, x=s[None, :] + U * t[:, None], y=y, s=s, length=1.0))
     assert not c.limit_cycle
     assert math.isnan(c.onset_time)
@@ -607,3 +610,20 @@ def test_a_noisy_growth_recorded_into_its_saturation_is_not_still_growing():
     assert abs(c.onset_time - t_on) < 0.4
     if math.isfinite(c.growth_rate):
         assert c.growth_rate == pytest.approx(rate, rel=0.1)
+
+
+def test_a_step_to_a_much_slower_stroke_is_described_with_its_new_cycles():
+    """The period steps from 0.4 to 1.0 s with 4 new cycles left in the record: the new cycles
+    are each over 1.5 times their neighbours' median, but 3 or more consecutive cycles of one
+    period are a new stroke, not skipped ones (those do not repeat at one period): the last 5
+    cycles are described, within 10 % of their mean true period (the window ended before the
+    new cycles: 0.49 s)."""
+    T1, T2, n_new = 0.4, 1.0, 4
+    ts = 15 * T1
+    dur = ts + n_new * T2 + 0.05
+    t = np.linspace(0.0, dur, int(round(dur * 100)) + 1)
+    phase = 2 * np.pi * np.where(t < ts, t / T1, ts / T1 + (t - ts) / T2)
+    s = np.linspace(0.0, 1.0, 41)
+    y = A * (0.4 + 0.6 * s)[None, :] * np.sin(2 * np.pi / 0.8 * s[None, :] - phase[:, None])
+    d = describe(Track(t=t, x=s[None, :] + U * t[:, None], y=y, s=s, length=1.0), n_last=5)
+    assert d.period_s == pytest.approx((n_new * T2 + T1) / 5, rel=0.1)

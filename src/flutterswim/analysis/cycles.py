@@ -200,6 +200,17 @@ def _envelope_onset(t: np.ndarray, d: np.ndarray, var: np.ndarray, W: float, t_f
 _LINEAR_ANGLE = 0.1  # rad: a shape within this of straight grows as the linearisation says
 
 
+def _enough(sel: np.ndarray, ramps: np.ndarray, noise_amp: np.ndarray, cut: float) -> bool:
+    """Whether the fit's selection, kept to the growing part before the envelope first reaches
+    the cut, holds 4 cycles, or 3 each far above the noise."""
+    sel = sel.copy()
+    first_big = np.nonzero(ramps > cut)[0]
+    if first_big.size:
+        sel &= np.arange(sel.size) < first_big[0]
+    n_sel = np.count_nonzero(sel)
+    return bool(n_sel >= 4 or n_sel == 3 and np.all(ramps[sel] > 30.0 * noise_amp[sel]))
+
+
 def detect_cycles(
     obj: Any,
     *,
@@ -240,9 +251,11 @@ def detect_cycles(
     that ends while the stroke still grows exponentially (its last two cycles each grow by
     over 10 % and at over 0.8 of the fastest growth, none before was larger, and the last
     period's cycles still grow at over half that) holds no final amplitude: no onset (NaN),
-    and the fit keeps to cycles whose shape is within 0.1 rad of straight. Variation under
-    1e-10 of the record's largest (floating-point rounding) is no stroke; the fit starts after
-    the first cycle only in a clean record (the noise under 1e-6 of the stroke).
+    and the fit keeps to cycles whose stroke deflects the tangent angle by at most 0.1 rad
+    (the fundamental's amplitude over the cycle, in the leading shape modes: a static bend and
+    the angle's noise do not count). Variation under 1e-10 of the record's largest
+    (floating-point rounding) is no stroke; in a noisy record the fit starts two relaxation
+    times after the record start where two after the first cycle leave too few cycles.
     """
     tr = as_track(obj)
     if not 0 < tol < 1:
@@ -295,14 +308,22 @@ def detect_cycles(
     j = np.clip(np.searchsorted(t, tq) - 1, 0, t.size - 2)
     wq = np.clip((tq - t[j]) / (t[j + 1] - t[j]), 0.0, 1.0)[:, None]
     stacked = ((1 - wq) * th[j] + wq * th[j + 1]).reshape(K, n_shape, th.shape[1])
-    theta_amp = np.max(np.abs(stacked), axis=(1, 2)) if K else np.empty(0)
     shapes = list(stacked)
+    basis = None
     if K >= 2 and n_shape_modes:
         # compare strokes in the space of the leading principal shape modes (filters noise)
         allsh = np.concatenate(shapes, axis=0)
         _, _, vt = np.linalg.svd(allsh, full_matrices=False)
         basis = vt[: int(n_shape_modes)].T
         shapes = [sh @ basis for sh in shapes]
+    # the stroke's tangent-angle deflection per cycle: the fundamental's amplitude along s (its
+    # largest) of the cycle's shapes less their mean over the cycle (a static bend is no stroke),
+    # in the leading shape modes (the measurement noise of a tracked filament's angle averages out)
+    osc = stacked - stacked.mean(axis=1, keepdims=True) if K else stacked
+    if basis is not None:
+        osc = osc @ basis @ basis.T
+    ph1 = np.exp(-2j * np.pi * np.arange(n_shape) / n_shape)
+    theta_amp = np.max(np.abs(np.einsum("kjs,j->ks", osc, ph1)), axis=1) * (2.0 / n_shape) if K else np.empty(0)
     d_shape = np.full(K, np.nan)
     for k in range(1, K):
         num = np.linalg.norm(shapes[k] - shapes[k - 1])
@@ -381,25 +402,24 @@ def detect_cycles(
             # stretch held it (a stroke growing out of the noise); where the source knows tau,
             # two relaxation times after the record start or, after a quiet stretch longer
             # than that (the field switched on late), after its first cycle
-            # (only a clean record's quiet stretch is at rest: under noise the first cycle is
-            # where the stroke leaves the noise, long after its transient, and the cycles after
-            # it are the growth to fit)
+            # (a noisy record's quiet stretch may hide a stroke growing since the record start,
+            # whose first cycle is where it leaves the noise: there, where two tau after that
+            # cycle leave too few cycles to fit, the fit starts two tau after the record start)
             clean = math.sqrt(float(var[0])) < 1e-6 * float(np.max(ramps))
-            t_first = float(starts[0]) if quiet and clean and tau is not None and starts[0] > t[0] + 2.0 * tau else float(t[0])
-            t_after = t_first + 2.0 * tau if tau is not None else (
-                float(t[0]) if quiet else float(starts[min(2, K)]))
+            late_on = quiet and tau is not None and starts[0] > t[0] + 2.0 * tau
+            t_after = float(starts[0]) + 2.0 * tau if late_on else (float(t[0]) + 2.0 * tau if tau is not None else (
+                float(t[0]) if quiet else float(starts[min(2, K)])))
+            if late_on and not clean and not _enough(
+                    (mids >= t_after) & (ramps <= fit_max_fraction * r_final) & ok, ramps, noise_amp, fit_max_fraction * r_final):
+                t_after = float(t[0]) + 2.0 * tau
         else:
             t_after = float(t[0]) + float(fit_after)
         # cycles above 3 noise sigma, away from the ends, below the cut
         sel = (mids >= t_after) & (ramps <= fit_max_fraction * r_final) & ok
-        # only the growing part before the envelope first reaches the cut
-        first_big = np.nonzero(ramps > fit_max_fraction * r_final)[0]
-        if first_big.size:
-            sel &= np.arange(K) < first_big[0]
-        # 4 cycles at least (2 degrees of freedom for its standard error), or 3 where each is
-        # far above the noise (a clean, fast onset: 3 cycles between the transient and the cut)
-        n_sel = np.count_nonzero(sel)
-        if n_sel >= 4 or n_sel == 3 and np.all(ramps[sel] > 30.0 * noise_amp[sel]):
+        if _enough(sel, ramps, noise_amp, fit_max_fraction * r_final):
+            first_big = np.nonzero(ramps > fit_max_fraction * r_final)[0]
+            if first_big.size:
+                sel &= np.arange(K) < first_big[0]
             tm, la = mids[sel], np.log(ramps[sel])
             A = np.vstack([tm - tm.mean(), np.ones_like(tm)]).T
             coef, res, *_ = np.linalg.lstsq(A, la, rcond=None)

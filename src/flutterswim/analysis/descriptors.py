@@ -382,7 +382,23 @@ def describe(
         w = np.delete(cyc.periods[a : a + 7], k - a)
         return float(np.median(w)) if w.size else float(cyc.periods[k])
     near = np.array([_near(k) for k in range(K)])
-    good = (gaps <= max_gap) & (cyc.periods <= 1.5 * near)
+    long_ = cyc.periods > 1.5 * near
+    # but a run of 3 or more consecutive cycles of one period (each within 25 % of the one
+    # before) is a new period (the field changed), not skipped strokes: those come and go
+    # with the noise and do not repeat at one period
+    same = np.zeros(K, bool)
+    if K >= 3:
+        r = cyc.periods[1:] / cyc.periods[:-1]
+        link = (r >= 0.8) & (r <= 1.25)
+        k = 0
+        while k < K:
+            j = k
+            while j < K - 1 and link[j]:
+                j += 1
+            if j - k + 1 >= 3:
+                same[k : j + 1] = True
+            k = j + 1
+    good = (gaps <= max_gap) & (~long_ | same)
     if not np.any(good):
         raise ParameterError(
             f"every one of the track's {K} stroke cycles misses frames over more than {max_gap:g} period "
