@@ -358,7 +358,7 @@ def detect_cycles(
         r_final = float(np.median(ramps[-min(K, max(n_consecutive, 3)) :]))
         # still growing at the record's end (the last two cycles each grow by more than 10 %,
         # at over 0.8 of the record's fastest growth): the final amplitude is not in the
-        # record, so neither is the onset, and the growth fit has no cut from above
+        # record, so neither is the onset, and the growth fit has no cut from above.
         # Cycles within a period of the record's ends are left out of both: the body axis is
         # extrapolated over the last half period and the running mean's window reaches half a
         # period further, which biases a growing stroke's amplitude there
@@ -379,9 +379,9 @@ def detect_cycles(
             if growing and tail.size >= 2 and np.all(tail > 3.0 * noise_amp[k_last:]):
                 growing = bool(np.all(np.diff(np.log(tail)) > 0.5 * float(np.max(lg))))
         if growing:
-            # no final amplitude to cut at: the fit keeps to cycles whose shape is still within
-            # the linear regime (tangent angle within _LINEAR_ANGLE of straight: sin and tan
-            # within 0.3 %)
+            # no final amplitude to cut at: the fit keeps to cycles whose stroke is still within
+            # the linear regime (its tangent-angle deflection, theta_amp, at most _LINEAR_ANGLE:
+            # sin and tan within 0.3 % of the angle)
             r_final = math.inf
             ok &= theta_amp <= _LINEAR_ANGLE
         above = np.nonzero(amps >= onset_fraction * a_final)[0] if not growing else np.empty(0, int)

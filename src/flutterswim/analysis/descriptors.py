@@ -344,8 +344,9 @@ def describe(
     """Descriptors averaged over the last ``n_last`` detected cycles (consecutive cycles without
     missing frames over more than ``max_gap`` periods: no interval between frames longer than
     1.5 median intervals and ``max_gap`` periods, and none longer than 1.5 times the median
-    period of its neighbours, 3 cycles either side, where the section skipped strokes; the last such run, fewer cycles if it is shorter,
-    ``n_cycles_used``).
+    period of its 6 nearest neighbours, where the section skipped strokes, unless it is one of
+    3 or more consecutive cycles of one period, a new stroke; the last such run, fewer cycles
+    if it is shorter, ``n_cycles_used``).
 
     Swimming direction: net centroid displacement over those cycles; advancement: its
     projection on the field direction (per cycle, field at mid-cycle; the total uses the mean
@@ -372,8 +373,8 @@ def describe(
     if not (isinstance(max_gap, (int, float)) and max_gap > 0):
         raise ParameterError(f"max_gap={max_gap!r} must be a number > 0 (periods)")
     gaps = cyc.frame_gaps(tr.t)
-    # and no cycle over 1.5 times the median period of its neighbours (3 cycles either side):
-    # the section skipped a stroke there (its amplitude fell into the noise). Local, so that
+    # and no cycle over 1.5 times the median period of its neighbours: the section skipped a
+    # stroke there (its amplitude fell into the noise). Local, so that
     # a record whose period changes (the field changed) is described by its own last strokes
     # (a full window of 7 shifted inward at the record's ends, without the cycle itself: two
     # skipped strokes among the last four cycles must not make the median their own)
