@@ -200,13 +200,15 @@ def _envelope_onset(t: np.ndarray, d: np.ndarray, var: np.ndarray, W: float, t_f
 _LINEAR_ANGLE = 0.1  # rad: a shape within this of straight grows as the linearisation says
 
 
-def _enough(sel: np.ndarray, ramps: np.ndarray, noise_amp: np.ndarray, cut: float) -> bool:
-    """Whether the fit's selection, kept to the growing part before the envelope first reaches
-    the cut, holds 4 cycles, or 3 each far above the noise."""
-    sel = sel.copy()
+def _before_cut(sel: np.ndarray, ramps: np.ndarray, cut: float) -> np.ndarray:
+    """The selection kept to the growing part before the envelope first reaches the cut."""
     first_big = np.nonzero(ramps > cut)[0]
-    if first_big.size:
-        sel &= np.arange(sel.size) < first_big[0]
+    return sel & (np.arange(sel.size) < first_big[0]) if first_big.size else sel
+
+
+def _enough(sel: np.ndarray, ramps: np.ndarray, noise_amp: np.ndarray) -> bool:
+    """Whether the fit's selection holds 4 cycles (2 degrees of freedom for its standard
+    error), or 3 each far above the noise (a clean, fast onset)."""
     n_sel = np.count_nonzero(sel)
     return bool(n_sel >= 4 or n_sel == 3 and np.all(ramps[sel] > 30.0 * noise_amp[sel]))
 
@@ -316,14 +318,11 @@ def detect_cycles(
         _, _, vt = np.linalg.svd(allsh, full_matrices=False)
         basis = vt[: int(n_shape_modes)].T
         shapes = [sh @ basis for sh in shapes]
-    # the stroke's tangent-angle deflection per cycle: the fundamental's amplitude along s (its
-    # largest) of the cycle's shapes less their mean over the cycle (a static bend is no stroke),
-    # in the leading shape modes (the measurement noise of a tracked filament's angle averages out)
-    osc = stacked - stacked.mean(axis=1, keepdims=True) if K else stacked
-    if basis is not None:
-        osc = osc @ basis @ basis.T
-    ph1 = np.exp(-2j * np.pi * np.arange(n_shape) / n_shape)
-    theta_amp = np.max(np.abs(np.einsum("kjs,j->ks", osc, ph1)), axis=1) * (2.0 / n_shape) if K else np.empty(0)
+    # the stroke's tangent-angle deflection per cycle: the amplitude of the fundamental over the
+    # cycle's phases (a static bend is the zeroth harmonic: no stroke), its largest along s, in
+    # the leading shape modes (the measurement noise of a tracked filament's angle averages out)
+    osc = stacked @ basis @ basis.T if basis is not None else stacked
+    theta_amp = np.max(np.abs(np.fft.rfft(osc, axis=1)[:, 1, :]), axis=1) * (2.0 / n_shape) if K else np.empty(0)
     d_shape = np.full(K, np.nan)
     for k in range(1, K):
         num = np.linalg.norm(shapes[k] - shapes[k - 1])
@@ -384,6 +383,7 @@ def detect_cycles(
             # sin and tan within 0.3 % of the angle)
             r_final = math.inf
             ok &= theta_amp <= _LINEAR_ANGLE
+        cut = fit_max_fraction * r_final
         above = np.nonzero(amps >= onset_fraction * a_final)[0] if not growing else np.empty(0, int)
         if above.size:
             k = int(above[0])
@@ -405,21 +405,21 @@ def detect_cycles(
             # (a noisy record's quiet stretch may hide a stroke growing since the record start,
             # whose first cycle is where it leaves the noise: there, where two tau after that
             # cycle leave too few cycles to fit, the fit starts two tau after the record start)
-            clean = math.sqrt(float(var[0])) < 1e-6 * float(np.max(ramps))
-            late_on = quiet and tau is not None and starts[0] > t[0] + 2.0 * tau
-            t_after = float(starts[0]) + 2.0 * tau if late_on else (float(t[0]) + 2.0 * tau if tau is not None else (
-                float(t[0]) if quiet else float(starts[min(2, K)])))
-            if late_on and not clean and not _enough(
-                    (mids >= t_after) & (ramps <= fit_max_fraction * r_final) & ok, ramps, noise_amp, fit_max_fraction * r_final):
+            if tau is None:
+                t_after = float(t[0]) if quiet else float(starts[min(2, K)])
+            elif quiet and starts[0] > t[0] + 2.0 * tau:
+                t_after = float(starts[0]) + 2.0 * tau
+                clean = math.sqrt(float(var[0])) < 1e-6 * float(np.max(ramps))
+                if not clean and not _enough(_before_cut((mids >= t_after) & (ramps <= cut) & ok, ramps, cut),
+                                             ramps, noise_amp):
+                    t_after = float(t[0]) + 2.0 * tau
+            else:
                 t_after = float(t[0]) + 2.0 * tau
         else:
             t_after = float(t[0]) + float(fit_after)
         # cycles above 3 noise sigma, away from the ends, below the cut
-        sel = (mids >= t_after) & (ramps <= fit_max_fraction * r_final) & ok
-        if _enough(sel, ramps, noise_amp, fit_max_fraction * r_final):
-            first_big = np.nonzero(ramps > fit_max_fraction * r_final)[0]
-            if first_big.size:
-                sel &= np.arange(K) < first_big[0]
+        sel = _before_cut((mids >= t_after) & (ramps <= cut) & ok, ramps, cut)
+        if _enough(sel, ramps, noise_amp):
             tm, la = mids[sel], np.log(ramps[sel])
             A = np.vstack([tm - tm.mean(), np.ones_like(tm)]).T
             coef, res, *_ = np.linalg.lstsq(A, la, rcond=None)

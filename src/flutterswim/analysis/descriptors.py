@@ -387,18 +387,14 @@ def describe(
     # but a run of 3 or more consecutive cycles of one period (each within 25 % of the one
     # before) is a new period (the field changed), not skipped strokes: those come and go
     # with the noise and do not repeat at one period
+    r = cyc.periods[1:] / cyc.periods[:-1]
+    link = (r >= 0.8) & (r <= 1.25)
     same = np.zeros(K, bool)
-    if K >= 3:
-        r = cyc.periods[1:] / cyc.periods[:-1]
-        link = (r >= 0.8) & (r <= 1.25)
-        k = 0
-        while k < K:
-            j = k
-            while j < K - 1 and link[j]:
-                j += 1
-            if j - k + 1 >= 3:
-                same[k : j + 1] = True
-            k = j + 1
+    run = 1  # length of the run of linked cycles ending at cycle k
+    for k in range(1, K):
+        run = run + 1 if link[k - 1] else 1
+        if run >= 3:
+            same[k - run + 1 : k + 1] = True
     good = (gaps <= max_gap) & (~long_ | same)
     if not np.any(good):
         raise ParameterError(
