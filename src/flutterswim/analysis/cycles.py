@@ -4,7 +4,7 @@ onset time and growth rate of the oscillation envelope."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -74,14 +74,40 @@ def sample_cycle(t: np.ndarray, f: np.ndarray, t0: float, period: float, n: int,
     return (1 - w) * f[j] + w * f[j + 1]
 
 
+def _fourier_columns(phase: np.ndarray, H: int) -> np.ndarray:
+    """Columns 1, cos(2 pi h phase) for h = 1..H, sin(2 pi h phase) for h = 1..H."""
+    arg = np.outer(phase, 2 * np.pi * np.arange(1, H + 1))
+    return np.hstack([np.ones((np.size(phase), 1)), np.cos(arg), np.sin(arg)])
+
+
+def fourier_fit(phase: np.ndarray, q: np.ndarray, harmonics: int, *, constant: bool = False, cov: bool = False):
+    """Least-squares Fourier series in phase (period 1) of q (n,) or (n, M), with at most
+    (n - 1) / 4 harmonics (at least 1): (coefficients, H), and with ``cov`` the inverse of the
+    normal matrix (2H + 1, 2H + 1) (the coefficients' covariance per unit noise variance).
+    The coefficients are the harmonics' (2H, ...): cos 1..H, then sin 1..H; with
+    ``constant``, the constant first ((2H + 1, ...))."""
+    H = int(min(harmonics, max(1, (phase.size - 1) // 4)))
+    A = _fourier_columns(phase, H)
+    G = A.T @ A
+    try:
+        coef = np.linalg.solve(G, A.T @ q)
+    except np.linalg.LinAlgError:
+        coef = np.linalg.lstsq(A, q, rcond=None)[0]
+    coef = coef if constant else coef[1:]
+    return (coef, H, np.linalg.pinv(G)) if cov else (coef, H)
+
+
 @dataclass(frozen=True, eq=False)
 class Cycles:
     """Stroke cycles found by the Poincare section and the limit-cycle verdict.
 
     starts: (K+1,) section times; cycle k spans [starts[k], starts[k+1]].
     periods, amplitudes: (K,) duration and half peak-to-peak of the detrended section signal.
-    d_period, d_amplitude, d_shape: (K,) relative change from the previous cycle (nan for k=0).
-    converged: (K,) all three changes below tol.
+    d_period, d_amplitude, d_shape: (K,) relative change from the previous cycle (nan for k=0)
+    of the period, the amplitude of the fitted lateral waveform (root mean square) and the shape.
+    converged: (K,) all three changes below their tolerance: tol, plus what the measurement
+    noise alone makes of the change (``tol_used``, (K, 3): period, amplitude, shape; nan for
+    k=0; tol itself for a clean simulation).
     """
 
     starts: np.ndarray
@@ -103,6 +129,7 @@ class Cycles:
     section_signal: np.ndarray
     tol: float
     tip: int
+    tol_used: np.ndarray = field(default_factory=lambda: np.empty((0, 3)))
 
     @property
     def n_cycles(self) -> int:
@@ -197,6 +224,16 @@ def _envelope_onset(t: np.ndarray, d: np.ndarray, var: np.ndarray, W: float, t_f
     return float(t[i - 1] + frac * (t[i] - t[i - 1]))
 
 
+_Z_999 = 3.29  # two-sided 99.9 % point of the normal distribution
+
+
+def _chi2_999(p: float) -> float:
+    """The 99.9 % point of the chi-square distribution with p degrees of freedom, per degree."""
+    from scipy.stats import chi2
+
+    return float(chi2.ppf(0.999, p)) / p
+
+
 _LINEAR_ANGLE = 0.1  # rad: a shape within this of straight grows as the linearisation says
 
 
@@ -234,10 +271,15 @@ def detect_cycles(
     perpendicular to the body axis) through its running mean over one period. The body axis
     is the end-to-end direction averaged over one period around each frame (``axis="local"``,
     follows a turning swimmer) or over the whole track (``axis="global"``).
-    A cycle is *converged* when its period, amplitude and shape (tangent angle minus its mean
-    along s, sampled at ``n_shape`` phases) each change by less than ``tol`` (relative) from
-    the previous cycle (shapes are projected on their ``n_shape_modes`` leading principal
-    modes first, 0 for no projection); the limit cycle is reached if the last ``n_consecutive`` cycles are
+    Each cycle is fitted by a Fourier series in its phase at the frames it has (at most 6
+    harmonics, (frames - 1) / 4). A cycle is *converged* when its period, amplitude (root mean
+    square of the fitted lateral waveform) and shape (tangent angle minus its mean along s, at
+    ``n_shape`` phases, projected on the ``n_shape_modes`` leading principal modes, 0 for no
+    projection) each change by less than ``tol`` (relative) from the previous cycle, plus what
+    the measurement noise alone makes of that change: the two cycles' residual variance
+    propagated to 3.29 standard errors (period, amplitude) or the 99.9 % point of the shape
+    change's chi-square (``tol_used``; residuals also hold harmonics too fast for a coarse
+    frame rate). The limit cycle is reached if the last ``n_consecutive`` cycles are
     converged, at the start of the trailing run of converged cycles.
 
     Onset time: when the cycle amplitude first reaches ``onset_fraction`` of the final
@@ -302,36 +344,77 @@ def detect_cycles(
             v = float(np.mean(var[lo[k] : hi[k]]))
             ramps[k] = math.sqrt(2.0 * max(float(np.mean(seg * seg)) - v, 0.0))
             noise_amp[k] = math.sqrt(v)
-    # shapes: tangent angle minus mean along s, sampled at n_shape phases
+    # each cycle as a Fourier series in its phase, fitted to its frames [starts[k], starts[k+1])
+    # (frames missing from a tracked movie leave no interpolated corner): the stroke's lateral
+    # waveform and its shape (tangent angle minus its mean along s, in the leading principal
+    # shape modes: filters noise), compared from cycle to cycle at n_shape phases
     _, th = tr.tangent_angle()
     th = th - th.mean(axis=1, keepdims=True)
-    # all cycles at once (sample_cycle's interpolation on the stacked phases)
-    tq = (starts[:-1, None] + periods[:, None] * (np.arange(n_shape) / n_shape)[None, :]).ravel()
-    j = np.clip(np.searchsorted(t, tq) - 1, 0, t.size - 2)
-    wq = np.clip((tq - t[j]) / (t[j + 1] - t[j]), 0.0, 1.0)[:, None]
-    stacked = ((1 - wq) * th[j] + wq * th[j + 1]).reshape(K, n_shape, th.shape[1])
-    shapes = list(stacked)
+    f0 = np.searchsorted(t, starts[:-1], side="left")
+    f1 = np.maximum(np.searchsorted(t, starts[1:], side="left"), f0 + 1)
     basis = None
     if K >= 2 and n_shape_modes:
-        # compare strokes in the space of the leading principal shape modes (filters noise)
-        allsh = np.concatenate(shapes, axis=0)
-        _, _, vt = np.linalg.svd(allsh, full_matrices=False)
+        _, _, vt = np.linalg.svd(th[f0[0] : f1[-1]], full_matrices=False)
         basis = vt[: int(n_shape_modes)].T
-        shapes = [sh @ basis for sh in shapes]
-    # the stroke's tangent-angle deflection per cycle: the amplitude of the fundamental over the
-    # cycle's phases (a static bend is the zeroth harmonic: no stroke), its largest along s, in
-    # the leading shape modes (the measurement noise of a tracked filament's angle averages out)
-    osc = stacked @ basis @ basis.T if basis is not None else stacked
-    theta_amp = np.max(np.abs(np.fft.rfft(osc, axis=1)[:, 1, :]), axis=1) * (2.0 / n_shape) if K else np.empty(0)
-    d_shape = np.full(K, np.nan)
+    modes = th @ basis if basis is not None else th
+    E_grid = {}
+    shapes, shape_cov = [], []
+    fit_amp, amp_gain, slope = np.zeros(K), np.zeros(K), np.zeros(K)
+    theta_amp = np.zeros(K)
+    # residual sums of squares and degrees of freedom of each cycle's fits: the measurement
+    # noise, what no periodic waveform explains (lateral; per shape mode)
+    rss_u, rss_m, dof = np.zeros(K), np.zeros((K, modes.shape[1])), np.zeros(K)
+    for k in range(K):
+        sl = slice(f0[k], f1[k])
+        ph = (t[sl] - starts[k]) / periods[k]
+        c, H, C = fourier_fit(ph, d[sl], 6, cov=True, constant=True)
+        ch = c[1:]
+        A = _fourier_columns(ph, H)
+        rss_u[k] = float(np.sum((d[sl] - A @ c) ** 2))
+        dof[k] = max(ph.size - (2 * H + 1), 0)
+        fit_amp[k] = math.sqrt(float(ch @ ch) / 2.0)
+        g = ch / (2.0 * fit_amp[k]) if fit_amp[k] > 0 else np.zeros_like(ch)
+        amp_gain[k] = float(g @ C[1:, 1:] @ g)  # the amplitude's variance per unit noise variance
+        slope[k] = float(2 * np.pi * np.arange(1, H + 1) @ ch[H:]) / periods[k]
+        cm = C @ (A.T @ modes[sl])  # the same design for the shape
+        rss_m[k] = np.sum((modes[sl] - A @ cm) ** 2, axis=0)
+        if H not in E_grid:
+            E_grid[H] = _fourier_columns(np.arange(n_shape) / n_shape, H)
+        E = E_grid[H]
+        shapes.append(E @ cm)
+        shape_cov.append(E @ C @ E.T)
+        # the stroke's tangent-angle deflection: the fundamental's amplitude, its largest
+        # along s, in the leading shape modes (a static bend is the zeroth harmonic: no stroke;
+        # the measurement noise of a tracked filament's angle averages out)
+        cs = np.stack([cm[1], cm[1 + H]])
+        cs = cs @ basis.T if basis is not None else cs
+        theta_amp[k] = float(np.max(np.hypot(cs[0], cs[1])))
+    # a change from the previous cycle converges under tol, or under what the measurement
+    # noise alone makes of it (the two cycles' pooled residual variance; a tracked movie):
+    # 3.29 standard errors for the period and the amplitude, the 99.9 % point of the shape
+    # change's (weighted) chi-square
+    d_period = _rel(periods)
+    d_amp, d_shape = _rel(fit_amp), np.full(K, np.nan)
+    conv = np.zeros(K, bool)
+    tol_used = np.full((K, 3), np.nan)
     for k in range(1, K):
-        num = np.linalg.norm(shapes[k] - shapes[k - 1])
-        den = max(np.linalg.norm(shapes[k]), 1e-300)
+        n_dof = dof[k] + dof[k - 1]
+        v_u = (rss_u[k] + rss_u[k - 1]) / n_dof if n_dof > 0 else 0.0
+        v_m = (rss_m[k] + rss_m[k - 1]) / n_dof if n_dof > 0 else np.zeros(modes.shape[1])
+        num = float(np.linalg.norm(shapes[k] - shapes[k - 1]))
+        den = max(float(np.linalg.norm(shapes[k])), 1e-300)
         d_shape[k] = num / den
-    d_period, d_amp = _rel(periods), _rel(amps)
-    with np.errstate(invalid="ignore"):
-        conv = (d_period < tol) & (d_amp < tol) & (d_shape < tol)
-    conv = np.asarray(conv, bool)
+        P = shape_cov[k] + shape_cov[k - 1]
+        tr_s = float(np.sum(v_m)) * float(np.trace(P))
+        tr_s2 = float(np.sum(v_m**2)) * float(np.sum(P * P))
+        noise_s = math.sqrt(_chi2_999(tr_s * tr_s / tr_s2) * tr_s) if tr_s2 > 0 else 0.0
+        # crossing times: the noise over the signal's slope there (the period's change takes
+        # three crossings, the middle one twice)
+        sig = [math.sqrt(v_u) / max(abs(slope[j]), 1e-300) for j in (k - 1, k, min(k + 1, K - 1))]
+        noise_p = _Z_999 * math.sqrt(sig[0] ** 2 + 4.0 * sig[1] ** 2 + sig[2] ** 2)
+        noise_a = _Z_999 * math.sqrt(v_u * (amp_gain[k] + amp_gain[k - 1]))
+        tol_used[k] = (tol + noise_p / periods[k], tol + noise_a / max(fit_amp[k], 1e-300), tol + noise_s / den)
+        conv[k] = bool(np.all(np.array([d_period[k], d_amp[k], d_shape[k]]) < tol_used[k]))
     # trailing run of converged cycles
     run = 0
     for c in conv[::-1]:
@@ -449,4 +532,5 @@ def detect_cycles(
         section_signal=u,
         tol=float(tol),
         tip=itip,
+        tol_used=tol_used,
     )

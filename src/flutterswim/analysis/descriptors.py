@@ -10,7 +10,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from .._validate import ParameterError
-from .cycles import Cycles, detect_cycles, sample_cycle, tip_index
+from .cycles import Cycles, detect_cycles, fourier_fit, sample_cycle, tip_index
 from .intersection import self_intersections
 from .track import Track, as_track
 
@@ -24,19 +24,6 @@ def _std(v: np.ndarray) -> float:
 
 _GRID = 256
 _GRID_BASIS: dict[int, np.ndarray] = {}
-
-
-def _fourier_fit(phase: np.ndarray, q: np.ndarray, harmonics: int):
-    """Least-squares Fourier series in phase (period 1): (harmonic coefficients (2H,), H)."""
-    H = int(min(harmonics, max(1, (phase.size - 1) // 4)))
-    w = 2 * np.pi * np.arange(1, H + 1)
-    arg = np.outer(phase, w)
-    A = np.hstack([np.ones((phase.size, 1)), np.cos(arg), np.sin(arg)])
-    try:
-        coef = np.linalg.solve(A.T @ A, A.T @ q)
-    except np.linalg.LinAlgError:
-        coef = np.linalg.lstsq(A, q, rcond=None)[0]
-    return coef[1:], H
 
 
 def _waveform_p2p(coef: np.ndarray, H: int) -> float:
@@ -57,7 +44,7 @@ def _waveform_p2p(coef: np.ndarray, H: int) -> float:
 
 def _fourier_p2p(phase: np.ndarray, q: np.ndarray, harmonics: int) -> float:
     """Peak-to-peak of a least-squares Fourier series in phase (period 1) fitted to q."""
-    return _waveform_p2p(*_fourier_fit(phase, q, harmonics))
+    return _waveform_p2p(*fourier_fit(phase, q, harmonics))
 
 
 def _lateral_series(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray) -> list:
@@ -147,7 +134,7 @@ def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmoni
     series = _lateral_series(tr, st, i_end, ang)
     out = np.array([_fourier_p2p(*c, harmonics) if c is not None else np.nan for c in series])
     need = min(int(harmonics), _POOLED_HARMONICS)
-    own = [_fourier_fit(*c, harmonics)[1] if c is not None else need for c in series]
+    own = [fourier_fit(*c, harmonics)[1] if c is not None else need for c in series]
     if min(own, default=need) < need:
         # pooled on one steady phase over the cycles (their mean period): the crossings of a
         # coarsely sampled stroke carry timing errors that per-cycle phases would fold in
@@ -451,10 +438,23 @@ def describe(
         p2p_end[e_name] = float(np.nanmean(pe)) if np.any(np.isfinite(pe)) else math.nan
     lead, trail = ("start", "end") if ahead > 0 else ("end", "start")
     settled = bool(cyc.limit_cycle)
+    movie = "px_per_mm" in tr.meta
     note = "" if settled else (
         "no limit cycle: the stroke is still changing from cycle to cycle (onset or transient), so the "
         "averages describe unsettled cycles and the limit-cycle time, transient duration and onset time "
-        "are unknown; simulate longer (run_to_limit_cycle)")
+        "are unknown; " + ("record longer" if movie else "simulate longer (run_to_limit_cycle)"))
+    if settled:
+        # the trailing run of converged cycles, judged within what the frames resolve where
+        # that exceeds tol (a tracked movie's noise, a stroke's harmonics beyond a coarse frame
+        # rate): say what change from cycle to cycle would go unseen
+        run = int(np.argmin(np.append(cyc.converged[::-1], False)))
+        used = cyc.tol_used[cyc.n_cycles - run :]
+        if used.size and np.nanmax(used) > 1.5 * cyc.tol:
+            worst = 100.0 * np.nanmax(used, axis=0)
+            note = (f"limit cycle within what the frames resolve (noise, or harmonics too fast for the frame "
+                    f"rate): over its last {run} cycles, changes from cycle "
+                    f"to cycle of up to {worst[0]:.2g} % in period, {worst[1]:.2g} % in amplitude and "
+                    f"{worst[2]:.2g} % in shape would go unseen (tol {100.0 * cyc.tol:.2g} %)")
     if not np.any(np.isfinite(p2p)):
         per_stroke = float(np.mean(per)) / float(np.median(np.diff(tr.t)))
         note = (note + "; " if note else "") + (
