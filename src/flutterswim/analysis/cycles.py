@@ -41,10 +41,20 @@ def local_axis_angle(track: Track, window: float) -> np.ndarray:
     t = track.t
     ang = np.unwrap(np.arctan2(track.y[:, -1] - track.y[:, 0], track.x[:, -1] - track.x[:, 0]))
     sm = running_mean(t, ang, window)
+    # a window reaching into frames missing (a gap in a tracked movie) averages part of the
+    # stroke's wobble: the axis there is interpolated between the windows clear of gaps (it
+    # turns slowly), else the gap's error reaches a period beyond it through the section
+    dt = np.diff(t)
+    big = np.nonzero(dt > 1.5 * float(np.median(dt)))[0] if t.size > 2 else np.empty(0, int)
+    hit = np.zeros(t.size, bool)
+    for i in big:
+        hit |= (t + 0.5 * window > t[i]) & (t - 0.5 * window < t[i + 1])
+    if np.any(hit) and np.count_nonzero(~hit) >= 2:
+        sm[hit] = np.interp(t[hit], t[~hit], sm[~hit])
     # within half a window of the ends the centred mean is not available: extrapolate the
     # interior linearly (exact for a steady turn, constant for a straight swimmer)
     a, b = t[0] + 0.5 * window, t[-1] - 0.5 * window
-    inner = (t >= a) & (t <= b)
+    inner = (t >= a) & (t <= b) & ~hit
     if np.count_nonzero(inner) >= 4:
         for edge, near in ((t < a, inner & (t <= a + 0.5 * window)), (t > b, inner & (t >= b - 0.5 * window))):
             if np.any(edge) and np.count_nonzero(near) >= 2:
@@ -143,22 +153,13 @@ class Cycles:
         """Indices of the last n cycles (fewer if fewer exist)."""
         return np.arange(max(0, self.n_cycles - n), self.n_cycles)
 
-    def frame_gaps(self, t: np.ndarray) -> np.ndarray:
+    def frame_gaps(self, t: np.ndarray, margin: float = 0.0) -> np.ndarray:
         """(K,) the longest interval with frames missing (longer than 1.5 times the median
-        interval between consecutive frame times ``t``) that overlaps each cycle, as a fraction
-        of that cycle's period; 0 where none is missing (a track from a movie holds only the
-        frames that were tracked). Evenly sampled frames, however coarse, have no gap."""
-        t = np.asarray(t, float)
-        out = np.zeros(self.n_cycles)
-        if t.size < 2:
-            return out
-        dt = np.diff(t)
-        dt = np.where(dt > 1.5 * float(np.median(dt)), dt, 0.0)
-        for k in range(self.n_cycles):
-            a, b = self.starts[k], self.starts[k + 1]
-            over = (t[1:] > a) & (t[:-1] < b)
-            out[k] = float(dt[over].max()) / (b - a) if np.any(over) else 0.0
-        return out
+        interval between consecutive frame times ``t``) that overlaps each cycle, widened by
+        ``margin`` of its period at both ends, as a fraction of that cycle's period; 0 where
+        none is missing (a track from a movie holds only the frames that were tracked). Evenly
+        sampled frames, however coarse, have no gap."""
+        return _frame_gaps(self.starts, t, margin)
 
     def to_dict(self) -> dict[str, Any]:
         f = lambda v: None if not np.isfinite(v) else float(v)  # noqa: E731
@@ -172,6 +173,29 @@ class Cycles:
             "growth_rate_stderr_per_s": f(self.growth_rate_stderr),
             "cycle_starts_s": [float(v) for v in self.starts],
         }
+
+
+def _frame_gaps(starts: np.ndarray, t: np.ndarray, margin: float) -> np.ndarray:
+    """:meth:`Cycles.frame_gaps` for cycles [starts[k], starts[k+1]]."""
+    t = np.asarray(t, float)
+    K = starts.size - 1
+    out = np.zeros(max(K, 0))
+    if t.size < 2:
+        return out
+    dt = np.diff(t)
+    dt = np.where(dt > 1.5 * float(np.median(dt)), dt, 0.0)
+    for k in range(K):
+        a, b = starts[k], starts[k + 1]
+        over = (t[1:] > a - margin * (b - a)) & (t[:-1] < b + margin * (b - a))
+        out[k] = float(dt[over].max()) / (b - a) if np.any(over) else 0.0
+    return out
+
+
+# frames missing over more than this fraction of a period, within GAP_MARGIN periods of a
+# cycle (the section's running mean reaches half a period beyond its crossings, and their
+# local fits a twelfth more), leave the cycle's crossings and fits uncertain
+MAX_GAP = 0.25
+GAP_MARGIN = 0.6
 
 
 def _rel(a: np.ndarray) -> np.ndarray:
@@ -415,16 +439,21 @@ def detect_cycles(
         noise_a = _Z_999 * math.sqrt(v_u * (amp_gain[k] + amp_gain[k - 1]))
         tol_used[k] = (tol + noise_p / periods[k], tol + noise_a / max(fit_amp[k], 1e-300), tol + noise_s / den)
         conv[k] = bool(np.all(np.array([d_period[k], d_amp[k], d_shape[k]]) < tol_used[k]))
-    # trailing run of converged cycles
-    run = 0
-    for c in conv[::-1]:
-        if not c:
+    # trailing run of converged cycles; a comparison with a cycle missing frames (a tracked
+    # movie's failed frames) neither counts nor breaks the run
+    gapped = _frame_gaps(starts, t, GAP_MARGIN) > MAX_GAP
+    valid = ~gapped & np.concatenate(([False], ~gapped[:-1])) if K else np.zeros(0, bool)
+    run, k_run = 0, K
+    for k in range(K - 1, -1, -1):
+        if not valid[k]:
+            continue
+        if not conv[k]:
             break
-        run += 1
+        run, k_run = run + 1, k
     limit = run >= n_consecutive
     # the first converged cycle of the run is compared with its (unconverged) predecessor:
     # the limit cycle starts at that cycle
-    lc_time = float(starts[K - run]) if limit else math.nan
+    lc_time = float(starts[k_run]) if limit else math.nan
     transient = lc_time - float(t[0]) if limit else math.nan
 
     # onset time and growth rate from the amplitude envelope

@@ -10,7 +10,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from .._validate import ParameterError
-from .cycles import Cycles, detect_cycles, fourier_fit, sample_cycle, tip_index
+from .cycles import GAP_MARGIN, Cycles, detect_cycles, fourier_fit, sample_cycle, tip_index
 from .intersection import self_intersections
 from .track import Track, as_track
 
@@ -359,7 +359,8 @@ def describe(
     # longer than max_gap periods (a track from a movie holds only the frames that were tracked)
     if not (isinstance(max_gap, (int, float)) and max_gap > 0):
         raise ParameterError(f"max_gap={max_gap!r} must be a number > 0 (periods)")
-    gaps = cyc.frame_gaps(tr.t)
+    # (near a cycle, too: a gap there moves its crossings)
+    gaps = cyc.frame_gaps(tr.t, margin=GAP_MARGIN)
     # and no cycle over 1.5 times the median period of its neighbours: the section skipped a
     # stroke there (its amplitude fell into the noise). Local, so that
     # a record whose period changes (the field changed) is described by its own last strokes
@@ -382,17 +383,25 @@ def describe(
         run = run + 1 if link[k - 1] else 1
         if run >= 3:
             same[k - run + 1 : k + 1] = True
-    good = (gaps <= max_gap) & (~long_ | same)
+    # a cycle missing frames is left out and the window goes on past it (the same stroke);
+    # skipped strokes end the window (before them, the stroke was another or under the noise)
+    skip = gaps > max_gap
+    ends = long_ & ~same
+    good = ~skip & ~ends
     if not np.any(good):
         raise ParameterError(
             f"every one of the track's {K} stroke cycles misses frames over more than {max_gap:g} period "
             f"(the shortest such gap {np.min(gaps):.2f} periods), for example frames that failed tracking; "
             "descriptors need cycles without such gaps (max_gap, describe --max-gap)")
     k1 = int(np.nonzero(good)[0][-1])
-    k0 = k1
-    while k0 > 0 and good[k0 - 1] and k1 - k0 + 1 < n_last:
+    k0, n_good = k1, 1
+    while k0 > 0 and not ends[k0 - 1] and n_good < n_last:
         k0 -= 1
-    idx = np.arange(k0, k1 + 1)
+        n_good += int(good[k0])
+    while not good[k0]:
+        k0 += 1
+    use = good[k0 : k1 + 1]  # the window's cycles that are described
+    idx = np.arange(k0, k1 + 1)[use]
     sub = Cycles(**{**cyc.__dict__, "starts": cyc.starts[k0 : k1 + 2]})
     # swimming direction over the window
     xc, yc = tr.centroid()
@@ -406,9 +415,10 @@ def describe(
     # a turning swimmer (cycle directions spread by more than a degree): measure the tip's
     # lateral excursion across each cycle's own displacement
     chord = np.arctan2(pc["dy"], pc["dx"])
-    if chord.size > 1 and np.max(np.abs(np.angle(np.exp(1j * (chord - swim))))) > math.radians(1.0):
+    if use.sum() > 1 and np.max(np.abs(np.angle(np.exp(1j * (chord[use] - swim))))) > math.radians(1.0):
         pc = per_cycle(tr, sub, tip=tip, harmonics=harmonics, swim_angle=chord, crossing=inter)
         pc_angle = chord
+    pc = {k: v[use] for k, v in pc.items()}
     mm = tr.scale_m * 1e3
     L = tr.length
     per = pc["period"]
@@ -426,15 +436,13 @@ def describe(
     nrec = pc["nonreciprocity"]
     nrec_mean = float(np.mean(nrec))
     # lateral peak-to-peak of both ends, named by the swimming direction
-    ang_used = chord if pc is not None and np.ndim(chord) and chord.size > 1 and np.max(
-        np.abs(np.angle(np.exp(1j * (chord - swim))))) > math.radians(1.0) else swim
     p2p_end = {}
-    ang_k = np.broadcast_to(np.asarray(ang_used, float), (sub.starts.size - 1,))
+    ang_k = np.broadcast_to(np.asarray(pc_angle, float), (sub.starts.size - 1,))
     for e_name in ("start", "end"):
-        if tip_index(tr, e_name) == sub.tip and np.all(ang_k == np.broadcast_to(pc_angle, ang_k.shape)):
+        if tip_index(tr, e_name) == sub.tip:
             pe = pc["tip_p2p"]  # the same end across the same directions: already measured
         else:
-            pe = _lateral_p2p(tr, sub.starts, tip_index(tr, e_name), ang_k, harmonics)
+            pe = _lateral_p2p(tr, sub.starts, tip_index(tr, e_name), ang_k, harmonics)[use]
         p2p_end[e_name] = float(np.nanmean(pe)) if np.any(np.isfinite(pe)) else math.nan
     lead, trail = ("start", "end") if ahead > 0 else ("end", "start")
     settled = bool(cyc.limit_cycle)

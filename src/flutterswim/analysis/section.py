@@ -289,6 +289,10 @@ def section_crossings(
         raise ParameterError(f"period={period!r} must be a finite number > 0")
     cross = np.empty(0)
     d = u - u.mean()
+    # intervals with frames missing (a tracked movie holds the frames that were tracked)
+    dt = np.diff(t)
+    gi = np.nonzero(dt > 1.5 * float(np.median(dt)))[0] if t.size > 2 else np.empty(0, int)
+    gap_a, gap_b = t[gi], t[gi + 1]
     # the period is refined on linearly interpolated crossings; the final crossings are
     # located by the local polynomial (one pass of it: linear in the record's length)
     final = locate and iterations <= 0 and period is not None  # a given period, not refined: the final pass only
@@ -329,8 +333,12 @@ def section_crossings(
                 break
             final = True
             continue
-        # refine with the period of the well-developed (later) cycles
+        # refine with the period of the well-developed (later) cycles, away from frames
+        # missing (a gap moves the crossings within about half a period of it)
         dif = np.diff(cross)
+        clear = ~np.array([np.any((gap_b > c0 - 0.6 * W) & (gap_a < c1 + 0.6 * W))
+                           for c0, c1 in zip(cross[:-1], cross[1:])], bool)
+        dif = dif[clear] if np.count_nonzero(clear) >= 1 else dif
         W_new = float(np.median(dif[len(dif) // 2 :]))
         if abs(W_new - W) < 1e-12 * W:
             if not locate:
