@@ -199,3 +199,31 @@ def test_cli_describe_names_missing_frames_and_takes_max_gap(movie, tmp_path, ca
     assert json.loads(capsys.readouterr().out)["period_s"] == pytest.approx(period, rel=1e-2)
     assert main(["describe", str(out), "--max-gap", "-1"]) == 2
     assert "max_gap=-1" in capsys.readouterr().err
+
+
+# --------------------------------------------------------------------------- damaged or odd inputs
+def _small_stack(T: int = 6) -> np.ndarray:
+    return (np.random.default_rng(3).random((T, 40, 50)) * 1000).astype(np.uint16)
+
+
+def test_damaged_tiff_is_bad_input_without_tifffile_log(tmp_path, capsys, caplog):
+    """A truncated TIFF and one with a garbage header: a ParameterError naming the file (API);
+    the CLI exits 2 with one line, and tifffile's logger says nothing."""
+    from flutterswim.tracking.io import open_frames
+
+    tifffile.imwrite(tmp_path / "whole.tif", _small_stack(), photometric="minisblack")
+    data = (tmp_path / "whole.tif").read_bytes()
+    (tmp_path / "cut.tif").write_bytes(data[: len(data) // 2])
+    (tmp_path / "garbage.tif").write_bytes(b"II*\x00garbage" * 10)
+    for name in ("cut.tif", "garbage.tif"):
+        with pytest.raises(fs.ParameterError, match=f"{name}' cannot be read as a TIFF stack"):
+            open_frames(tmp_path / name)
+        caplog.clear()
+        capsys.readouterr()
+        rc = main(["track", str(tmp_path / name), "--px-per-mm", "70", "--fps", "50", "--quiet",
+                   "--out", str(tmp_path / "x.nc")])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert rc == 2 and len(err) == 1 and name in err[0] and "cannot be read as a TIFF stack" in err[0], err
+        assert not [r for r in caplog.records if r.name.startswith("tifffile")]
+    assert not (tmp_path / "x.nc").exists()
+

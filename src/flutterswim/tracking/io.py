@@ -6,8 +6,11 @@ ROI: (x0, y0, x1, y1) in pixels of the full frame, columns x0 <= x < x1, rows y0
 
 from __future__ import annotations
 
+import logging
 import os
 import re
+import warnings
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterator
@@ -92,13 +95,42 @@ def _from_array(a: np.ndarray, name: str) -> Frames:
     return Frames(name, a.shape[0], tuple(a.shape[1:3]), None, lambda i: a[i], lambda: iter(a))
 
 
+@contextmanager
+def _tifffile_said() -> Iterator[list[str]]:
+    """tifffile's log messages during a read, kept here instead of printed to stderr."""
+    said: list[str] = []
+
+    def keep(record: logging.LogRecord) -> bool:
+        if record.levelno < logging.WARNING:
+            return True
+        # tifffile starts its messages with repr(self), e.g. "<tifffile.TiffPages @8> ..."
+        said.append(re.sub(r"^<[^>]*>\s*", "", record.getMessage()))
+        return False
+
+    log = logging.getLogger("tifffile")
+    log.addFilter(keep)
+    try:
+        yield said
+    finally:
+        log.removeFilter(keep)
+
+
 def _tiff_stack(p: Path) -> Frames:
     import tifffile
 
-    try:
-        arr = tifffile.memmap(p, mode="r")  # uncompressed: frames read on demand
-    except (ValueError, tifffile.TiffFileError, OSError):
-        arr = tifffile.imread(p)
+    with _tifffile_said() as said:
+        try:
+            try:
+                arr = tifffile.memmap(p, mode="r")  # uncompressed: frames read on demand
+            except (ValueError, tifffile.TiffFileError, OSError):
+                arr = tifffile.imread(p)
+        except (MemoryError, PermissionError):
+            raise
+        except Exception as exc:  # a damaged file fails in many ways inside tifffile
+            why = said[0] if said else f"{type(exc).__name__}: {exc}"
+            raise ParameterError(f"input={str(p)!r} cannot be read as a TIFF stack ({why})") from None
+    if said:  # read, but damaged (e.g. truncated: the pages after the damage are missing)
+        warnings.warn(f"input={str(p)!r}: tifffile: {said[0]}", stacklevel=3)
     arr = np.asarray(arr) if not isinstance(arr, np.memmap) else arr
     if arr.ndim == 2:
         arr = arr[None]
