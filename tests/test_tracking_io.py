@@ -227,3 +227,29 @@ def test_damaged_tiff_is_bad_input_without_tifffile_log(tmp_path, capsys, caplog
         assert not [r for r in caplog.records if r.name.startswith("tifffile")]
     assert not (tmp_path / "x.nc").exists()
 
+
+def test_tiff_stack_of_other_shape_is_refused_colour_is_read(movie, tracked, tmp_path, capsys):
+    """(T, Z, H, W) is refused naming the shape (it was read as T*Z frames); colour stacks,
+    interleaved (T, H, W, 3) or planar (T, 3, H, W), track as the grey one."""
+    from flutterswim.tracking.io import open_frames
+
+    tifffile.imwrite(tmp_path / "tz.tif", _small_stack().reshape(3, 2, 40, 50), imagej=False)
+    tifffile.imwrite(tmp_path / "tz_ij.tif", _small_stack().reshape(3, 2, 40, 50), imagej=True,
+                     metadata={"axes": "TZYX"})
+    for name in ("tz.tif", "tz_ij.tif"):
+        with pytest.raises(fs.ParameterError, match=rf"{name}' is a TIFF stack of shape \(3, 2, 40, 50\)"):
+            open_frames(tmp_path / name)
+    rc = main(["track", str(tmp_path / "tz.tif"), "--px-per-mm", "70", "--fps", "50", "--quiet",
+               "--out", str(tmp_path / "x.nc")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and "(3, 2, 40, 50)" in err[0] and "one Z plane" in err[0], err
+    rgb = np.repeat(movie.frames[..., None], 3, axis=-1)
+    tifffile.imwrite(tmp_path / "rgb.tif", rgb, photometric="rgb")
+    tifffile.imwrite(tmp_path / "planar.tif", np.moveaxis(rgb, -1, 1), photometric="rgb", planarconfig="separate")
+    for name in ("rgb.tif", "planar.tif"):
+        fr = open_frames(tmp_path / name)
+        assert (fr.n_frames, fr.shape) == (45, movie.frames.shape[1:])
+        got = track(tmp_path / name, px_per_mm=movie.px_per_mm, fps=FPS)
+        np.testing.assert_allclose(got.x, tracked.x, atol=1e-6)
+        np.testing.assert_allclose(got.y, tracked.y, atol=1e-6)
+

@@ -90,8 +90,8 @@ def parse_roi(roi: Any, shape: tuple[int, int]) -> tuple[int, int, int, int] | N
 
 
 def _from_array(a: np.ndarray, name: str) -> Frames:
-    if a.ndim not in (3, 4):
-        raise ParameterError(f"input array has shape {a.shape}; (T, H, W) or (T, H, W, 3) is required")
+    if not (a.ndim == 3 or (a.ndim == 4 and a.shape[-1] in (3, 4))):
+        raise ParameterError(f"input array has shape {a.shape}; (T, H, W) or (T, H, W, 3|4) is required")
     return Frames(name, a.shape[0], tuple(a.shape[1:3]), None, lambda i: a[i], lambda: iter(a))
 
 
@@ -120,6 +120,8 @@ def _tiff_stack(p: Path) -> Frames:
 
     with _tifffile_said() as said:
         try:
+            with tifffile.TiffFile(p) as tf:
+                axes, shape = tf.series[0].axes, tuple(tf.series[0].shape)
             try:
                 arr = tifffile.memmap(p, mode="r")  # uncompressed: frames read on demand
             except (ValueError, tifffile.TiffFileError, OSError):
@@ -132,10 +134,16 @@ def _tiff_stack(p: Path) -> Frames:
     if said:  # read, but damaged (e.g. truncated: the pages after the damage are missing)
         warnings.warn(f"input={str(p)!r}: tifffile: {said[0]}", stacklevel=3)
     arr = np.asarray(arr) if not isinstance(arr, np.memmap) else arr
-    if arr.ndim == 2:
-        arr = arr[None]
-    if arr.ndim == 4 and arr.shape[-1] not in (3, 4):
-        arr = arr.reshape((-1,) + arr.shape[-2:])
+    if len(axes) == arr.ndim and "S" in axes[:-1] and arr.shape[axes.index("S")] in (3, 4):
+        arr, axes = np.moveaxis(arr, axes.index("S"), -1), axes.replace("S", "") + "S"  # planar colour
+    colour = axes.endswith("S") and arr.shape[-1] in (3, 4)
+    if arr.ndim == 2 + colour:
+        arr = arr[None]  # one frame
+    if arr.ndim != 3 + colour:
+        raise ParameterError(
+            f"input={str(p)!r} is a TIFF stack of shape {shape} (axes {axes!r}); a (T, H, W) stack, a colour "
+            "(T, H, W, 3|4) stack or one (H, W) frame is required: for a (T, Z, H, W) or (T, C, H, W) stack, "
+            "pass one Z plane or channel")
     return _from_array(arr, str(p))
 
 
