@@ -253,3 +253,19 @@ def test_tiff_stack_of_other_shape_is_refused_colour_is_read(movie, tracked, tmp
         np.testing.assert_allclose(got.x, tracked.x, atol=1e-6)
         np.testing.assert_allclose(got.y, tracked.y, atol=1e-6)
 
+
+def test_png_folder_with_a_frame_of_another_shape_is_refused(tmp_path):
+    """A frame 10 rows short, or in colour among grey ones: refused naming that file and both shapes."""
+    import imageio.v3 as iio
+
+    from flutterswim.tracking.io import open_frames
+
+    frames = (_small_stack(8) // 4).astype(np.uint8)
+    for case, odd in (("short", frames[5][:-10]), ("colour", np.repeat(frames[5][..., None], 3, axis=-1))):
+        folder = tmp_path / case
+        folder.mkdir()
+        for i, f in enumerate(frames):
+            iio.imwrite(folder / f"f{i}.png", odd if i == 5 else f)
+        want = r"'f5.png' has shape \(30, 50\)" if case == "short" else r"'f5.png' has shape \(40, 50, 3\)"
+        with pytest.raises(fs.ParameterError, match=want + r" but the first frame 'f0.png' has \(40, 50\)"):
+            open_frames(folder)

@@ -157,6 +157,23 @@ def _read_image(p: Path) -> np.ndarray:
     return iio.imread(p)
 
 
+def _image_shape(p: Path) -> tuple[int, ...]:
+    """The shape :func:`_read_image` gives, from the file's header."""
+    try:
+        if p.suffix.lower() in STACK_SUFFIXES:
+            import tifffile
+
+            with _tifffile_said(), tifffile.TiffFile(p) as tf:
+                return tuple(tf.series[0].shape)
+        import imageio.v3 as iio
+
+        return tuple(iio.improps(p).shape)
+    except (MemoryError, PermissionError):
+        raise
+    except Exception as exc:  # a damaged file fails in many ways inside the readers
+        raise ParameterError(f"frame {str(p)!r} cannot be read as an image ({type(exc).__name__}: {exc})") from None
+
+
 def _folder(p: Path) -> Frames:
     files = sorted((f for f in p.iterdir() if f.is_file() and f.suffix.lower() in FRAME_SUFFIXES), key=_natural_key)
     if not files:
@@ -165,6 +182,11 @@ def _folder(p: Path) -> Frames:
     if len(sfx) > 1:
         raise ParameterError(f"input={str(p)!r} mixes frame formats {sorted(sfx)}; one format per folder is required")
     first = _gray(_read_image(files[0]))
+    want = _image_shape(files[0])
+    for f in files[1:]:
+        if (got := _image_shape(f)) != want:
+            raise ParameterError(f"input={str(p)!r}: frame {f.name!r} has shape {got} but the first frame "
+                                 f"{files[0].name!r} has {want}; all frames must have one size and channel count")
     return Frames(str(p), len(files), first.shape, None, lambda i: _read_image(files[i]),
                   lambda: (_read_image(f) for f in files))
 
@@ -200,8 +222,9 @@ def _movie(p: Path) -> Frames:
 
 
 def open_frames(source: Any, roi: Any = None) -> Frames:
-    """Frames from a path (TIFF stack, folder of PNG/TIFF frames, MP4/AVI movie), an array
-    (T, H, W), or an object with a ``frames`` array (a rendered :class:`Movie`)."""
+    """Frames from a path (TIFF stack (T, H, W) or colour (T, H, W, 3|4), folder of PNG/TIFF
+    frames of one shape, MP4/AVI movie), an array (T, H, W), or an object with a ``frames``
+    array (a rendered :class:`Movie`). A damaged file or another shape is a ParameterError."""
     if hasattr(source, "frames") and isinstance(source.frames, np.ndarray):
         fr = _from_array(source.frames, "movie")
         fr.fps = getattr(source, "fps", None)
