@@ -199,3 +199,73 @@ def test_cli_describe_names_missing_frames_and_takes_max_gap(movie, tmp_path, ca
     assert json.loads(capsys.readouterr().out)["period_s"] == pytest.approx(period, rel=1e-2)
     assert main(["describe", str(out), "--max-gap", "-1"]) == 2
     assert "max_gap=-1" in capsys.readouterr().err
+
+
+# --------------------------------------------------------------------------- damaged or odd inputs
+def _small_stack(T: int = 6) -> np.ndarray:
+    return (np.random.default_rng(3).random((T, 40, 50)) * 1000).astype(np.uint16)
+
+
+def test_damaged_tiff_is_bad_input_without_tifffile_log(tmp_path, capsys, caplog):
+    """A truncated TIFF and one with a garbage header: a ParameterError naming the file (API);
+    the CLI exits 2 with one line, and tifffile's logger says nothing."""
+    from flutterswim.tracking.io import open_frames
+
+    tifffile.imwrite(tmp_path / "whole.tif", _small_stack(), photometric="minisblack")
+    data = (tmp_path / "whole.tif").read_bytes()
+    (tmp_path / "cut.tif").write_bytes(data[: len(data) // 2])
+    (tmp_path / "garbage.tif").write_bytes(b"II*\x00garbage" * 10)
+    for name in ("cut.tif", "garbage.tif"):
+        with pytest.raises(fs.ParameterError, match=f"{name}' cannot be read as a TIFF stack"):
+            open_frames(tmp_path / name)
+        caplog.clear()
+        capsys.readouterr()
+        rc = main(["track", str(tmp_path / name), "--px-per-mm", "70", "--fps", "50", "--quiet",
+                   "--out", str(tmp_path / "x.nc")])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert rc == 2 and len(err) == 1 and name in err[0] and "cannot be read as a TIFF stack" in err[0], err
+        assert not [r for r in caplog.records if r.name.startswith("tifffile")]
+    assert not (tmp_path / "x.nc").exists()
+
+
+def test_tiff_stack_of_other_shape_is_refused_colour_is_read(movie, tracked, tmp_path, capsys):
+    """(T, Z, H, W) is refused naming the shape (it was read as T*Z frames); colour stacks,
+    interleaved (T, H, W, 3) or planar (T, 3, H, W), track as the grey one."""
+    from flutterswim.tracking.io import open_frames
+
+    tifffile.imwrite(tmp_path / "tz.tif", _small_stack().reshape(3, 2, 40, 50), imagej=False)
+    tifffile.imwrite(tmp_path / "tz_ij.tif", _small_stack().reshape(3, 2, 40, 50), imagej=True,
+                     metadata={"axes": "TZYX"})
+    for name in ("tz.tif", "tz_ij.tif"):
+        with pytest.raises(fs.ParameterError, match=rf"{name}' is a TIFF stack of shape \(3, 2, 40, 50\)"):
+            open_frames(tmp_path / name)
+    rc = main(["track", str(tmp_path / "tz.tif"), "--px-per-mm", "70", "--fps", "50", "--quiet",
+               "--out", str(tmp_path / "x.nc")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and "(3, 2, 40, 50)" in err[0] and "one Z plane" in err[0], err
+    rgb = np.repeat(movie.frames[..., None], 3, axis=-1)
+    tifffile.imwrite(tmp_path / "rgb.tif", rgb, photometric="rgb")
+    tifffile.imwrite(tmp_path / "planar.tif", np.moveaxis(rgb, -1, 1), photometric="rgb", planarconfig="separate")
+    for name in ("rgb.tif", "planar.tif"):
+        fr = open_frames(tmp_path / name)
+        assert (fr.n_frames, fr.shape) == (45, movie.frames.shape[1:])
+        got = track(tmp_path / name, px_per_mm=movie.px_per_mm, fps=FPS)
+        np.testing.assert_allclose(got.x, tracked.x, atol=1e-6)
+        np.testing.assert_allclose(got.y, tracked.y, atol=1e-6)
+
+
+def test_png_folder_with_a_frame_of_another_shape_is_refused(tmp_path):
+    """A frame 10 rows short, or in colour among grey ones: refused naming that file and both shapes."""
+    import imageio.v3 as iio
+
+    from flutterswim.tracking.io import open_frames
+
+    frames = (_small_stack(8) // 4).astype(np.uint8)
+    for case, odd in (("short", frames[5][:-10]), ("colour", np.repeat(frames[5][..., None], 3, axis=-1))):
+        folder = tmp_path / case
+        folder.mkdir()
+        for i, f in enumerate(frames):
+            iio.imwrite(folder / f"f{i}.png", odd if i == 5 else f)
+        want = r"'f5.png' has shape \(30, 50\)" if case == "short" else r"'f5.png' has shape \(40, 50, 3\)"
+        with pytest.raises(fs.ParameterError, match=want + r" but the first frame 'f0.png' has \(40, 50\)"):
+            open_frames(folder)

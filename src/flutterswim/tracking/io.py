@@ -6,8 +6,11 @@ ROI: (x0, y0, x1, y1) in pixels of the full frame, columns x0 <= x < x1, rows y0
 
 from __future__ import annotations
 
+import logging
 import os
 import re
+import warnings
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterator
@@ -87,23 +90,60 @@ def parse_roi(roi: Any, shape: tuple[int, int]) -> tuple[int, int, int, int] | N
 
 
 def _from_array(a: np.ndarray, name: str) -> Frames:
-    if a.ndim not in (3, 4):
-        raise ParameterError(f"input array has shape {a.shape}; (T, H, W) or (T, H, W, 3) is required")
+    if not (a.ndim == 3 or (a.ndim == 4 and a.shape[-1] in (3, 4))):
+        raise ParameterError(f"input array has shape {a.shape}; (T, H, W) or (T, H, W, 3|4) is required")
     return Frames(name, a.shape[0], tuple(a.shape[1:3]), None, lambda i: a[i], lambda: iter(a))
+
+
+@contextmanager
+def _tifffile_said() -> Iterator[list[str]]:
+    """tifffile's log messages during a read, kept here instead of printed to stderr."""
+    said: list[str] = []
+
+    def keep(record: logging.LogRecord) -> bool:
+        if record.levelno < logging.WARNING:
+            return True
+        # tifffile starts its messages with repr(self), e.g. "<tifffile.TiffPages @8> ..."
+        said.append(re.sub(r"^<[^>]*>\s*", "", record.getMessage()))
+        return False
+
+    log = logging.getLogger("tifffile")
+    log.addFilter(keep)
+    try:
+        yield said
+    finally:
+        log.removeFilter(keep)
 
 
 def _tiff_stack(p: Path) -> Frames:
     import tifffile
 
-    try:
-        arr = tifffile.memmap(p, mode="r")  # uncompressed: frames read on demand
-    except (ValueError, tifffile.TiffFileError, OSError):
-        arr = tifffile.imread(p)
+    with _tifffile_said() as said:
+        try:
+            with tifffile.TiffFile(p) as tf:
+                axes, shape = tf.series[0].axes, tuple(tf.series[0].shape)
+            try:
+                arr = tifffile.memmap(p, mode="r")  # uncompressed: frames read on demand
+            except (ValueError, tifffile.TiffFileError, OSError):
+                arr = tifffile.imread(p)
+        except (MemoryError, PermissionError):
+            raise
+        except Exception as exc:  # a damaged file fails in many ways inside tifffile
+            why = said[0] if said else f"{type(exc).__name__}: {exc}"
+            raise ParameterError(f"input={str(p)!r} cannot be read as a TIFF stack ({why})") from None
+    if said:  # read, but damaged (e.g. truncated: the pages after the damage are missing)
+        warnings.warn(f"input={str(p)!r}: tifffile: {said[0]}", stacklevel=3)
     arr = np.asarray(arr) if not isinstance(arr, np.memmap) else arr
-    if arr.ndim == 2:
-        arr = arr[None]
-    if arr.ndim == 4 and arr.shape[-1] not in (3, 4):
-        arr = arr.reshape((-1,) + arr.shape[-2:])
+    if len(axes) == arr.ndim and "S" in axes[:-1] and arr.shape[axes.index("S")] in (3, 4):
+        arr, axes = np.moveaxis(arr, axes.index("S"), -1), axes.replace("S", "") + "S"  # planar colour
+    colour = axes.endswith("S") and arr.shape[-1] in (3, 4)
+    if arr.ndim == 2 + colour:
+        arr = arr[None]  # one frame
+    if arr.ndim != 3 + colour:
+        raise ParameterError(
+            f"input={str(p)!r} is a TIFF stack of shape {shape} (axes {axes!r}); a (T, H, W) stack, a colour "
+            "(T, H, W, 3|4) stack or one (H, W) frame is required: for a (T, Z, H, W) or (T, C, H, W) stack, "
+            "pass one Z plane or channel")
     return _from_array(arr, str(p))
 
 
@@ -117,6 +157,23 @@ def _read_image(p: Path) -> np.ndarray:
     return iio.imread(p)
 
 
+def _image_shape(p: Path) -> tuple[int, ...]:
+    """The shape :func:`_read_image` gives, from the file's header."""
+    try:
+        if p.suffix.lower() in STACK_SUFFIXES:
+            import tifffile
+
+            with _tifffile_said(), tifffile.TiffFile(p) as tf:
+                return tuple(tf.series[0].shape)
+        import imageio.v3 as iio
+
+        return tuple(iio.improps(p).shape)
+    except (MemoryError, PermissionError):
+        raise
+    except Exception as exc:  # a damaged file fails in many ways inside the readers
+        raise ParameterError(f"frame {str(p)!r} cannot be read as an image ({type(exc).__name__}: {exc})") from None
+
+
 def _folder(p: Path) -> Frames:
     files = sorted((f for f in p.iterdir() if f.is_file() and f.suffix.lower() in FRAME_SUFFIXES), key=_natural_key)
     if not files:
@@ -125,6 +182,11 @@ def _folder(p: Path) -> Frames:
     if len(sfx) > 1:
         raise ParameterError(f"input={str(p)!r} mixes frame formats {sorted(sfx)}; one format per folder is required")
     first = _gray(_read_image(files[0]))
+    want = _image_shape(files[0])
+    for f in files[1:]:
+        if (got := _image_shape(f)) != want:
+            raise ParameterError(f"input={str(p)!r}: frame {f.name!r} has shape {got} but the first frame "
+                                 f"{files[0].name!r} has {want}; all frames must have one size and channel count")
     return Frames(str(p), len(files), first.shape, None, lambda i: _read_image(files[i]),
                   lambda: (_read_image(f) for f in files))
 
@@ -160,8 +222,9 @@ def _movie(p: Path) -> Frames:
 
 
 def open_frames(source: Any, roi: Any = None) -> Frames:
-    """Frames from a path (TIFF stack, folder of PNG/TIFF frames, MP4/AVI movie), an array
-    (T, H, W), or an object with a ``frames`` array (a rendered :class:`Movie`)."""
+    """Frames from a path (TIFF stack (T, H, W) or colour (T, H, W, 3|4), folder of PNG/TIFF
+    frames of one shape, MP4/AVI movie), an array (T, H, W), or an object with a ``frames``
+    array (a rendered :class:`Movie`). A damaged file or another shape is a ParameterError."""
     if hasattr(source, "frames") and isinstance(source.frames, np.ndarray):
         fr = _from_array(source.frames, "movie")
         fr.fps = getattr(source, "fps", None)
