@@ -57,7 +57,7 @@ import math
 
 import numpy as np
 
-__all__ = ["periodic_shape", "fourier_basis"]
+__all__ = ["periodic_shape", "periodic_shape_flagging", "fourier_basis"]
 
 _J = np.array([[0.0, -1.0], [1.0, 0.0]])
 
@@ -253,6 +253,7 @@ def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: 
     if e_frame[k_max] > max(max_frame_ratio * e_med, max_residual_px):
         info["reason"] = (f"not done: the stroke is not periodic (frame {int(idx[k_max])} is {e_frame[k_max]:.2f} px "
                           f"from the template, median {e_med:.2f} px)")
+        info["outlier_frame"] = int(idx[k_max])
         return X, Y, info
     if f_stroke < min_stroke_f:
         info["reason"] = (f"not done: no stroke (the periodic template fits the body no better than one static "
@@ -277,3 +278,35 @@ def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: 
     info["reason"] = (f"done: period {period:.3f} frames, {H} harmonics{', mirror-symmetric' if sym else ''}, "
                       f"drift F = {f_stat:.2f}, symmetry F = {f_sym:.2f}, residual {info['residual_px']:.3f} px")
     return Xo, Yo, info
+
+
+def periodic_shape_flagging(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, reason: list, period_frames: float,
+                            max_fraction: float = 0.01, **kw) -> tuple[np.ndarray, np.ndarray, dict]:
+    """:func:`periodic_shape`, where a few lone frames far from an otherwise accepted template
+    (more than ``max_frame_ratio`` times the median frame's distance) are flagged instead of
+    refusing the template for the whole movie: each such frame (at most ``max_fraction`` of
+    the good frames, at least one) gets ok False and the reason "template outlier: ...", and
+    the template is fitted again without it. ``ok`` and ``reason`` are updated in place;
+    info["outliers"] lists the frames flagged."""
+    flagged: list[int] = []
+    n_max = max(1, int(max_fraction * np.count_nonzero(ok)))
+    X0, Y0 = X, Y
+    while True:
+        Xp, Yp, info = periodic_shape(X, Y, ok, period_frames, **kw)
+        k = info.pop("outlier_frame", None)
+        if info["done"] or k is None or len(flagged) >= n_max:
+            break
+        ok[k] = False
+        reason[k] = (f"template outlier: {info['frame_residual_max_px']:.2f} px RMS from the periodic stroke that "
+                     f"fits the other frames (median {info['frame_residual_px']:.2f} px)")
+        X, Y = X.copy(), Y.copy()
+        X[k] = Y[k] = np.nan
+        flagged.append(k)
+    if flagged and not info["done"]:  # refused all the same: every frame keeps its own estimate
+        for k in flagged:
+            ok[k], reason[k] = True, ""
+        return X0, Y0, {**info, "outliers": []}
+    info["outliers"] = flagged
+    if flagged:
+        info["reason"] += f"; {len(flagged)} frame(s) flagged as template outliers"
+    return Xp, Yp, info

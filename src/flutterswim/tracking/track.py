@@ -9,8 +9,9 @@ the raw pixels). A frame is flagged, never kept, when:
 
 - lost contrast: nothing above the thresholds, or the ridge is below ``min_contrast`` noise
   standard deviations of the filtered frame (a line at SNR 1 gives about 3);
-- gap: a second piece holds more than ``gap_fraction`` of the light of the largest one, or
-  the ridge breaks along the body;
+- gap: a second piece beyond one of the body's ends (within a quarter of its length and 60
+  degrees of the end's tangent: where a broken-off piece of it lies) holds more than
+  ``gap_fraction`` of the light of the largest one, or the ridge breaks along the body;
 - crossing: the body encloses a hole (it loops over itself) or its skeleton branches;
 - out of view: the body touches the edge of the frame or ROI;
 - length: the body length differs from the median of the good frames by more than
@@ -56,15 +57,31 @@ START_ENDS = ("left", "right", "top", "bottom")
 
 
 def _component_light(filtered: np.ndarray, median: float, noise: float, k_high: float,
-                     mask: np.ndarray) -> float:
-    """Light of the brightest piece other than ``mask`` over that of ``mask`` (0: none)."""
+                     mask: np.ndarray, x: np.ndarray, y: np.ndarray) -> float:
+    """Light of the brightest piece other than ``mask`` that could be the body's own over that
+    of ``mask`` (0: none). A piece of the body broken off lies beyond one of the ends of the
+    centreline (x, y) (P,) [px]: within a quarter of the body's length of an end and within 60
+    degrees of its outward tangent; a piece elsewhere (dust or debris beside the body, static
+    or not) is not the body's."""
     lab, n = ndi.label(filtered > median + k_high * noise, structure=np.ones((3, 3), bool))
     if n < 2:
         return 0.0
     sums = np.bincount(lab.ravel(), weights=(filtered - median).ravel(), minlength=n + 1)[1:]
     own = np.unique(lab[mask & (lab > 0)])
     main = float(sums[own - 1].sum()) if own.size else float(sums.max())
-    others = np.delete(sums, own - 1) if own.size else np.sort(sums)[:-1]
+    reach = 0.25 * float(np.sum(np.hypot(np.diff(x), np.diff(y))))
+    rows, cols = np.nonzero(lab)
+    ids = lab[rows, cols]
+    near = np.zeros(n + 1, bool)
+    for e, i in ((0, 1), (-1, -2)):
+        tx, ty = x[e] - x[i], y[e] - y[i]
+        nt = math.hypot(tx, ty)
+        dx, dy = cols - x[e], rows - y[e]
+        dist = np.hypot(dx, dy)
+        ahead = (dx * tx + dy * ty) >= 0.5 * dist * nt  # within 60 degrees of the outward tangent
+        near[np.unique(ids[(dist <= reach) & ahead])] = True
+    cand = np.array([k for k in range(1, n + 1) if near[k] and k not in set(own.tolist())], int)
+    others = sums[cand - 1] if cand.size else np.empty(0)
     return float(others.max()) / main if others.size and main > 0 else 0.0
 
 
@@ -72,6 +89,12 @@ def _has_loop(mask: np.ndarray, min_hole: int = 12) -> bool:
     rows, cols = np.nonzero(mask)
     sub = mask[rows.min(): rows.max() + 1, cols.min(): cols.max() + 1]
     return int(ndi.binary_fill_holes(sub).sum() - sub.sum()) >= min_hole
+
+
+# the matched filter smooths over at least this [px]: a line blurred by less (a sharp focus,
+# PSF sigma 0.5-0.7 px) is nearly one pixel wide, and a filter that narrow leaves the frame's
+# noise almost as it is (at SNR 3, 20-34 of 101 frames lost at 0.7 px, all at 0.5 px)
+_MIN_FILTER_SIGMA = 1.2
 
 
 def track_frame(img: np.ndarray, *, n_points: int = 49, sigma: float = 1.2, k_low: float = 2.0,
@@ -83,7 +106,7 @@ def track_frame(img: np.ndarray, *, n_points: int = 49, sigma: float = 1.2, k_lo
     out: dict[str, Any] = {"x": nan, "y": nan, "length": math.nan, "contrast": math.nan, "ok": False,
                            "reason": ""}
     img = clean_frame(img)
-    seg = segment(img, sigma=sigma, k_low=k_low, k_high=k_high)
+    seg = segment(img, sigma=max(sigma, _MIN_FILTER_SIGMA), k_low=k_low, k_high=k_high)
     if not seg.ok:
         out["reason"] = f"lost contrast: {seg.reason}"
         return out
@@ -104,7 +127,7 @@ def track_frame(img: np.ndarray, *, n_points: int = 49, sigma: float = 1.2, k_lo
                "lost ridge": "lost contrast: the ridge is lost"}.get(c.reason, c.reason)
         out["reason"] = why
         return out
-    light = _component_light(seg.filtered, seg.median, seg.noise, k_high, m)
+    light = _component_light(seg.filtered, seg.median, seg.noise, k_high, m, c.x, c.y)
     if light > gap_fraction:
         out["reason"] = f"gap: a second piece holds {100 * light:.0f}% of the body's light"
         return out
@@ -396,10 +419,10 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
             temporal["smoothing"] = (f"not done: {per_stroke:.1f} frames per stroke, too few for a quartic over "
                                      f"{w} frames")
     if periodic and np.count_nonzero(ok) >= 2:
-        from .periodic import periodic_shape
+        from .periodic import periodic_shape_flagging
 
         try:
-            X, Y, pinfo = periodic_shape(X, Y, ok, per_stroke)
+            X, Y, pinfo = periodic_shape_flagging(X, Y, ok, reason, per_stroke)
         except (np.linalg.LinAlgError, ValueError) as exc:  # a degenerate movie: the frames stay as they are
             pinfo = {"done": False, "reason": f"not done: the template fit failed ({exc})"}
         temporal["periodic"] = pinfo["reason"]
