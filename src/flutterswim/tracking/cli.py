@@ -27,6 +27,8 @@ def register(subparsers) -> None:
                    help="field direction in the image [deg] from +x towards +y (rows down); default 0")
     p.add_argument("--dark-line", action="store_true",
                    help="the filament is darker than its background (bright field); default: brighter (fluorescence)")
+    p.add_argument("--sigma", type=float, default=None,
+                   help="the line's blur, Gaussian sigma [px] (default: measured on the first good frame)")
     p.add_argument("--kymograph", default=None, help="also draw the raw-frame kymographs (Fig. 3c) to this PNG")
     p.add_argument("--json", action="store_true", help="print the descriptors (as flutterswim describe --json)")
     p.add_argument("--last", type=int, default=5, help="descriptors over the last N cycles (default 5)")
@@ -60,6 +62,7 @@ def _cmd_track(args) -> int:
         check_output_file(args.kymograph, (".png", ".pdf", ".svg"), what="--kymograph")
     tr = track(args.input, px_per_mm=args.px_per_mm, fps=args.fps, roi=args.roi, n_points=args.points,
                start_end=args.start_end, field_angle=math.radians(args.field_angle_deg), dark_line=args.dark_line,
+               sigma=args.sigma,
                progress=not args.quiet)
     save_track(tr, out)
     m = tr.meta

@@ -42,7 +42,7 @@ def _points(spl, s_end: float, q: np.ndarray) -> np.ndarray:
 
 
 def _fit_end(img: np.ndarray, spl, s_end: float, q0: float, outward: int, sigma0: float,
-             inner: float, outer: float, pivot: float) -> tuple[float, float, float]:
+             inner: float, outer: float, pivot: float, saturation: float | None = None) -> tuple[float, float, float]:
     """Fitted end parameter q_end (same parametrisation as ``spl``), sigma and the bend c
     about the hinge at q0 - outward * pivot; NaN if the fit fails. ``outward`` = +1 for the s_end end, -1 for the s = 0 end."""
     H, W = img.shape
@@ -67,9 +67,12 @@ def _fit_end(img: np.ndarray, spl, s_end: float, q0: float, outward: int, sigma0
     d = (py - P[j, 1]) * T[j, 0] - (px - P[j, 0]) * T[j, 1]
     u = outward * (q - q0)
     sel = (np.abs(d) <= 3.0 * sigma0) & (u >= -inner) & (u <= outer) & (j > 0) & (j < qq.size - 1)
+    v = img[r0:r1, c0:c1].ravel()
+    if saturation is not None:  # clipped pixels: the light was at least that, not that
+        sel &= v < saturation
     if np.count_nonzero(sel) < 30:
         return math.nan, math.nan, 0.0
-    v = img[r0:r1, c0:c1].ravel()[sel].astype(float)
+    v = v[sel].astype(float)
     q, d, u = q[sel], d[sel], u[sel]
     hinge = np.maximum(u + pivot, 0.0)
 
@@ -136,13 +139,14 @@ def _levenberg_marquardt(q: np.ndarray, d: np.ndarray, h: np.ndarray, v: np.ndar
 
 
 def _fit_end_twice(img: np.ndarray, spl, s_end: float, q0: float, outward: int, sigma0: float,
-                   inner: float, outer: float, pivot: float) -> tuple[float, float, float]:
+                   inner: float, outer: float, pivot: float, saturation: float | None = None
+                   ) -> tuple[float, float, float]:
     """:func:`_fit_end`, and once more with the pixels re-centred on its result when that
     moved the end by more than 2 px (a skeleton tip may be several px short). Returns
     (q_end, c, hinge parameter)."""
-    qe, _, c = _fit_end(img, spl, s_end, q0, outward, sigma0, inner, outer, pivot)
+    qe, _, c = _fit_end(img, spl, s_end, q0, outward, sigma0, inner, outer, pivot, saturation)
     if np.isfinite(qe) and abs(qe - q0) > 2.0:
-        q2, _, c2 = _fit_end(img, spl, s_end, qe, outward, sigma0, inner, outer, pivot)
+        q2, _, c2 = _fit_end(img, spl, s_end, qe, outward, sigma0, inner, outer, pivot, saturation)
         if np.isfinite(q2):
             return q2, c2, qe - outward * pivot
     return qe, c, q0 - outward * pivot
@@ -170,7 +174,8 @@ def resample(x: np.ndarray, y: np.ndarray, q_a: float, q_b: float, n_points: int
 
 def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float = 1.2,
                 inner: float = 14.0, outer: float = 6.0, pivot: float | None = None, trim: float = 5.0,
-                span: float = 40.0, hook: float = 6.0, hook_deg: float = 25.0, degree: int = 4) -> tuple[np.ndarray, np.ndarray, float, float]:
+                span: float = 40.0, hook: float = 6.0, hook_deg: float = 25.0, degree: int = 4,
+                saturation: float | None = None) -> tuple[np.ndarray, np.ndarray, float, float]:
     """Move both ends of the centreline (x, y) (P,) [px] to the line ends fitted on the raw
     frame ``img`` (H, W) (end position along the curve and a small rotation of the last
     ``pivot`` px, default 6 ``sigma`` (at most ``inner``), fitted over the last ``inner`` px;
@@ -183,7 +188,8 @@ def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float =
     free end falls linearly to zero (no bending moment there): a quadratic overshoots the
     lateral excursions by ~0.5 %; quartic over 40 px had the least bias on rendered strokes. Returns (x, y) resampled at P equal steps
     between the refined ends, and the two end corrections along the curve [px] (NaN where a
-    fit failed; that end is then kept)."""
+    fit failed; that end is then kept). ``saturation``: the value at which the frame is clipped;
+    pixels at it are left out of the end fits."""
     n = x.size
     x = np.asarray(x, float)
     y = np.asarray(y, float)
@@ -218,8 +224,8 @@ def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float =
     s, spl = _curve(x2, y2)
     L = float(s[-1])
     pivot = min(6.0 * sigma if pivot is None else float(pivot), inner)
-    qa, ca, ha = _fit_end_twice(img, spl, L, 0.0, -1, sigma, inner, outer, pivot)
-    qb, cb, hb = _fit_end_twice(img, spl, L, L, +1, sigma, inner, outer, pivot)
+    qa, ca, ha = _fit_end_twice(img, spl, L, 0.0, -1, sigma, inner, outer, pivot, saturation)
+    qb, cb, hb = _fit_end_twice(img, spl, L, L, +1, sigma, inner, outer, pivot, saturation)
     xa = qa if np.isfinite(qa) else 0.0
     xb = qb if np.isfinite(qb) else L
     xo, yo = resample(x2, y2, xa, xb, n, (ca, cb), (ha, hb))

@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from typing import Any
 
 import numpy as np
@@ -97,14 +98,35 @@ def _has_loop(mask: np.ndarray, min_hole: int = 12) -> bool:
 _MIN_FILTER_SIGMA = 1.2
 
 
+def saturation_level(img: np.ndarray, min_plateau: int = 10) -> float | None:
+    """The value at which the frame is clipped (a sensor or a conversion saturated), or None:
+    the largest value (the dtype's largest for an integer frame) where at least
+    ``min_plateau`` pixels holding it touch another such pixel (a clipped line is a plateau;
+    a few brightest pixels of a frame scaled to full range, or ties of integer counts, are
+    not). Those pixels tell only that the light was at least that."""
+    a = np.asarray(img)
+    if a.dtype.kind in "iu":
+        top = float(np.iinfo(a.dtype).max)
+    elif a.dtype.kind == "f" and np.isfinite(a).any():
+        top = float(np.nanmax(a[np.isfinite(a)]))
+    else:
+        return None
+    m = a == top
+    if np.count_nonzero(m) < min_plateau:
+        return None
+    touch = m & (np.roll(m, 1, 0) | np.roll(m, -1, 0) | np.roll(m, 1, 1) | np.roll(m, -1, 1))
+    return top if np.count_nonzero(touch) >= min_plateau else None
+
+
 def track_frame(img: np.ndarray, *, n_points: int = 49, sigma: float = 1.2, k_low: float = 2.0,
                 k_high: float = 5.0, min_contrast: float = 4.0, gap_fraction: float = 0.2,
                 max_branch: float = 0.15, refine: bool = True) -> dict[str, Any]:
     """Centreline of one frame (H, W): dict with x, y (n_points,) [px] (NaN on failure),
     length [px], contrast (ridge over filtered-noise sd), ok, reason."""
     nan = np.full(n_points, np.nan)
+    sat = saturation_level(img)
     out: dict[str, Any] = {"x": nan, "y": nan, "length": math.nan, "contrast": math.nan, "ok": False,
-                           "reason": ""}
+                           "reason": "", "saturated": sat is not None}
     img = clean_frame(img)
     seg = segment(img, sigma=max(sigma, _MIN_FILTER_SIGMA), k_low=k_low, k_high=k_high)
     if not seg.ok:
@@ -139,7 +161,7 @@ def track_frame(img: np.ndarray, *, n_points: int = 49, sigma: float = 1.2, k_lo
         return out
     x, y = c.x, c.y
     if refine:
-        x, y, da, db = refine_tips(img, x, y, sigma=sigma)
+        x, y, da, db = refine_tips(img, x, y, sigma=sigma, saturation=sat)
         if not (math.isfinite(da) and math.isfinite(db)):
             out["reason"] = "tip not found: the line-end fit failed"
             return out
@@ -307,10 +329,11 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     ref: tuple[np.ndarray, np.ndarray] | None = None
     sig = 1.2 if sigma is None else positive("sigma", sigma)
     blur_known = sigma is not None
+    n_clipped = 0
     try:
         for i, img in enumerate(frames):
-            if dark_line:
-                img = np.negative(img)
+            if dark_line:  # in floats: an unsigned frame's negative wraps (0 stays 0)
+                img = -np.asarray(img, np.float32) if np.asarray(img).dtype.kind in "iu" else np.negative(img)
             r = track_image(img, ref, window_px, n_points=n_points, sigma=sig, min_contrast=min_contrast,
                             gap_fraction=gap_fraction, refine=refine)
             if sigma is None and not blur_known and r["ok"]:
@@ -323,6 +346,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
                     r = track_image(img, None, window_px, n_points=n_points, sigma=sig, min_contrast=min_contrast,
                                     gap_fraction=gap_fraction, refine=refine)
             contrast[i] = r["contrast"]
+            n_clipped += bool(r.get("saturated", False))
             if r["ok"]:
                 x, y = r["x"], r["y"]
                 if ref is None:
@@ -448,9 +472,14 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         "t": t_all, "x_px": X, "y_px": Y, "length_px": length, "contrast": contrast, "ok": ok,
         "reason": reason, "match_px": match,
     }
+    if n_clipped:
+        warnings.warn(f"input={frames.source!r}: {n_clipped} of {T} frames have pixels clipped at their largest "
+                      "value (saturated); the line ends are fitted without them, but a clipped line's blur is "
+                      "measured too wide: lower the exposure, or give the blur (sigma, --sigma)", stacklevel=2)
     meta = {
         "source": frames.source, "px_per_mm": px_per_mm, "fps": fps, "roi": frames.roi,
         "frame_shape": frames.shape, "dark_line": bool(dark_line), "n_frames": T, "psf_sigma_px": sig, "n_failed": T - n_ok,
+        "n_clipped": n_clipped,
         "length_px": L_px, "length_std_px": float(np.std(Lgood, ddof=1)) if n_ok > 1 else 0.0,
         "length_spread": float((Lgood.max() - Lgood.min()) / L_px), "wall_time_s": wall,
         "frames": frames_info, "temporal": temporal,
