@@ -107,8 +107,11 @@ def saturation_level(img: np.ndarray, min_plateau: int = 10) -> float | None:
     a = np.asarray(img)
     if a.dtype.kind in "iu":
         top = float(np.iinfo(a.dtype).max)
-    elif a.dtype.kind == "f" and np.isfinite(a).any():
-        top = float(np.nanmax(a[np.isfinite(a)]))
+    elif a.dtype.kind == "f":
+        with np.errstate(invalid="ignore"):
+            top = float(np.nanmax(a)) if a.size and not np.all(np.isnan(a)) else math.nan
+        if not math.isfinite(top):  # inf pixels are cleaned later; no clipping read from them
+            return None
     else:
         return None
     m = a == top
