@@ -33,7 +33,10 @@ class Segmentation:
     reason: str
 
 
-def matched_filter(img: np.ndarray, sigma: float = 1.2, background_sigma: float = 16.0) -> np.ndarray:
+BACKGROUND_SIGMA = 16.0  # px: the matched filter's broad background estimate
+
+
+def matched_filter(img: np.ndarray, sigma: float = 1.2, background_sigma: float = BACKGROUND_SIGMA) -> np.ndarray:
     """(H, W) -> (H, W) float32: G_sigma * img minus a broad background estimate."""
     a = np.asarray(img, dtype=np.float32)
     f = ndi.gaussian_filter(a, sigma, mode="nearest")

