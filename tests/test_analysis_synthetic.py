@@ -694,7 +694,7 @@ def test_a_block_of_missing_frames_anywhere_leaves_the_described_cycles_exact():
     worst = 0.0
     for n_frames, duration in ((106, 2.1), (201, 4.0)):
         tr = wave_track(duration=duration, n_frames=n_frames, wavelength=1.3)
-        for a in range(5, n_frames - 15, 3):
+        for a in range(5, n_frames - 15, 5):
             for w in (6, 11):
                 keep = np.ones(n_frames, bool)
                 keep[a : a + w] = False
