@@ -298,7 +298,7 @@ def test_cycles_with_missing_frames_are_not_described():
     _check(d)
     holes = ((full.t / T) % 1.0 < 0.4) | ((full.t / T) % 1.0 > 0.7)
     tr = Track(t=full.t[holes], x=full.x[holes], y=full.y[holes], s=full.s, length=full.length)
-    with pytest.raises(ParameterError, match="misses frames over more than 0.25 period"):
+    with pytest.raises(ParameterError, match="misses frames, in it or within 0.6 period of it, over more than 0.25 period"):
         describe(tr)
     even = np.arange(0, 1001, 20)  # 0.08 s = 0.2 period between frames
     tr = Track(t=full.t[even], x=full.x[even], y=full.y[even], s=full.s, length=full.length)
@@ -639,10 +639,16 @@ def test_a_settled_stroke_with_measurement_noise_is_a_limit_cycle(n_frames):
     # white noise of 2-10 % of the tip's excursion makes neighbouring cycles differ by more
     # than tol = 1 %; a settled stroke is still settled. Each of the 9 comparisons (period,
     # amplitude, shape of 3 cycle pairs) passes at 99.9 %, so nearly every record passes
-    for noise in (0.002, 0.005, 0.01):
+    for noise in (0.002, 0.005):
         ok = [detect_cycles(wave_track(duration=2.1, n_frames=n_frames, noise=noise, seed=s, phase=0.37 * s)).limit_cycle
               for s in range(20)]
         assert sum(ok) >= 18, (noise, ok)
+    # noise of 20 % of the excursion: no comparison resolves a change of 20 %, and a record
+    # that cannot tell is no limit cycle (the note says why)
+    for s in range(5):
+        tr = wave_track(duration=2.1, n_frames=n_frames, noise=0.02, seed=s)
+        assert not detect_cycles(tr).limit_cycle
+        assert "the noise hides changes" in describe(tr).note
 
 
 def test_a_growing_stroke_with_the_same_noise_is_no_limit_cycle():
@@ -702,3 +708,35 @@ def test_a_block_of_missing_frames_anywhere_leaves_the_described_cycles_exact():
                 d = describe(sub, n_last=100)
                 worst = max(worst, abs(d.period_s / T - 1), abs(d.advance_per_cycle_mm / (U * T * 1e3) - 1))
     assert worst < 1e-3
+
+
+def test_a_clean_transient_is_judged_at_tol_not_at_its_own_growth():
+    # a clean Landau growth (no noise): the noise allowance came from the growing cycles' own
+    # residual, and a change of 1.17 % in shape passed at tol = 1 %. The noise is now the lower
+    # quartile of the cycles' residuals, which the settled cycles set
+    c = detect_cycles(wave_track(duration=8.0, n_frames=801, envelope=(0.05, 3.0)))
+    assert c.limit_cycle
+    k0 = int(np.searchsorted(c.starts, c.limit_cycle_time))
+    assert np.all(c.d_amplitude[k0:] < c.tol) and np.all(c.d_shape[k0:] < c.tol)
+
+
+def test_a_change_hidden_in_a_gap_still_delays_the_limit_cycle():
+    # the amplitude steps up by 20 % at 4.1 s, and the frames from 3.9 to 4.3 s are lost: the
+    # comparisons with the cycles by the gap are skipped, so the cycles either side of it are
+    # compared directly, and the change shows (the run bridged the gap: limit cycle from 0.7 s)
+    tr = wave_track(duration=8.0, n_frames=801)
+    y = tr.y.copy()
+    y[tr.t > 4.1] *= 1.2
+    keep = (tr.t < 3.9) | (tr.t > 4.3)
+    c = detect_cycles(Track(t=tr.t[keep], x=tr.x[keep], y=y[keep], s=tr.s, length=tr.length))
+    assert c.limit_cycle and c.limit_cycle_time > 4.1
+
+
+def test_frames_missing_over_two_periods_do_not_end_the_window():
+    # 2.1 periods of frames lost near the end of a settled record: that long cycle is missing
+    # frames, not a skipped stroke, so the window goes on past it (it ended there: 1 cycle)
+    tr = wave_track(duration=6.0, n_frames=601)
+    keep = (tr.t < 4.2) | (tr.t > 5.04)
+    d = describe(Track(t=tr.t[keep], x=tr.x[keep], y=tr.y[keep], s=tr.s, length=tr.length), n_last=5)
+    assert d.n_cycles_used == 5
+    _check(d)

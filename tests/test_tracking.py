@@ -507,3 +507,31 @@ def test_the_centreline_is_the_line_not_the_inside_ridge_of_its_blur(sim, psf, b
     D, E, _ = pixel_errors(tr, mv)
     assert tr.meta["n_failed"] == 0
     assert np.sqrt(np.mean(D**2)) < bound
+
+
+def test_a_body_broken_in_the_first_frames_is_not_taken_for_the_body(sim):
+    # the first two frames broken by a 40 px dark stretch are flagged and the rest tracked
+    # with the whole body's length (a review's movie took the half for the body: the other
+    # piece lay further than a quarter of the half's length from its end, and the 99 later
+    # frames failed "jump"; the reach is now 0.75 of the tracked piece's length)
+    mv = render(sim, um_per_px=UM_PER_PX, snr=8.0, seed=4)
+    frames = mv.frames.copy()
+    frames[0] = _two_pieces_frame(mv, 0, 40.0)
+    frames[1] = _two_pieces_frame(mv, 1, 40.0)
+    tr = track(frames, px_per_mm=mv.px_per_mm, fps=FPS, periodic=False)
+    f = {i: why for i, _, why in failures(tr)}
+    assert set(f) <= {0, 1, 2} and {0, 1} <= set(f), f
+    assert tr.meta["length_px"] == pytest.approx(264.3, rel=0.01)
+
+
+def test_a_line_clipped_tenfold_keeps_its_frames(sim):
+    # so heavily clipped that the unclipped pixels do not hold the line's ends: the end fit
+    # falls back to all the pixels (it failed in 16-19 of 101 frames: "tip not found")
+    sub = SimpleNamespace(t=sim.t[:20], x=sim.x[:20], y=sim.y[:20])
+    mv = render(sub, um_per_px=UM_PER_PX, snr=10.0, seed=2)
+    f = mv.frames.astype(float)
+    bg = np.median(f)
+    f8 = np.clip(np.rint(40 + (f - bg) * (10 * 255 - 40) / mv.meta["amplitude"]), 0, 255).astype(np.uint8)
+    with pytest.warns(UserWarning, match="clipped"):
+        tr = track(f8, px_per_mm=mv.px_per_mm, fps=FPS, periodic=False)
+    assert tr.meta["n_failed"] <= 1, failures(tr)

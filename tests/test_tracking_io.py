@@ -193,7 +193,7 @@ def test_cli_describe_names_missing_frames_and_takes_max_gap(movie, tmp_path, ca
     capsys.readouterr()
     assert main(["describe", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "misses frames over more than 0.25 period" in err[0] and "--max-gap" in err[0]
+    assert len(err) == 1 and "misses frames, in it or within 0.6 period of it, over more than 0.25 period" in err[0] and "--max-gap" in err[0]
     assert main(["describe", str(out), "--max-gap", "0.4", "--json"]) == 0
     period = describe(truth(movie)).period_s
     assert json.loads(capsys.readouterr().out)["period_s"] == pytest.approx(period, rel=1e-2)

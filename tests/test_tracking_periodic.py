@@ -319,6 +319,14 @@ def test_a_turn_of_the_field_within_the_movie_is_refused_the_template(settled):
         Xf, Yf, info = periodic_shape_flagging(Xb, Yb, ok, reason, frames_per_stroke(Xb, Yb, ok))
         assert info["done"] and info["outliers"] == [50], info["reason"]
         assert not ok[50] and reason[50].startswith("template outlier") and np.all(ok[np.arange(ok.size) != 50])
+        # three frames in a row bent so (a transient of the stroke): no lone outlier, nothing
+        # flagged, the template refused (two of them were flagged and hidden)
+        Xt, Yt = Xi.copy(), Yi.copy()
+        for f in (50, 51, 52):
+            Xt[f], Yt[f] = Xb[50] + (Xi[f] - Xi[50]), Yb[50] + (Yi[f] - Yi[50])
+        ok3, reason3 = np.ones(X.shape[0], bool), [""] * X.shape[0]
+        _, _, info3 = periodic_shape_flagging(Xt, Yt, ok3, reason3, frames_per_stroke(Xt, Yt, ok3), max_fraction=0.05)
+        assert not info3["done"] and np.all(ok3) and not any(reason3), info3["reason"]
         Xg, Yg, _ = _periodic(Xi, Yi)  # the other frames get the template of the unbent movie
         keep = np.arange(ok.size) != 50
         assert np.max(np.hypot(Xf[keep] - Xg[keep], Yf[keep] - Yg[keep])) < 0.05

@@ -249,13 +249,19 @@ def _envelope_onset(t: np.ndarray, d: np.ndarray, var: np.ndarray, W: float, t_f
 
 
 _Z_999 = 3.29  # two-sided 99.9 % point of the normal distribution
+_MAX_RESOLVABLE = 0.2  # a limit cycle needs comparisons that resolve a change of this (relative)
+
+
+def _chi2_quantile(q: float, p: float) -> float:
+    """The q point of the chi-square distribution with p degrees of freedom, per degree."""
+    from scipy.stats import chi2
+
+    return float(chi2.ppf(q, p)) / p
 
 
 def _chi2_999(p: float) -> float:
     """The 99.9 % point of the chi-square distribution with p degrees of freedom, per degree."""
-    from scipy.stats import chi2
-
-    return float(chi2.ppf(0.999, p)) / p
+    return _chi2_quantile(0.999, p)
 
 
 _LINEAR_ANGLE = 0.1  # rad: a shape within this of straight grows as the linearisation says
@@ -413,41 +419,56 @@ def detect_cycles(
         cs = np.stack([cm[1], cm[1 + H]])
         cs = cs @ basis.T if basis is not None else cs
         theta_amp[k] = float(np.max(np.hypot(cs[0], cs[1])))
-    # a change from the previous cycle converges under tol, or under what the measurement
-    # noise alone makes of it (the two cycles' pooled residual variance; a tracked movie):
-    # 3.29 standard errors for the period and the amplitude, the 99.9 % point of the shape
-    # change's (weighted) chi-square
-    d_period = _rel(periods)
-    d_amp, d_shape = _rel(fit_amp), np.full(K, np.nan)
+    # a change between two cycles converges under tol, or under what the measurement noise
+    # alone makes of it (a tracked movie): 3.29 standard errors for the period and the
+    # amplitude, the 99.9 % point of the shape change's (weighted) chi-square. The noise is
+    # stationary: its variance is the lower quartile of the cycles' residual variances (a
+    # cycle's own growth or a harmonic it cannot hold is no noise, and makes the quartile no
+    # larger than the most periodic cycles'). A comparison that could not resolve a change of
+    # _MAX_RESOLVABLE in period or amplitude converges never
+    has = dof > 0
+    # (over the lower quartile's expectation for noise alone, a chi-square of the cycles' dof)
+    q25 = _chi2_quantile(0.25, float(np.median(dof[has]))) if np.any(has) else 1.0
+    v_u = float(np.percentile(rss_u[has] / dof[has], 25)) / q25 if np.any(has) else 0.0
+    v_m = (np.percentile(rss_m[has] / dof[has, None], 25, axis=0) / q25 if np.any(has)
+           else np.zeros(modes.shape[1]))
+    # the crossing times' noise: the signal's noise over its slope there
+    sig_x = math.sqrt(v_u) / np.maximum(np.abs(np.append(slope, slope[-1:])), 1e-300) if K else np.zeros(1)
+
+    def compare(j: int, k: int):
+        """(change of period, amplitude, shape, their tolerances (3,), converged) from cycle j to k."""
+        dp = abs(periods[k] - periods[j]) / max(abs(periods[k]), 1e-300)
+        da = abs(fit_amp[k] - fit_amp[j]) / max(fit_amp[k], 1e-300)
+        num = float(np.linalg.norm(shapes[k] - shapes[j]))
+        den = max(float(np.linalg.norm(shapes[k])), 1e-300)
+        Pc = shape_cov[k] + shape_cov[j]
+        tr_s = float(np.sum(v_m)) * float(np.trace(Pc))
+        tr_s2 = float(np.sum(v_m**2)) * float(np.sum(Pc * Pc))
+        noise_s = math.sqrt(_chi2_999(tr_s * tr_s / tr_s2) * tr_s) if tr_s2 > 0 else 0.0
+        # P_k - P_j = s[k+1] - s[k] - s[j+1] + s[j] (the middle crossing twice when adjacent)
+        coef: dict[int, float] = {}
+        for i, c in ((k + 1, 1.0), (k, -1.0), (j + 1, -1.0), (j, 1.0)):
+            coef[i] = coef.get(i, 0.0) + c
+        noise_p = _Z_999 * math.sqrt(sum((c * sig_x[i]) ** 2 for i, c in coef.items()))
+        noise_a = _Z_999 * math.sqrt(v_u * (amp_gain[k] + amp_gain[j]))
+        row = np.array([tol + noise_p / periods[k], tol + noise_a / max(fit_amp[k], 1e-300), tol + noise_s / den])
+        d = np.array([dp, da, num / den])
+        return d, row, bool(np.all(d < row) and np.all(row[:2] <= _MAX_RESOLVABLE))
+
+    d_period, d_amp, d_shape = np.full(K, np.nan), np.full(K, np.nan), np.full(K, np.nan)
     conv = np.zeros(K, bool)
     tol_used = np.full((K, 3), np.nan)
     for k in range(1, K):
-        n_dof = dof[k] + dof[k - 1]
-        v_u = (rss_u[k] + rss_u[k - 1]) / n_dof if n_dof > 0 else 0.0
-        v_m = (rss_m[k] + rss_m[k - 1]) / n_dof if n_dof > 0 else np.zeros(modes.shape[1])
-        num = float(np.linalg.norm(shapes[k] - shapes[k - 1]))
-        den = max(float(np.linalg.norm(shapes[k])), 1e-300)
-        d_shape[k] = num / den
-        P = shape_cov[k] + shape_cov[k - 1]
-        tr_s = float(np.sum(v_m)) * float(np.trace(P))
-        tr_s2 = float(np.sum(v_m**2)) * float(np.sum(P * P))
-        noise_s = math.sqrt(_chi2_999(tr_s * tr_s / tr_s2) * tr_s) if tr_s2 > 0 else 0.0
-        # crossing times: the noise over the signal's slope there (the period's change takes
-        # three crossings, the middle one twice)
-        sig = [math.sqrt(v_u) / max(abs(slope[j]), 1e-300) for j in (k - 1, k, min(k + 1, K - 1))]
-        noise_p = _Z_999 * math.sqrt(sig[0] ** 2 + 4.0 * sig[1] ** 2 + sig[2] ** 2)
-        noise_a = _Z_999 * math.sqrt(v_u * (amp_gain[k] + amp_gain[k - 1]))
-        tol_used[k] = (tol + noise_p / periods[k], tol + noise_a / max(fit_amp[k], 1e-300), tol + noise_s / den)
-        conv[k] = bool(np.all(np.array([d_period[k], d_amp[k], d_shape[k]]) < tol_used[k]))
-    # trailing run of converged cycles; a comparison with a cycle missing frames (a tracked
-    # movie's failed frames) neither counts nor breaks the run
-    gapped = _frame_gaps(starts, t, GAP_MARGIN) > MAX_GAP
-    valid = ~gapped & np.concatenate(([False], ~gapped[:-1])) if K else np.zeros(0, bool)
+        (d_period[k], d_amp[k], d_shape[k]), tol_used[k], conv[k] = compare(k - 1, k)
+    # trailing run of converged comparisons between the cycles clear of missing frames (a
+    # tracked movie's failed frames), each with the one before it clear of them, across a gap
+    # if need be (a change hidden in the gap shows there)
+    clear = np.nonzero(~(_frame_gaps(starts, t, GAP_MARGIN) > MAX_GAP))[0]
     run, k_run = 0, K
-    for k in range(K - 1, -1, -1):
-        if not valid[k]:
-            continue
-        if not conv[k]:
+    for i in range(clear.size - 1, 0, -1):
+        j, k = int(clear[i - 1]), int(clear[i])
+        ok = conv[k] if j == k - 1 else compare(j, k)[2]
+        if not ok:
             break
         run, k_run = run + 1, k
     limit = run >= n_consecutive

@@ -10,7 +10,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from .._validate import ParameterError
-from .cycles import GAP_MARGIN, Cycles, detect_cycles, fourier_fit, sample_cycle, tip_index
+from .cycles import _MAX_RESOLVABLE, GAP_MARGIN, Cycles, detect_cycles, fourier_fit, sample_cycle, tip_index
 from .intersection import self_intersections
 from .track import Track, as_track
 
@@ -386,11 +386,12 @@ def describe(
     # a cycle missing frames is left out and the window goes on past it (the same stroke);
     # skipped strokes end the window (before them, the stroke was another or under the noise)
     skip = gaps > max_gap
-    ends = long_ & ~same
+    ends = long_ & ~same & ~skip  # a cycle long because frames are missing skipped no stroke
     good = ~skip & ~ends
     if not np.any(good):
         raise ParameterError(
-            f"every one of the track's {K} stroke cycles misses frames over more than {max_gap:g} period "
+            f"every one of the track's {K} stroke cycles misses frames, in it or within {GAP_MARGIN:g} period of it, "
+            f"over more than {max_gap:g} period "
             f"(the shortest such gap {np.min(gaps):.2f} periods), for example frames that failed tracking; "
             "descriptors need cycles without such gaps (max_gap, describe --max-gap)")
     k1 = int(np.nonzero(good)[0][-1])
@@ -451,13 +452,18 @@ def describe(
         "no limit cycle: the stroke is still changing from cycle to cycle (onset or transient), so the "
         "averages describe unsettled cycles and the limit-cycle time, transient duration and onset time "
         "are unknown; " + ("record longer" if movie else "simulate longer (run_to_limit_cycle)"))
+    last = cyc.tol_used[-min(cyc.n_cycles - 1, 3):, :2] if cyc.n_cycles > 1 else np.empty((0, 2))
+    if not settled and last.size and np.nanmax(last) > _MAX_RESOLVABLE:
+        note = (f"no limit cycle found: the noise hides changes from cycle to cycle of up to "
+                f"{100.0 * np.nanmax(last):.3g} % in period or amplitude, over {100 * _MAX_RESOLVABLE:g} %, so "
+                "whether the stroke has settled is not known")
     if settled:
         # the trailing run of converged cycles, judged within what the frames resolve where
         # that exceeds tol (a tracked movie's noise, a stroke's harmonics beyond a coarse frame
         # rate): say what change from cycle to cycle would go unseen
         run = int(np.argmin(np.append(cyc.converged[::-1], False)))
         used = cyc.tol_used[cyc.n_cycles - run :]
-        if used.size and np.nanmax(used) > 1.5 * cyc.tol:
+        if used.size and np.nanmax(used) > 1.2 * cyc.tol:
             worst = 100.0 * np.nanmax(used, axis=0)
             note = (f"limit cycle within what the frames resolve (noise, or harmonics too fast for the frame "
                     f"rate): over its last {run} cycles, changes from cycle "

@@ -282,7 +282,7 @@ def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: 
 
 def periodic_shape_flagging(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, reason: list, period_frames: float,
                             max_fraction: float = 0.01, **kw) -> tuple[np.ndarray, np.ndarray, dict]:
-    """:func:`periodic_shape`, where a few lone frames far from an otherwise accepted template
+    """:func:`periodic_shape`, where a few lone frames (none within 2 frames of another) far from an otherwise accepted template
     (more than ``max_frame_ratio`` times the median frame's distance) are flagged instead of
     refusing the template for the whole movie: each such frame (at most ``max_fraction`` of
     the good frames, at least one) gets ok False and the reason "template outlier: ...", and
@@ -294,7 +294,8 @@ def periodic_shape_flagging(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, reason
     while True:
         Xp, Yp, info = periodic_shape(X, Y, ok, period_frames, **kw)
         k = info.pop("outlier_frame", None)
-        if info["done"] or k is None or len(flagged) >= n_max:
+        # lone frames only: one next to a flagged one makes a run, a transient of the stroke
+        if info["done"] or k is None or len(flagged) >= n_max or any(abs(k - f) <= 2 for f in flagged):
             break
         ok[k] = False
         reason[k] = (f"template outlier: {info['frame_residual_max_px']:.2f} px RMS from the periodic stroke that "

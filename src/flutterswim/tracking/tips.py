@@ -145,6 +145,9 @@ def _fit_end_twice(img: np.ndarray, spl, s_end: float, q0: float, outward: int, 
     moved the end by more than 2 px (a skeleton tip may be several px short). Returns
     (q_end, c, hinge parameter)."""
     qe, _, c = _fit_end(img, spl, s_end, q0, outward, sigma0, inner, outer, pivot, saturation)
+    if saturation is not None and not np.isfinite(qe):
+        # clipped so heavily that the unclipped pixels do not hold the end: fit them all
+        return _fit_end_twice(img, spl, s_end, q0, outward, sigma0, inner, outer, pivot)
     if np.isfinite(qe) and abs(qe - q0) > 2.0:
         q2, _, c2 = _fit_end(img, spl, s_end, qe, outward, sigma0, inner, outer, pivot, saturation)
         if np.isfinite(q2):

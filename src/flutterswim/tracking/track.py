@@ -9,7 +9,7 @@ the raw pixels). A frame is flagged, never kept, when:
 
 - lost contrast: nothing above the thresholds, or the ridge is below ``min_contrast`` noise
   standard deviations of the filtered frame (a line at SNR 1 gives about 3);
-- gap: a second piece beyond one of the body's ends (within a quarter of its length and 60
+- gap: a second piece beyond one of the body's ends (within 0.75 of its length and 60
   degrees of the end's tangent: where a broken-off piece of it lies) holds more than
   ``gap_fraction`` of the light of the largest one, or the ridge breaks along the body;
 - crossing: the body encloses a hole (it loops over itself) or its skeleton branches;
@@ -61,16 +61,16 @@ def _component_light(filtered: np.ndarray, median: float, noise: float, k_high: 
                      mask: np.ndarray, x: np.ndarray, y: np.ndarray) -> float:
     """Light of the brightest piece other than ``mask`` that could be the body's own over that
     of ``mask`` (0: none). A piece of the body broken off lies beyond one of the ends of the
-    centreline (x, y) (P,) [px]: within a quarter of the body's length of an end and within 60
-    degrees of its outward tangent; a piece elsewhere (dust or debris beside the body, static
-    or not) is not the body's."""
+    centreline (x, y) (P,) [px]: within 0.75 of that centreline's length of an end (the piece
+    tracked may be the smaller part) and within 60 degrees of its outward tangent; a piece
+    elsewhere (dust or debris beside the body, static or not) is not the body's."""
     lab, n = ndi.label(filtered > median + k_high * noise, structure=np.ones((3, 3), bool))
     if n < 2:
         return 0.0
     sums = np.bincount(lab.ravel(), weights=(filtered - median).ravel(), minlength=n + 1)[1:]
     own = np.unique(lab[mask & (lab > 0)])
     main = float(sums[own - 1].sum()) if own.size else float(sums.max())
-    reach = 0.25 * float(np.sum(np.hypot(np.diff(x), np.diff(y))))
+    reach = 0.75 * float(np.sum(np.hypot(np.diff(x), np.diff(y))))  # the piece tracked may be the smaller part
     rows, cols = np.nonzero(lab)
     ids = lab[rows, cols]
     near = np.zeros(n + 1, bool)
@@ -98,6 +98,10 @@ def _has_loop(mask: np.ndarray, min_hole: int = 12) -> bool:
 _MIN_FILTER_SIGMA = 1.2
 
 
+# (and 0: an unsigned frame negated for dark_line, clipped at black)
+_FULL_SCALES = frozenset([0.0, 1.0] + [float(2**n - 1) for n in range(8, 17)])
+
+
 def saturation_level(img: np.ndarray, min_plateau: int = 10) -> float | None:
     """The value at which the frame is clipped (a sensor or a conversion saturated), or None:
     the largest value (the dtype's largest for an integer frame) where at least
@@ -110,7 +114,9 @@ def saturation_level(img: np.ndarray, min_plateau: int = 10) -> float | None:
     elif a.dtype.kind == "f":
         with np.errstate(invalid="ignore"):
             top = float(np.nanmax(a)) if a.size and not np.all(np.isnan(a)) else math.nan
-        if not math.isfinite(top):  # inf pixels are cleaned later; no clipping read from them
+        # a float frame clips at a full scale (1, or 2^n - 1 of an n-bit sensor or format); a
+        # plateau at another largest value is the line's own (a noise-free frame, say)
+        if top not in _FULL_SCALES:
             return None
     else:
         return None
