@@ -475,17 +475,22 @@ def test_a_sharply_focused_line_is_tracked_at_snr3(sim):
     assert np.sqrt(np.mean(D**2)) < 0.25
 
 
+def _clipped_movie(sim, n: int, over: float):
+    """The first n frames at SNR 10 as 8-bit frames whose line peaks at ``over`` x full scale."""
+    sub = SimpleNamespace(t=sim.t[:n], x=sim.x[:n], y=sim.y[:n])
+    mv = render(sub, um_per_px=UM_PER_PX, snr=10.0, seed=2)
+    f = mv.frames.astype(float)
+    scale = (over * 255 - 40) / mv.meta["amplitude"]
+    return mv, np.clip(np.rint(40 + (f - np.median(f)) * scale), 0, 255).astype(np.uint8)
+
+
 def test_a_clipped_line_is_tracked_from_its_unclipped_pixels_and_said_so(sim):
     # 8-bit frames whose line peaks at twice full scale (the sensor saturated): the line-end
     # fit took the clipped plateau for the line's height, and the tips were 0.7 px RMS off
     # (no frame flagged, no word). Clipped pixels now stay out of the end fits; the movie's
     # count of such frames is recorded and a warning says so. A dark line clipped at 0 (bright
     # field, dark_line) is the same movie negated: an unsigned negative wrapped 0 to 0
-    sub = SimpleNamespace(t=sim.t[:12], x=sim.x[:12], y=sim.y[:12])
-    mv = render(sub, um_per_px=UM_PER_PX, snr=10.0, seed=2)
-    f = mv.frames.astype(float)
-    bg = np.median(f)
-    f8 = np.clip(np.rint(40 + (f - bg) * (2 * 255 - 40) / mv.meta["amplitude"]), 0, 255).astype(np.uint8)
+    mv, f8 = _clipped_movie(sim, 12, 2.0)
     assert np.count_nonzero(f8 == 255) > 12 * 50  # clipped along the body in every frame
     for frames, dark in ((f8, False), (255 - f8, True)):
         with pytest.warns(UserWarning, match="clipped"):
@@ -527,11 +532,7 @@ def test_a_body_broken_in_the_first_frames_is_not_taken_for_the_body(sim):
 def test_a_line_clipped_tenfold_keeps_its_frames(sim):
     # so heavily clipped that the unclipped pixels do not hold the line's ends: the end fit
     # falls back to all the pixels (it failed in 16-19 of 101 frames: "tip not found")
-    sub = SimpleNamespace(t=sim.t[:20], x=sim.x[:20], y=sim.y[:20])
-    mv = render(sub, um_per_px=UM_PER_PX, snr=10.0, seed=2)
-    f = mv.frames.astype(float)
-    bg = np.median(f)
-    f8 = np.clip(np.rint(40 + (f - bg) * (10 * 255 - 40) / mv.meta["amplitude"]), 0, 255).astype(np.uint8)
+    mv, f8 = _clipped_movie(sim, 20, 10.0)
     with pytest.warns(UserWarning, match="clipped"):
         tr = track(f8, px_per_mm=mv.px_per_mm, fps=FPS, periodic=False)
     assert tr.meta["n_failed"] <= 1, failures(tr)
