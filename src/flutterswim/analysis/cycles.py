@@ -117,7 +117,7 @@ class Cycles:
     of the period, the amplitude of the fitted lateral waveform (root mean square) and the shape.
     converged: (K,) all three changes below their tolerance: tol, plus what the measurement
     noise alone makes of the change (``tol_used``, (K, 3): period, amplitude, shape; nan for
-    k=0; tol itself for a clean simulation).
+    k=0; close to tol for a clean, finely sampled simulation).
     """
 
     starts: np.ndarray
@@ -196,13 +196,6 @@ def _frame_gaps(starts: np.ndarray, t: np.ndarray, margin: float) -> np.ndarray:
 # local fits a twelfth more), leave the cycle's crossings and fits uncertain
 MAX_GAP = 0.25
 GAP_MARGIN = 0.6
-
-
-def _rel(a: np.ndarray) -> np.ndarray:
-    out = np.full(a.shape[0], np.nan)
-    if a.shape[0] > 1:
-        out[1:] = np.abs(np.diff(a)) / np.maximum(np.abs(a[1:]), 1e-300)
-    return out
 
 
 def _noise_variance(t: np.ndarray, u: np.ndarray, d: np.ndarray, W: float) -> float:
@@ -306,11 +299,14 @@ def detect_cycles(
     square of the fitted lateral waveform) and shape (tangent angle minus its mean along s, at
     ``n_shape`` phases, projected on the ``n_shape_modes`` leading principal modes, 0 for no
     projection) each change by less than ``tol`` (relative) from the previous cycle, plus what
-    the measurement noise alone makes of that change: the two cycles' residual variance
-    propagated to 3.29 standard errors (period, amplitude) or the 99.9 % point of the shape
-    change's chi-square (``tol_used``; residuals also hold harmonics too fast for a coarse
-    frame rate). The limit cycle is reached if the last ``n_consecutive`` cycles are
-    converged, at the start of the trailing run of converged cycles.
+    the measurement noise alone makes of that change (``tol_used``): the noise variance, the
+    lower quartile of the cycles' residual variances over its chi-square expectation (residuals
+    also hold harmonics too fast for a coarse frame rate), propagated to 3.29 standard errors
+    (period, amplitude) or the 99.9 % point of the shape change's chi-square; a change of 20 %
+    in period or amplitude that the noise could hide converges never. The limit cycle is
+    reached if the last ``n_consecutive`` comparisons between cycles clear of missing frames
+    (none over 0.25 period within 0.6 period of them) converge, the cycles either side of such
+    frames compared directly; it starts at the first cycle of that run.
 
     Onset time: when the cycle amplitude first reaches ``onset_fraction`` of the final
     amplitude (log-linear interpolation); after a quiet stretch (no cycles over more than 1.5
@@ -452,8 +448,8 @@ def detect_cycles(
         noise_p = _Z_999 * math.sqrt(sum((c * sig_x[i]) ** 2 for i, c in coef.items()))
         noise_a = _Z_999 * math.sqrt(v_u * (amp_gain[k] + amp_gain[j]))
         row = np.array([tol + noise_p / periods[k], tol + noise_a / max(fit_amp[k], 1e-300), tol + noise_s / den])
-        d = np.array([dp, da, num / den])
-        return d, row, bool(np.all(d < row) and np.all(row[:2] <= _MAX_RESOLVABLE))
+        change = np.array([dp, da, num / den])
+        return change, row, bool(np.all(change < row) and np.all(row[:2] <= _MAX_RESOLVABLE))
 
     d_period, d_amp, d_shape = np.full(K, np.nan), np.full(K, np.nan), np.full(K, np.nan)
     conv = np.zeros(K, bool)
