@@ -461,8 +461,9 @@ def describe(
         # the trailing run of converged cycles, judged within what the frames resolve where
         # that exceeds tol (a tracked movie's noise, a stroke's harmonics beyond a coarse frame
         # rate): say what change from cycle to cycle would go unseen
-        run = int(np.argmin(np.append(cyc.converged[::-1], False)))
-        used = cyc.tol_used[cyc.n_cycles - run :]
+        k_lc = int(np.searchsorted(cyc.starts, cyc.limit_cycle_time))  # the verdict's run, gaps and all
+        run = cyc.n_cycles - k_lc
+        used = cyc.tol_used[k_lc:]
         if used.size and np.nanmax(used) > 1.2 * cyc.tol:
             worst = 100.0 * np.nanmax(used, axis=0)
             note = (f"limit cycle within what the frames resolve (noise, or harmonics too fast for the frame "
