@@ -111,3 +111,28 @@ def test_describe_without_limit_cycle_says_so(tmp_path):
     d = json.loads(j.stdout)
     assert d["limit_cycle"] is False and "no limit cycle" in d["note"]
     assert d["limit_cycle_time_s"] is None and d["onset_time_s"] is None
+
+
+def test_a_missing_optional_package_names_its_extra(tmp_path, monkeypatch, capsys):
+    """A command whose optional package is absent says, in one line, which extra brings it, and
+    every extra named is one of pyproject.toml's that lists that package."""
+    import re
+    import tomllib
+    from pathlib import Path
+
+    from flutterswim import cli
+
+    pyproject = Path(__file__).resolve().parents[1] / "pyproject.toml"
+    extras = tomllib.loads(pyproject.read_text())["project"]["optional-dependencies"]
+    pip_name = {"skimage": "scikit-image", "imageio_ffmpeg": "imageio-ffmpeg", "distributed": "dask"}
+    for module, extra in cli._EXTRA_OF.items():
+        wanted = pip_name.get(module, module)
+        names = [re.split(r"[\[<>=!~ ]", req)[0] for req in extras[extra]]
+        assert wanted in names, (module, extra, extras[extra])
+
+    monkeypatch.setitem(sys.modules, "tqdm", None)  # import tqdm now raises ModuleNotFoundError
+    monkeypatch.setitem(sys.modules, "tqdm.auto", None)
+    status = cli.main(["simulate", "--t-end", "0.1", "--out", str(tmp_path / "r.nc")])
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert status == 1 and len(err) == 1, err
+    assert "'tqdm'" in err[0] and "flutterswim[cli]" in err[0], err

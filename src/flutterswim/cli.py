@@ -244,6 +244,13 @@ def _one_line(text: str) -> str:
     return " ".join(str(text).split())
 
 
+# the extra of pyproject.toml that brings each optional package (the import name)
+_EXTRA_OF = {"xarray": "io", "h5netcdf": "io", "h5py": "io", "zarr": "io", "matplotlib": "plot",
+             "imageio": "video", "imageio_ffmpeg": "video", "dask": "dask", "distributed": "dask",
+             "tqdm": "cli", "numba": "fast", "jinja2": "report", "skimage": "track",
+             "tifffile": "track"}
+
+
 def _describe_error(exc: BaseException) -> tuple[int, str]:
     """(exit status, one-line message) of an exception escaping a subcommand."""
     from ._validate import ParameterError
@@ -251,8 +258,10 @@ def _describe_error(exc: BaseException) -> tuple[int, str]:
     if isinstance(exc, ParameterError):
         return 2, _one_line(exc)
     if isinstance(exc, ModuleNotFoundError) and exc.name and not exc.name.startswith("flutterswim"):
-        return 1, (f"this command needs the optional package {exc.name!r}; install it with "
-                   "pip install 'flutterswim[all]'")
+        top = exc.name.split(".")[0]
+        extra = _EXTRA_OF.get(top, "all")
+        return 1, (f"this command needs the optional package {top!r}; install it with "
+                   f"pip install 'flutterswim[{extra}]' (or 'flutterswim[all]')")
     if isinstance(exc, (FileNotFoundError, IsADirectoryError, NotADirectoryError, PermissionError,
                         FileExistsError)):
         what = {FileNotFoundError: "does not exist", IsADirectoryError: "is a directory",
