@@ -339,13 +339,15 @@ def test_tiff_stack_png_folder_and_roi_agree(sim, tmp_path):
     assert abs(dx.mean()) < 0.03 and abs(dy.mean()) < 0.03
 
 
-def _write_mp4(path, frames: np.ndarray, lo: float, hi: float) -> None:
+def _write_mp4(path, frames: np.ndarray, lo: float, hi: float, **codec) -> None:
+    """8-bit movie of the frames (H.264 MP4 by default; ``codec``: imageio_ffmpeg.write_frames
+    options, e.g. an MJPEG AVI)."""
     import imageio_ffmpeg
 
     f8 = np.clip((frames - lo) / (hi - lo) * 255, 0, 255).astype(np.uint8)
     f8 = f8[:, : f8.shape[1] // 2 * 2, : f8.shape[2] // 2 * 2]
     w = imageio_ffmpeg.write_frames(str(path), (f8.shape[2], f8.shape[1]), pix_fmt_in="gray", fps=FPS,
-                                    quality=8, macro_block_size=1)
+                                    macro_block_size=1, **({"quality": 8} | codec))
     w.send(None)
     for f in f8:
         w.send(np.ascontiguousarray(f))
@@ -366,6 +368,22 @@ def test_mp4_within_one_percent_of_lossless(snr3, tmp_path):
     a, b = describe(tr), describe(tm)
     for k in ("period_s", "advance_per_cycle_mm", "leading_lateral_p2p_mm", "trailing_lateral_p2p_mm",
               "body_length_mm"):
+        assert getattr(b, k) == pytest.approx(getattr(a, k), rel=0.01), k
+
+
+def test_mjpeg_avi_within_one_percent_of_lossless(snr3, tmp_path):
+    """An AVI of the kind cameras write (Motion JPEG, 8 bits, lossy) reads and tracks like the
+    lossless frames."""
+    pytest.importorskip("imageio_ffmpeg")
+    mv, tr = snr3
+    lo, hi = np.percentile(mv.frames, [0.1, 99.99])
+    _write_mp4(tmp_path / "movie.avi", mv.frames, lo, hi, codec="mjpeg", pix_fmt_out="yuvj420p",
+               quality=None, output_params=["-q:v", "3"])
+    tm = track(tmp_path / "movie.avi", px_per_mm=mv.px_per_mm, t0=float(mv.t[0]))
+    assert tm.meta["fps"] == pytest.approx(FPS)
+    assert tm.meta["n_failed"] == 0, failures(tm)
+    a, b = describe(tr), describe(tm)
+    for k in ("period_s", "advance_per_cycle_mm", "leading_lateral_p2p_mm", "trailing_lateral_p2p_mm"):
         assert getattr(b, k) == pytest.approx(getattr(a, k), rel=0.01), k
 
 
