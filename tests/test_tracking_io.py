@@ -168,6 +168,30 @@ def test_batch_csv_sidecar_pattern_failures_and_figure(movie, tmp_path, capsys):
     assert "90V_sample9" in said.err and "lost contrast" in said.err
 
 
+def test_batch_field_across_the_image_is_given_on_the_command_line_or_warned(movie, tmp_path, capsys):
+    """The swimmer swims along the field. A movie turned by 90 degrees (field along the rows)
+    tracked with the default field direction (+x) would report the advance across the field
+    (about 0): track-batch warns, naming the trial and the option; with --field-angle-deg 90
+    the advance per cycle is that of the untouched movie (the lateral excursion never changed)."""
+    from flutterswim.fitting.data import read_trials
+
+    folder = tmp_path / "t"
+    folder.mkdir()
+    tifffile.imwrite(folder / "85V_sample1.tif", np.ascontiguousarray(movie.frames.transpose(0, 2, 1)),
+                     photometric="minisblack")
+    out = tmp_path / "turned.csv"
+    common = ["track-batch", str(folder), "--px-per-mm", str(movie.px_per_mm), "--fps", "50", "--quiet"]
+    assert main(common + ["--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "85V_sample1" in err and "to the field" in err and "--field-angle-deg" in err
+    assert main(common + ["--out", str(out), "--field-angle-deg", "90"]) == 0
+    assert "to the field" not in capsys.readouterr().err
+    dt = describe(truth(movie))
+    turned = read_trials(out).values[0]
+    assert turned[1] == pytest.approx(abs(dt.advance_per_cycle_mm), rel=0.01)
+    assert turned[2] == pytest.approx(dt.trailing_lateral_p2p_mm, rel=0.01)
+
+
 def test_batch_needs_voltage_and_sample(tmp_path, movie):
     folder = tmp_path / "t"
     folder.mkdir()

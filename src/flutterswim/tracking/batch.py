@@ -24,6 +24,7 @@ import json
 import math
 import os
 import re
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -156,6 +157,12 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
         except ParameterError as exc:
             failed.append((str(tr_.path), " ".join(str(exc).split())))
             continue
+        if abs(math.cos(math.radians(d.direction_to_field_deg))) < math.cos(math.radians(45.0)):
+            # the stroke swims along the field: this far across it, the field's direction is wrong
+            warnings.warn(f"trial {str(tr_.path)!r} swims at {d.direction_to_field_deg:.0f} deg to the field, taken "
+                          f"at {d.field_direction_deg:.0f} deg in the image; advance_mm is the advance along it. "
+                          "Give the field's direction: --field-angle-deg, or field_angle_deg in the trial's sidecar",
+                          stacklevel=2)
         m = tk.meta
         rows.append({
             "voltage_V": tr_.voltage_V, "sample": tr_.sample, "period_s": d.period_s,

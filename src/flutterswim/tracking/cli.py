@@ -48,6 +48,11 @@ def register(subparsers) -> None:
     q.add_argument("--last", type=int, default=5, help="descriptors over the last N cycles (default 5)")
     q.add_argument("--dark-line", action="store_true",
                    help="the filaments are darker than their background (unless a sidecar says dark_line)")
+    q.add_argument("--field-angle-deg", type=float, default=None,
+                   help="field direction in the image [deg] from +x towards +y (rows down), unless a sidecar says "
+                        "field_angle_deg; default 0")
+    q.add_argument("--start-end", choices=("left", "right", "top", "bottom"), default=None,
+                   help="side of the s = 0 end in the first tracked frame, unless a sidecar says start_end; default left")
     q.add_argument("--quiet", action="store_true", help="no progress bar")
     q.set_defaults(func=_cmd_batch)
 
@@ -91,7 +96,10 @@ def _cmd_batch(args) -> int:
 
     out, rows, failed = track_batch(args.folder, args.out, px_per_mm=args.px_per_mm, fps=args.fps,
                                     pattern=args.pattern or DEFAULT_PATTERN, n_last=args.last, plot=args.plot,
-                                    progress=not args.quiet, dark_line=args.dark_line)
+                                    progress=not args.quiet, dark_line=args.dark_line,
+                                    **({} if args.field_angle_deg is None else
+                                       {"field_angle": math.radians(args.field_angle_deg)}),
+                                    **({} if args.start_end is None else {"start_end": args.start_end}))
     for trial, why in failed:
         print(f"flutterswim track-batch: {trial}: {why}", file=sys.stderr)
     failed_csv = f"; the failures and their reasons in {failures_path(out)}" if failed else ""
