@@ -161,6 +161,25 @@ def test_trials_csv_means_sems_and_cli(tmp_path, model, capsys):
     assert main(["fit", str(csv), "--voltage", "80", "--out", str(tmp_path / "f3.json")]) == 2
 
 
+def test_cli_notes_sems_from_few_trials(tmp_path, model, capsys):
+    """Two trials give an SEM with one degree of freedom: the 90 % range of the true SEM
+    spans a factor sqrt(chi2_0.95(1)) = 1.96 above to 1/sqrt(chi2_0.05(1)) = 15.9 below it.
+    The CLI says so, and that the 1-sigma is the trials' scatter only."""
+    from scipy.stats import chi2
+
+    from flutterswim.cli import main
+
+    y = model(to_identifiable(BASE, 1.94e-14, 0.375, 19.1e3))
+    rows = ["voltage_V,sample,period_s,advance_mm,lateral_mm"]
+    rows += [f"85,{k},{v[0]},{v[1]},{v[2]}" for k, v in enumerate((y * 1.003, y * 0.997))]
+    csv = tmp_path / "two.csv"
+    csv.write_text("\n".join(rows) + "\n")
+    assert main(["fit", str(csv), "--out", str(tmp_path / "f.json"), "--segments", "24"]) == 0
+    err = capsys.readouterr().err
+    assert "from 2 trials" in err and "scatter only" in err
+    assert f"factor {1 / math.sqrt(chi2.ppf(0.05, 1)):.2g}" in err
+
+
 def test_profile_interval_is_exact_on_a_parabola_and_open_on_a_flat_side():
     from flutterswim.fitting.profile import profile_interval
 

@@ -10,7 +10,9 @@ uses the same resolution (``--segments 48``), so the model holds the truth exact
 
 from __future__ import annotations
 
+import contextlib
 import csv
+import io
 import json
 import math
 from types import SimpleNamespace
@@ -80,12 +82,13 @@ def pipeline(tmp_path_factory):
                "--out", str(out), "--quiet"])
     with open(out, newline="") as f:
         rows = list(csv.DictReader(f))
-    fits = {}
+    fits, said = {}, {}
     for v in VOLTS:
         p = root / f"fit_{v:g}V.json"
-        fits[v] = (main(["fit", str(out), "--voltage", f"{v:g}", "--segments", str(N_SEGMENTS), "--out", str(p)]),
-                   json.loads(p.read_text()))
-    return SimpleNamespace(rc=rc, rows=rows, truth=truth, fits=fits)
+        with contextlib.redirect_stderr(io.StringIO()) as err:
+            rc_fit = main(["fit", str(out), "--voltage", f"{v:g}", "--segments", str(N_SEGMENTS), "--out", str(p)])
+        fits[v], said[v] = (rc_fit, json.loads(p.read_text())), err.getvalue()
+    return SimpleNamespace(rc=rc, rows=rows, truth=truth, fits=fits, said=said)
 
 
 def _errors(pipeline, v):
@@ -113,6 +116,8 @@ def test_pipeline_end_to_end(pipeline):
     for v in VOLTS:
         rc, res = pipeline.fits[v]
         assert rc == 0 and res["convergence"]["converged"]
+        # two trials per voltage: the CLI says how little their SEMs cover
+        assert "from 2 trials" in pipeline.said[v] and "scatter only" in pipeline.said[v]
         # three descriptors, three parameters: the fit closes on the measured means
         np.testing.assert_allclose(res["data"]["model"], res["data"]["measured"], rtol=1e-6)
         got, _, S = _errors(pipeline, v)

@@ -4,6 +4,17 @@ from __future__ import annotations
 
 __all__ = ["register"]
 
+#: below this many trials at the fitted voltage, the CLI notes how uncertain the SEMs are
+FEW_TRIALS = 5
+
+
+def _sem_factor(n: int) -> float:
+    """The factor by which an SEM from n trials can miss the true one, 90 % two-sided: the
+    larger of sqrt((n - 1) / chi2_0.05) and sqrt(chi2_0.95 / (n - 1)), n - 1 degrees of freedom."""
+    from scipy.stats import chi2
+
+    return float(max(((n - 1) / chi2.ppf(0.05, n - 1)) ** 0.5, (chi2.ppf(0.95, n - 1) / (n - 1)) ** 0.5))
+
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("fit", help="fit B, tau and kappa_E to a trials CSV, with uncertainty",
@@ -54,6 +65,14 @@ def _cmd_fit(args) -> int:
               tip=args.tip, profiles=args.profiles, bootstrap=args.bootstrap, n_segments=args.segments,
               backend=args.backend, workers=args.workers)
     res.save(out)
+    n = int(summary.n[np.isclose(summary.voltage_V, v)][0])
+    if not args.paper_cost and n < FEW_TRIALS:
+        import sys
+
+        print(f"flutterswim fit: note: the SEMs at {v:g} V come from {n} trials, so the reported 1-sigma is itself "
+              f"uncertain (from {n} trials, within a factor {_sem_factor(n):.2g} either way at 90 %), and it covers "
+              "the trials' scatter only, not an error common to them (tracking, frame rate, the model's --segments)",
+              file=sys.stderr)
     s = res.sigma_rel
     print(f"{out}: B = {res.B * 1e6:.4g} N mm^2 (+-{s[0]:.1%}), tau = {res.tau:.4g} s (+-{s[1]:.1%}), "
           f"kappa_E = {res.kappa_E * 1e-3:.4g} 1/mm (+-{s[2]:.1%}) at {v:g} V; paper cost C = {res.paper_cost:.3g}; "
