@@ -70,18 +70,19 @@ def test_growth_rate_matches_linear_stability(paper_track):
     assert np.median(early) == pytest.approx(2 * math.pi * fs.PAPER.tau / abs(lam.imag), rel=3e-2)
 
 
-@pytest.mark.parametrize("step", [6, 8, 10])
+@pytest.mark.parametrize("step", [4, 5, 6, 8, 10])
 def test_lateral_excursions_do_not_depend_on_the_frame_rate(paper_track, step):
-    """The same run seen at 33, 25 and 20 fps (every 6th, 8th, 10th frame of 200 fps): 7.5-12.6
-    frames per stroke, too few for a cycle's own fit to hold the 4-5 harmonics of the trailing
-    end's lateral motion (before, -5.8 % at 25 fps); the pooled cycles supply them. Both ends'
-    excursions, the period and the advance agree with the finely sampled run."""
+    """The same run seen at 50, 40, 33, 25 and 20 fps (every 4th ... 10th frame of 200 fps):
+    7.5-19 frames per stroke, too few for a cycle's own fit to hold the 5 harmonics of the
+    trailing end's lateral motion (before, -5.8 % at 25 fps; with 4 harmonics, -0.36 % at the
+    paper's 50 fps); the pooled cycles supply them. Both ends' excursions (within 0.1 %), the
+    period and the advance agree with the finely sampled run."""
     fine = describe(paper_track.window(8.0, 12.0), n_last=8)
     tr = paper_track.window(8.0, 12.0)
     sub = type(tr)(t=tr.t[::step], x=tr.x[::step], y=tr.y[::step], s=tr.s, length=tr.length,
                    field_angle=np.asarray(tr.field_angle)[::step] if np.ndim(tr.field_angle) else tr.field_angle)
     coarse = describe(sub, n_last=8)
-    for key, tol in (("leading_lateral_p2p_mm", 5e-3), ("trailing_lateral_p2p_mm", 5e-3),
+    for key, tol in (("leading_lateral_p2p_mm", 1e-3), ("trailing_lateral_p2p_mm", 1e-3),
                      ("period_s", 3e-3), ("advance_per_cycle_mm", 3e-3)):
         assert getattr(coarse, key) == pytest.approx(getattr(fine, key), rel=tol), key
 
