@@ -202,3 +202,35 @@ def test_a_fast_onset_with_three_cycles_gives_its_rate():
     g = fs.PAPER.groups
     lam = st.leading_eigenvalue(2.0 * g.chi, g.eta_perp).omega.real / fs.PAPER.tau
     assert c.growth_rate == pytest.approx(lam, rel=0.1)
+
+
+def test_a_templates_shared_noise_is_not_borrowed_as_a_harmonic(paper_track):
+    """A tracked movie's periodic template puts the same noise into every cycle, so the nested F
+    test across the pooled cycles would take its 5th harmonic for the stroke's. Given the
+    template's coefficient noise (``meta["template_coef_se"]``, per end), describe borrows only
+    harmonics well above it: a shared 5th harmonic of that size at the leading end leaves its
+    excursion as without it, while the same track without the noise figure borrows it (the
+    test's control); the trailing end, with no template noise given, still borrows its own."""
+    tr = paper_track.window(8.0, 12.0)
+
+    def track_of(t, x, y, meta):
+        fa = np.asarray(tr.field_angle)
+        return type(tr)(t=t, x=x, y=y, s=tr.s, length=tr.length, meta=meta,
+                        field_angle=fa[:: 4] if fa.ndim else tr.field_angle)
+
+    sub = track_of(tr.t[::4], tr.x[::4], tr.y[::4], {})  # 50 fps
+    base = describe(sub, n_last=8)
+    assert base.leading_end == "s=l"
+    period = base.period_s
+    from flutterswim.analysis.track import UNIT_SCALE
+
+    # a shared 5th harmonic, 1 % of the excursion (in the track's units)
+    a = 0.01 * base.leading_lateral_p2p_mm * 1e-3 / UNIT_SCALE[tr.units]
+    y = sub.y.copy()
+    y[:, -1] += a * np.cos(2 * np.pi * 5 * sub.t / period + 0.3)
+    gated = describe(track_of(sub.t, sub.x, y, {"template_coef_se": [0.0, a]}), n_last=8)
+    control = describe(track_of(sub.t, sub.x, y, {}), n_last=8)
+    fine = describe(tr, n_last=8)
+    assert gated.leading_lateral_p2p_mm == pytest.approx(base.leading_lateral_p2p_mm, rel=1e-3)
+    assert abs(control.leading_lateral_p2p_mm / base.leading_lateral_p2p_mm - 1) > 3e-3
+    assert gated.trailing_lateral_p2p_mm == pytest.approx(fine.trailing_lateral_p2p_mm, rel=1e-3)

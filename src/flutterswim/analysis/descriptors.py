@@ -122,6 +122,17 @@ def _pooled_p2p(series: list, H: int) -> tuple[float, float, int]:
     return _waveform_p2p(coef[len(cyc):], H), float(np.sum((q - A @ coef) ** 2)), n - A.shape[1]
 
 
+def _template_se(tr: Track, i_end: int) -> float:
+    """Standard error of the harmonic coefficients of a tracked movie's periodic template at
+    point ``i_end`` (an end; track units), 0 where there is none (a simulation, an untemplated
+    movie, an inner point)."""
+    se = (getattr(tr, "meta", None) or {}).get("template_coef_se")
+    if se is None or len(se) != 2:
+        return 0.0
+    n = np.shape(tr.x)[1]
+    return float(se[0] if i_end % n == 0 else se[1] if i_end % n == n - 1 else 0.0)
+
+
 def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmonics: int) -> np.ndarray:
     """Per cycle: peak-to-peak of point ``i_end`` across direction ang[k] (Fourier fit of the
     cycle's frames, at most (frames - 1) / 4 harmonics). A cycle of too few frames for
@@ -151,10 +162,17 @@ def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmoni
         top += 1
         if math.isfinite(full):
             factor = {}
+            se = _template_se(tr, i_end)
+            n_pooled = sum(c[0].size for c in steady if c is not None)
             for h in sorted(set(h for h in own if h < top)):
                 low, rss_h, _ = _pooled_p2p(steady, h)
                 # only harmonics the data hold (nested F test), not noise or timing jitter
                 F = ((rss_h - rss) / (2 * (top - h))) / (rss / dof) if rss > 0 else math.inf
+                if se > 0:
+                    # nor the noise of a tracked movie's periodic template, which every cycle
+                    # shares: each added harmonic's rss drop, n/2 (a^2 + b^2), against its
+                    # coefficients' variance se^2
+                    F = min(F, (rss_h - rss) / (2 * (top - h) * 0.5 * n_pooled * se**2))
                 if F >= _POOLED_MIN_F and low > 0 and 1 / _POOLED_MAX_FACTOR <= full / low <= _POOLED_MAX_FACTOR:
                     factor[h] = full / low
             for k, h in enumerate(own):

@@ -67,6 +67,9 @@ def to_xarray(tr: Track):
         # NetCDF has no boolean attribute: 1 for a line darker than its background
         "dark_line": int(bool(m.get("dark_line", False))),
     })
+    if "template_coef_se" in m:  # the periodic template's coefficient noise at (s = 0, s = l)
+        ds.attrs.update({"template_coef_se": np.asarray(m["template_coef_se"], float),
+                         "template_coef_se_units": "mm"})
     return ds
 
 
@@ -104,5 +107,7 @@ def load_track(path: str | os.PathLike) -> Track:
             "length_px": float(a["body_length"]) * a["px_per_mm"],
             "length_std_px": float(a["body_length_std"]) * a["px_per_mm"],
             "length_spread": float(a["body_length_spread"]), "frames": frames}
+    if "template_coef_se" in a:
+        meta["template_coef_se"] = [float(v) for v in np.atleast_1d(a["template_coef_se"])]
     return Track(t=ds["time"].values[ok], x=ds["x"].values[ok], y=ds["y"].values[ok], s=ds["s"].values,
                  field_angle=float(a["field_angle"]), length=float(a["body_length"]), units="mm", meta=meta)

@@ -186,7 +186,8 @@ def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: 
     (bool), info["reason"] (why not, or a summary), and when tested "period_frames",
     "harmonics", "drift_harmonics", "drift_f", "drift_px" (the systematic part of the drift
     model's improvement, RMS over samples), "residual_px", "frame_residual_px" (median over
-    frames), "frame_residual_max_px", "stroke_f", "symmetric", "symmetry_f" and "symmetry_px"."""
+    frames), "frame_residual_max_px", "end_residual_px" (each end's residual per coordinate, [s = 0,
+    s = l]), "template_frames", "stroke_f", "symmetric", "symmetry_f" and "symmetry_px"."""
     ok = np.asarray(ok, bool)
     idx = np.nonzero(ok)[0]
     info: dict = {"done": False, "reason": ""}
@@ -239,7 +240,12 @@ def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: 
     rss_static = float(np.sum((U - U.mean(axis=0)) ** 2))
     f_stroke = (((rss_static - rss0) / (2 * P * (B.shape[1] - 1))) / (rss0 / (2 * P * (n - B.shape[1])))
                 if rss0 > 0 else math.inf)
+    # each end's residual per coordinate [px] over the n frames: the noise that the template's
+    # harmonic coefficients there carry (standard error about it x sqrt(2 / n)), which every
+    # cycle shares, so that a test across cycles cannot see it (analysis.descriptors)
+    end_res = [float(np.sqrt(np.mean(res.reshape(n, P, 2)[:, i, :] ** 2))) for i in (0, P - 1)]
     info.update(period_frames=period, harmonics=H, drift_harmonics=H_d, drift_f=float(f_stat), drift_px=drift_px,
+                end_residual_px=end_res, template_frames=int(n),
                 residual_px=math.sqrt(rss0 / (n * P)), frame_residual_px=e_med,
                 frame_residual_max_px=float(e_frame[k_max]), stroke_f=float(f_stroke))
     if not (f_stat <= max_f or drift_px <= floor_px):

@@ -525,6 +525,12 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         "length_spread": float((Lgood.max() - Lgood.min()) / L_px), "wall_time_s": wall,
         "frames": frames_info, "temporal": temporal,
     }
+    pinfo_done = temporal.get("periodic_info", {})
+    if pinfo_done.get("done") and "end_residual_px" in pinfo_done:
+        # standard error of the template's harmonic coefficients at each end [mm]: noise that
+        # every cycle shares (describe tests the harmonics it borrows against it)
+        meta["template_coef_se"] = [float(r * math.sqrt(2.0 / pinfo_done["template_frames"]) * scale)
+                                    for r in pinfo_done["end_residual_px"]]
     return Track(t=t_all[ok], x=X[ok] * scale, y=Y[ok] * scale, s=np.linspace(0.0, L_px * scale, n_points),
                  field_angle=field_angle, length=L_px * scale, units="mm", meta=meta)
 
