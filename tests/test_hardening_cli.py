@@ -136,3 +136,14 @@ def test_a_missing_optional_package_names_its_extra(tmp_path, monkeypatch, capsy
     err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
     assert status == 1 and len(err) == 1, err
     assert "'tqdm'" in err[0] and "flutterswim[cli]" in err[0], err
+
+
+def test_saving_a_run_without_xarray_names_the_extra(tmp_path, monkeypatch):
+    """The API's save and load, without xarray: a ModuleNotFoundError that names the extra (and
+    keeps the module's name, which the CLI turns into its one line)."""
+    r = fs.simulate(fs.PAPER, 0.05, n_segments=12)
+    monkeypatch.setitem(sys.modules, "xarray", None)
+    for call in (lambda: r.save(tmp_path / "r.nc"), lambda: fs.load(tmp_path / "r.nc")):
+        with pytest.raises(ModuleNotFoundError, match=r"flutterswim\[io\]") as info:
+            call()
+        assert info.value.name == "xarray"

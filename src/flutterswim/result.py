@@ -98,7 +98,7 @@ class SimulationResult:
         """A CF-style xarray.Dataset: coordinates t, s, s_mid; every variable and coordinate
         with ``units`` and ``long_name``; the parameters and groups as numeric attributes
         (``parameter_<name>`` with ``parameter_<name>_units``, ``group_<name>``) and as JSON."""
-        import xarray as xr
+        xr = _xarray()
 
         from . import __version__
 
@@ -196,10 +196,20 @@ PARAMETER_UNITS = {"l": "m", "a": "m", "b": "m", "B": "N m2", "tau": "s", "kappa
 _REQUIRED = ("t", "s", "s_mid", "x", "y", "theta", "kappa", "field_angle", "field_strength", "state_final")
 
 
+def _xarray():
+    """xarray, or a ModuleNotFoundError that says which extra brings it (with h5netcdf)."""
+    try:
+        import xarray
+    except ModuleNotFoundError as exc:
+        raise ModuleNotFoundError("runs are saved and loaded as NetCDF through xarray and h5netcdf: "
+                                  "pip install 'flutterswim[io]'", name=exc.name) from None
+    return xarray
+
+
 def load(path: str | Path) -> SimulationResult:
     """Read a run written by :meth:`SimulationResult.save`. A missing, empty, truncated or
     foreign file raises ParameterError naming the file and what is wrong."""
-    import xarray as xr
+    xr = _xarray()
 
     from ._validate import ParameterError
 
