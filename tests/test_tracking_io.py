@@ -293,3 +293,8 @@ def test_png_folder_with_a_frame_of_another_shape_is_refused(tmp_path):
         want = r"'f5.png' has shape \(30, 50\)" if case == "short" else r"'f5.png' has shape \(40, 50, 3\)"
         with pytest.raises(fs.ParameterError, match=want + r" but the first frame 'f0.png' has \(40, 50\)"):
             open_frames(folder)
+
+
+def test_a_bad_sigma_is_refused_before_any_frame_is_read(tmp_path):
+    with pytest.raises(fs.ParameterError, match="sigma=-1"):
+        track(tmp_path / "not-read.tif", px_per_mm=70.0, fps=50.0, sigma=-1.0)

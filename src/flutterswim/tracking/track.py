@@ -338,6 +338,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     n_points = positive_int("n_points", n_points, 5)
     tip_k = positive("tip_k", tip_k)
     tip_floor_px = positive("tip_floor_px", tip_floor_px)
+    sig = 1.2 if sigma is None else positive("sigma", sigma)  # checked before any frame is read
     if smooth_frames != 0 and not (isinstance(smooth_frames, (int, np.integer)) and smooth_frames >= 7):
         raise ParameterError(f"smooth_frames={smooth_frames!r} is not allowed; give 0 (off) or a whole number "
                              "of frames >= 7 (the window of a quartic in time)")
@@ -368,7 +369,6 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         bar = tqdm(total=T, unit="frame", desc="track", leave=False)
     tic = time.perf_counter()
     ref: tuple[np.ndarray, np.ndarray] | None = None
-    sig = 1.2 if sigma is None else positive("sigma", sigma)
     blur_known = sigma is not None
     n_clipped = 0
     try:
@@ -525,12 +525,12 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         "length_spread": float((Lgood.max() - Lgood.min()) / L_px), "wall_time_s": wall,
         "frames": frames_info, "temporal": temporal,
     }
-    pinfo_done = temporal.get("periodic_info", {})
-    if pinfo_done.get("done") and "end_residual_px" in pinfo_done:
+    template = temporal.get("periodic_info", {})
+    if template.get("done") and "end_residual_px" in template:
         # standard error of the template's harmonic coefficients at each end [mm]: noise that
         # every cycle shares (describe tests the harmonics it borrows against it)
-        meta["template_coef_se"] = [float(r * math.sqrt(2.0 / pinfo_done["template_frames"]) * scale)
-                                    for r in pinfo_done["end_residual_px"]]
+        meta["template_coef_se"] = [float(r * math.sqrt(2.0 / template["template_frames"]) * scale)
+                                    for r in template["end_residual_px"]]
     return Track(t=t_all[ok], x=X[ok] * scale, y=Y[ok] * scale, s=np.linspace(0.0, L_px * scale, n_points),
                  field_angle=field_angle, length=L_px * scale, units="mm", meta=meta)
 
