@@ -18,7 +18,14 @@ REL_SEM = np.array([0.005, 0.05, 0.03])  # the issue's plausible error bars: per
 
 @pytest.fixture(scope="module")
 def model():
+    """The fit's default model: descriptors extrapolated from 24 and 48 segments."""
     return DescriptorModel(BASE, n_segments=24)
+
+
+@pytest.fixture(scope="module")
+def coarse():
+    """24 segments alone (3-4x cheaper): for tests whose point is not the discretisation."""
+    return DescriptorModel(BASE, n_segments=24, extrapolate=False)
 
 
 @pytest.mark.parametrize("factors", [(1.0, 1.25, 1.06), (1.3, 0.9, 0.95), (0.7, 1.3, 1.0)])
@@ -33,22 +40,22 @@ def test_round_trip_from_the_papers_guess(model, factors):
     assert res.paper_cost < 1e-8 and res.converged
 
 
-def test_an_ill_posed_point_is_flagged_not_hidden(model):
+def test_an_ill_posed_point_is_flagged_not_hidden(coarse):
     """At (0.8, 1.1, 1.2) x the paper's fit two parameter sets 3-4 % apart give descriptors equal
     to 1e-5: the fit may land on either; its card and 1-sigma must say so."""
     truth = np.array([1.94e-14, 0.375, 19.1e3]) * np.array((0.8, 1.1, 1.2))
-    y = model(to_identifiable(BASE, *truth))
-    res = fit(y, y * REL_SEM, model=model)
+    y = coarse(to_identifiable(BASE, *truth))
+    res = fit(y, y * REL_SEM, model=coarse)
     got = np.array([res.B, res.tau, res.kappa_E])
     assert res.card.condition_number > 100
     assert np.all(np.abs(np.log(got / truth)) < res.sigma_rel)  # the miss is within the stated 1-sigma
     assert "poorly determined" in res.card.describe()
 
 
-def test_papers_cost_and_bounds_recover_the_paper_fit(model):
+def test_papers_cost_and_bounds_recover_the_paper_fit(coarse):
     truth = np.array([1.94e-14, 0.375, 19.1e3])
-    y = model(to_identifiable(BASE, *truth))
-    res = fit(y, None, cost="paper", model=model)
+    y = coarse(to_identifiable(BASE, *truth))
+    res = fit(y, None, cost="paper", model=coarse)
     assert res.paper_cost < 1e-8
     assert np.all(np.abs(np.array([res.B, res.tau, res.kappa_E]) / truth - 1) < 5e-3)
 
@@ -130,11 +137,11 @@ def test_shapes_shrink_the_uncertainty_threefold(model):
     assert np.all(info["several voltages (kappa_E ~ V)"] < info["descriptors"])
 
 
-def test_trials_csv_means_sems_and_cli(tmp_path, model, capsys):
+def test_trials_csv_means_sems_and_cli(tmp_path, coarse, capsys):
     from flutterswim.cli import main
 
     truth = (1.94e-14, 0.375, 19.1e3)
-    y = model(to_identifiable(BASE, *truth))
+    y = coarse(to_identifiable(BASE, *truth))
     rng = np.random.default_rng(2)
     rows = ["voltage_V,sample,period_s,advance_mm,lateral_mm,comment"]
     vals = y * (1 + REL_SEM * 2 * rng.standard_normal((6, 3)))
@@ -148,8 +155,9 @@ def test_trials_csv_means_sems_and_cli(tmp_path, model, capsys):
     assert np.allclose(mean, vals.mean(axis=0)) and np.allclose(sem, vals.std(axis=0, ddof=1) / math.sqrt(6))
     assert np.all(np.isnan(s.at(80.0)[1]))
     out = tmp_path / "fit.json"
-    assert main(["fit", str(csv), "--voltage", "85", "--out", str(out), "--segments", "24"]) == 0
+    assert main(["fit", str(csv), "--voltage", "85", "--out", str(out), "--segments", "24", "--no-extrapolate"]) == 0
     d = json.loads(out.read_text())
+    assert d["settings"]["extrapolate"] is False and d["settings"]["model"] == "orbits of 24 segments"
     assert set(d["sigma_rel"]) == {"B", "tau", "kappa_E"} and d["convergence"]["converged"]
     assert "B-tau" in d["correlation"] and d["identifiability"]["condition_number"] > 1
     # bad input: one line, exit 2
@@ -161,7 +169,7 @@ def test_trials_csv_means_sems_and_cli(tmp_path, model, capsys):
     assert main(["fit", str(csv), "--voltage", "80", "--out", str(tmp_path / "f3.json")]) == 2
 
 
-def test_cli_notes_sems_from_few_trials(tmp_path, model, capsys):
+def test_cli_notes_sems_from_few_trials(tmp_path, coarse, capsys):
     """Two trials give an SEM with one degree of freedom: the 90 % range of the true SEM
     spans a factor sqrt(chi2_0.95(1)) = 1.96 above to 1/sqrt(chi2_0.05(1)) = 15.9 below it.
     The CLI says so, and that the 1-sigma is the trials' scatter only."""
@@ -169,12 +177,12 @@ def test_cli_notes_sems_from_few_trials(tmp_path, model, capsys):
 
     from flutterswim.cli import main
 
-    y = model(to_identifiable(BASE, 1.94e-14, 0.375, 19.1e3))
+    y = coarse(to_identifiable(BASE, 1.94e-14, 0.375, 19.1e3))
     rows = ["voltage_V,sample,period_s,advance_mm,lateral_mm"]
     rows += [f"85,{k},{v[0]},{v[1]},{v[2]}" for k, v in enumerate((y * 1.003, y * 0.997))]
     csv = tmp_path / "two.csv"
     csv.write_text("\n".join(rows) + "\n")
-    assert main(["fit", str(csv), "--out", str(tmp_path / "f.json"), "--segments", "24"]) == 0
+    assert main(["fit", str(csv), "--out", str(tmp_path / "f.json"), "--segments", "24", "--no-extrapolate"]) == 0
     err = capsys.readouterr().err
     assert "from 2 trials" in err and "scatter only" in err
     assert f"factor {1 / math.sqrt(chi2.ppf(0.05, 1)):.2g}" in err
@@ -261,3 +269,57 @@ def test_fig3e_draws_every_trial_beside_its_voltage_and_the_mean_with_its_sem():
     import matplotlib.pyplot as plt
 
     plt.close(fig)
+
+
+@pytest.fixture(scope="module")
+def ladder():
+    """Descriptors at the paper's point from orbits of 24, 48 and 96 segments (one model each)."""
+    x = to_identifiable(BASE, 1.94e-14, 0.375, 19.1e3)
+    eta_perp, chi, _ = np.exp(x)
+    return {n: DescriptorModel(BASE, n_segments=n, extrapolate=False).dimensionless(eta_perp, chi)
+            for n in (24, 48, 96)}
+
+
+def test_descriptors_converge_at_order_two_and_extrapolation_removes_it(ladder, model):
+    """Richardson's premise: halving the segment length cuts each descriptor's change about
+    fourfold (observed order 2), so (4 D_2N - D_N) / 3 from 24 and 48 lands on the one from 48
+    and 96 far closer than 24 or 48 alone do; the default model returns exactly that."""
+    d24, d48, d96 = ladder[24], ladder[48], ladder[96]
+    order = np.log2(np.abs(d24 - d48) / np.abs(d48 - d96))
+    assert np.all((order > 1.7) & (order < 2.4)), order
+    r24, r48 = (4 * d48 - d24) / 3, (4 * d96 - d48) / 3
+    assert np.all(np.abs(r24 / r48 - 1) < 0.1 * np.abs(d24 / r48 - 1)), (r24 / r48 - 1, d24 / r48 - 1)
+    assert np.all(np.abs(r24 / r48 - 1) < 0.35 * np.abs(d48 / r48 - 1)), (r24 / r48 - 1, d48 / r48 - 1)
+    x = to_identifiable(BASE, 1.94e-14, 0.375, 19.1e3)
+    assert model.extrapolate and model.n_segments == 24  # the fit's default
+    # (its orbits came from warm starts: Newton to 1e-10 leaves ~1e-7 in the lateral excursion)
+    assert np.allclose(model.dimensionless(*np.exp(x)[:2]), r24, rtol=1e-6, atol=0)
+
+
+def test_fit_to_a_finer_models_data_recovers_the_truth_only_when_extrapolated(ladder):
+    """Data made by a finer model than the fit's (extrapolated from 48 and 96 segments) at the
+    paper's point: the default fit (from 24 and 48) recovers B, tau, kappa_E within 0.5 %; 24
+    segments alone miss by more than 2 % (the discretisation bias the 1-sigma does not hold)."""
+    x = to_identifiable(BASE, 1.94e-14, 0.375, 19.1e3)
+    tau = float(np.exp(x[2]))
+    y = (4 * ladder[96] - ladder[48]) / 3 * np.array([tau, BASE.l * 1e3, BASE.l * 1e3])
+    truth = np.array([1.94e-14, 0.375, 19.1e3])
+    good = fit(y, y * REL_SEM)
+    assert good.settings["extrapolate"] and "continuum" in good.settings["model"]
+    assert np.all(np.abs(np.array([good.B, good.tau, good.kappa_E]) / truth - 1) < 5e-3)
+    coarse = fit(y, y * REL_SEM, extrapolate=False)
+    assert not coarse.settings["extrapolate"]
+    assert np.max(np.abs(np.array([coarse.B, coarse.tau, coarse.kappa_E]) / truth - 1)) > 0.02
+
+
+def test_an_unresolved_stroke_is_not_extrapolated(monkeypatch):
+    """When N and 2N segments give descriptors further apart than the limit (another branch,
+    or too near onset), the model says so (NotSwimming, naming both resolutions)."""
+    from flutterswim.fitting import model as fm
+
+    monkeypatch.setattr(fm, "MAX_REFINEMENT_CHANGE", 1e-3)  # the paper's point changes by ~2 % from 16 to 32
+    m = DescriptorModel(BASE, n_segments=16)
+    with pytest.raises(fm.NotSwimming, match="from 16 to 32 segments"):
+        m(to_identifiable(BASE, 1.94e-14, 0.375, 19.1e3))
+    with pytest.raises(fs.ParameterError, match="n_segments"):
+        DescriptorModel(BASE, n_segments=4)

@@ -35,15 +35,16 @@ class Calibration:
 
 
 def refit_task(item):
-    """Worker function: ``item = (base, tip, n_segments, steps, truth (3,), data (3,), sem (3,))``
+    """Worker function: ``item = (base, tip, n_segments, steps, extrapolate, truth (3,), data (3,),
+    sem (3,))``
     -> log(B, tau, kappa_E) of the refit, or None when it failed."""
     from .fit import fit
     from .model import DescriptorModel, NotSwimming
 
-    base, tip, n_segments, steps, truth, data, sem = item
-    key = (repr(base), tip, n_segments, steps)
+    base, tip, n_segments, steps, extrapolate, truth, data, sem = item
+    key = (repr(base), tip, n_segments, steps, extrapolate)
     if key not in _MODELS:
-        _MODELS[key] = DescriptorModel(base, tip=tip, n_segments=n_segments, steps=steps)
+        _MODELS[key] = DescriptorModel(base, tip=tip, n_segments=n_segments, steps=steps, extrapolate=extrapolate)
     try:
         r = fit(data, sem, model=_MODELS[key], guess=tuple(truth))
     except (NotSwimming, RuntimeError):
@@ -72,7 +73,8 @@ def calibrate(model, truth, sem, *, n: int = 100, seed: int = 0, backend: str = 
     draws = [y + sem * rng.standard_normal(3) for _ in range(n)]
     logs = []
     if isinstance(model, DescriptorModel) and backend != "serial":
-        items = [(k, (model.base, model.tip, model.n_segments, model.steps, truth, d, sem)) for k, d in enumerate(draws)]
+        items = [(k, (model.base, model.tip, model.n_segments, model.steps, model.extrapolate, truth, d, sem))
+                 for k, d in enumerate(draws)]
         with get_backend(backend, workers=workers) as ex:
             logs = [v for _, v in ex.imap(refit_task, items)]
         logs = [v for v in logs if isinstance(v, np.ndarray)]

@@ -118,37 +118,40 @@ def _weighted(model, x, mean, sem):
 
 def fit(measured, sem=None, *, base: Parameters | None = None, guess=PAPER_GUESS, cost: str = "sem",
         tip: str = "trailing", model=None, profiles: bool = False, bootstrap: int = 0,
-        n_segments: int = 24, seed: int = 0, backend: str | None = None, workers: int | None = None) -> FitResult:
+        n_segments: int = 24, extrapolate: bool = True, seed: int = 0, backend: str | None = None,
+        workers: int | None = None) -> FitResult:
     """Fit (B, tau, kappa_E) to ``measured`` = (period [s], advance [mm], lateral [mm]) with
     standard errors ``sem`` (same units; required for the default cost and for uncertainties).
 
     ``base``: geometry and viscosity (default: the paper preset); ``guess``: (B, tau, kappa_E)
     to start from (default: the paper's initial guess); ``model``: a descriptor model (default
-    :class:`DescriptorModel` on periodic orbits, N = ``n_segments``; the default 24 puts the
-    paper's advance 1.4 % and lateral 0.6 % above N = 48, which moves the fitted B, tau, kappa_E
-    by -3, -5, -5 %, a bias the reported 1-sigma does not include: give 48 for SEMs under 1 %);
+    :class:`DescriptorModel` on periodic orbits: the continuum's descriptors, extrapolated from
+    ``n_segments`` and twice as many; with ``extrapolate=False`` those of ``n_segments`` alone,
+    whose discretisation the reported 1-sigma does not include: 24 alone puts the paper's advance
+    1.8 % above the continuum and moves the fitted B, tau, kappa_E by 3-5 %);
     ``backend``, ``workers``:
     a sweep backend (``"processes"``, ``"dask-local"``, ...) on which the finite-difference
     orbits of each Jacobian are computed in parallel (default: in this process)."""
     if backend is None or not hasattr(model if model is not None else DescriptorModel, "prefetch"):
         return _fit(measured, sem, base=base, guess=guess, cost=cost, tip=tip, model=model, profiles=profiles,
-                    bootstrap=bootstrap, n_segments=n_segments, seed=seed)
+                    bootstrap=bootstrap, n_segments=n_segments, extrapolate=extrapolate, seed=seed)
     from ..sweep.backends import check_backend, get_backend
 
     check_backend(backend, workers=workers)
     base_ = preset("paper") if base is None else base
-    model = DescriptorModel(base_, tip=tip, n_segments=n_segments) if model is None else model
+    model = DescriptorModel(base_, tip=tip, n_segments=n_segments, extrapolate=extrapolate) if model is None else model
     with get_backend(backend, workers=workers) as ex:
         model.executor = ex
         try:
             res = _fit(measured, sem, base=base, guess=guess, cost=cost, tip=tip, model=model, profiles=profiles,
-                       bootstrap=bootstrap, n_segments=n_segments, seed=seed)
+                       bootstrap=bootstrap, n_segments=n_segments, extrapolate=extrapolate, seed=seed)
         finally:
             model.executor = None
     return replace(res, settings={**res.settings, "backend": backend, "workers": workers})
 
 
-def _fit(measured, sem=None, *, base, guess, cost, tip, model, profiles, bootstrap, n_segments, seed) -> FitResult:
+def _fit(measured, sem=None, *, base, guess, cost, tip, model, profiles, bootstrap, n_segments, extrapolate,
+         seed) -> FitResult:
     t0 = time.perf_counter()
     base = preset("paper") if base is None else base
     if not isinstance(base, Parameters):
@@ -164,7 +167,7 @@ def _fit(measured, sem=None, *, base, guess, cost, tip, model, profiles, bootstr
     if cost == "sem" and sem_arr is None:
         raise ParameterError("sem=None: the default cost weights by the standard errors; give sem or cost='paper'")
     B0, tau0, k0 = (positive(n, v) for n, v in zip(("guess B", "guess tau", "guess kappa_E"), guess))
-    model = DescriptorModel(base, tip=tip, n_segments=n_segments) if model is None else model
+    model = DescriptorModel(base, tip=tip, n_segments=n_segments, extrapolate=extrapolate) if model is None else model
     x0 = to_identifiable(base, B0, tau0, k0)
     from scipy.optimize import least_squares, minimize
 
@@ -222,10 +225,12 @@ def _fit(measured, sem=None, *, base, guess, cost, tip, model, profiles, bootstr
             raise ParameterError("bootstrap needs the standard errors (sem)")
         boot = _bootstrap(model, x, mean, sem_arr, bootstrap, seed)
     return FitResult(B, tau, kE, cov.sigma_rel, cov.correlation, chi2 if cost == "sem" else paper_cost(mean, y),
-                     paper_cost(mean, y), cost, ok, msg, getattr(model, "n_evaluations", 0),
+                     paper_cost(mean, y), cost, ok, msg, getattr(model, "evaluations", getattr(model, "n_evaluations", 0)),
                      time.perf_counter() - t0, mean, sem_arr if sem_arr is not None else np.full(3, np.nan), y,
                      card, prof, boot,
-                     {"tip": tip, "n_segments": n_segments, "guess": list(guess), "cost": cost,
+                     {"tip": tip, "n_segments": getattr(model, "n_segments", n_segments),
+                      "extrapolate": bool(getattr(model, "_fine", None) is not None),
+                      "model": getattr(model, "resolution", type(model).__name__), "guess": list(guess), "cost": cost,
                       "base": {k: float(v) for k, v in asdict(base).items()},
                       "uncertainty_weights": "sem" if sem_arr is not None else "5% of the measured values"},
                      at_bound)
