@@ -740,3 +740,14 @@ def test_frames_missing_over_two_periods_do_not_end_the_window():
     d = describe(Track(t=tr.t[keep], x=tr.x[keep], y=tr.y[keep], s=tr.s, length=tr.length), n_last=5)
     assert d.n_cycles_used == 5
     _check(d)
+
+
+def test_fewer_cycles_than_asked_for_are_said():
+    """A record of 5 periods from an arbitrary phase holds 4 complete cycles between section
+    crossings: describe(n_last=5) uses 4 and says so, naming n_last; asking for what the record
+    holds adds no such note."""
+    tr = wave_track(duration=2.0, n_frames=501, phase=0.3)  # 5 periods of 0.4 s
+    d = describe(tr, n_last=5)
+    assert d.n_cycles_used == d.n_cycles_detected < 5
+    assert "fewer than the 5 asked for (n_last)" in d.note and f"holds {d.n_cycles_detected} complete" in d.note
+    assert "asked for" not in describe(tr, n_last=d.n_cycles_used).note
