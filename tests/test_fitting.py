@@ -271,6 +271,36 @@ def test_fig3e_draws_every_trial_beside_its_voltage_and_the_mean_with_its_sem():
     plt.close(fig)
 
 
+def test_fit_figure_draws_the_trials_as_fig3e_and_the_model_at_the_fitted_voltage():
+    """plot_fit's top row is Fig. 3e (trials beside their voltage, mean +- SEM) with the model's
+    descriptors at the fit drawn at the voltage that was fitted, not at another one."""
+    from flutterswim.fitting.data import Trials
+    from flutterswim.fitting.plot import plot_fit
+    from flutterswim.fitting.surrogate import ScalingSurrogate
+
+    sur = ScalingSurrogate(BASE)
+    y = sur(to_identifiable(BASE, 1.94e-14, 0.375, 19.1e3))
+    rng = np.random.default_rng(4)
+    v = np.repeat([80.0, 85.0], 5)
+    vals = y * (1 + 0.01 * rng.standard_normal((10, 3)))
+    vals[:5] *= 0.9  # 80 V: another stroke
+    tr = Trials(v, np.array(["s"] * 10), vals)
+    sm = summarise(tr)
+    mean, sem = sm.at(85.0)
+    res = fit(mean, sem, model=sur)
+    for voltage in (85.0, None):  # given, or found from the fitted means
+        fig = plot_fit(res, sm, tr, None, voltage=voltage)
+        for k, ax in enumerate(fig.axes[:3]):
+            dots = next(ln for ln in ax.lines if ln.get_label() == "trials")
+            assert np.all(np.asarray(dots.get_xdata(), float) < v) and np.all(dots.get_xdata() > v - 2.5)
+            mark = next(ln for ln in ax.lines if ln.get_label() == "model at the fit")
+            np.testing.assert_allclose(mark.get_xdata(), [85.0])
+            np.testing.assert_allclose(mark.get_ydata(), [res.model[k]])
+        import matplotlib.pyplot as plt
+
+        plt.close(fig)
+
+
 @pytest.fixture(scope="module")
 def ladder():
     """Descriptors at the paper's point from orbits of 24, 48 and 96 segments (one model each)."""

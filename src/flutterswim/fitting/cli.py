@@ -83,6 +83,6 @@ def _cmd_fit(args) -> int:
     if args.plot:
         from .plot import plot_fit
 
-        plot_fit(res, summary, trials, args.plot)
+        plot_fit(res, summary, trials, args.plot, voltage=v)
         print(f"figure: {args.plot}")
     return 0 if res.converged else 1

@@ -89,6 +89,23 @@ def summarise(trials: Trials) -> Summary:
     return Summary(vs, n, mean, sem)
 
 
+LABELS = ("period [s]", "advance per cycle [mm]", "lateral peak-to-peak [mm]")
+
+
+def draw_trials(ax, k: int, summary: Summary, trials: Trials | None = None) -> None:
+    """Descriptor k (period, advance, lateral) against voltage on ``ax``: mean +- SEM (red) and
+    the trials (grey dots, drawn just left of their voltage so the error bar does not hide them)."""
+    if trials is not None:
+        u = np.unique(np.asarray(summary.voltage_V, float))
+        shift = 0.06 * (float(np.min(np.diff(u))) if u.size > 1 else max(abs(float(u[0])), 1.0))
+        ax.plot(np.asarray(trials.voltage_V, float) - shift, trials.values[:, k], ".", color="0.5", ms=4,
+                label="trials")
+    ax.errorbar(summary.voltage_V, summary.mean[:, k], yerr=summary.sem[:, k], fmt="o", color="tab:red",
+                capsize=3, label="mean \u00b1 SEM")
+    ax.set_xlabel("voltage [V]")
+    ax.set_ylabel(LABELS[k])
+
+
 def plot_trials(summary: Summary, path=None, *, trials: Trials | None = None, model=None):
     """Fig. 3e: advance per cycle and period against voltage, mean +- SEM (red), the trials
     (grey dots) and, optionally, model values per voltage (``model``: (m, 3) array)."""
@@ -99,21 +116,10 @@ def plot_trials(summary: Summary, path=None, *, trials: Trials | None = None, mo
     import matplotlib.pyplot as plt
 
     fig, axs = plt.subplots(1, 3, figsize=(10, 3.4), constrained_layout=True)
-    labels = (("period_s", "period [s]"), ("advance_mm", "advance per cycle [mm]"),
-              ("lateral_mm", "lateral peak-to-peak [mm]"))
-    # the trials drawn just left of their voltage, so the mean's error bar does not hide them
-    u = np.unique(np.asarray(summary.voltage_V, float))
-    shift = 0.06 * (float(np.min(np.diff(u))) if u.size > 1 else max(abs(float(u[0])), 1.0))
-    for k, (ax, (_, lab)) in enumerate(zip(axs, labels)):
-        if trials is not None:
-            ax.plot(np.asarray(trials.voltage_V, float) - shift, trials.values[:, k], ".", color="0.5", ms=4,
-                    label="trials")
-        ax.errorbar(summary.voltage_V, summary.mean[:, k], yerr=summary.sem[:, k], fmt="o", color="tab:red",
-                    capsize=3, label="mean \u00b1 SEM")
+    for k, ax in enumerate(axs):
+        draw_trials(ax, k, summary, trials)
         if model is not None:
             ax.plot(summary.voltage_V, np.asarray(model)[:, k], "s", mfc="none", color="k", label="model")
-        ax.set_xlabel("voltage [V]")
-        ax.set_ylabel(lab)
     axs[0].legend(fontsize=8)
     if path is not None:
         from .._paths import atomic_path, figure_metadata

@@ -9,24 +9,25 @@ import numpy as np
 __all__ = ["plot_fit"]
 
 
-def plot_fit(res, summary, trials, path=None):
+def plot_fit(res, summary, trials, path=None, *, voltage: float | None = None):
+    """Figure of a fit at ``voltage`` (default: the voltage whose means are closest to the
+    fitted data): the trials and means (Fig. 3e) with the model at the fit, and each
+    parameter's profile (or its 1-sigma band)."""
     import matplotlib
 
     if path is not None:
         matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from .data import draw_trials
+
     fig, axs = plt.subplots(2, 3, figsize=(10.5, 6.4), constrained_layout=True)
-    labels = ("period [s]", "advance per cycle [mm]", "lateral peak-to-peak [mm]")
+    if voltage is None:
+        voltage = summary.voltage_V[np.argmin(np.sum(np.abs(summary.mean / res.measured - 1), axis=1))]
     for k in range(3):
         ax = axs[0, k]
-        ax.plot(trials.voltage_V, trials.values[:, k], ".", color="0.6", ms=4, label="trials")
-        ax.errorbar(summary.voltage_V, summary.mean[:, k], yerr=summary.sem[:, k], fmt="o", color="tab:red",
-                    capsize=3, label="mean +- SEM")
-        v = summary.voltage_V[np.argmin(np.abs(summary.mean[:, k] - res.measured[k]))]
-        ax.plot([v], [res.model[k]], "s", mfc="none", color="k", ms=8, label="model at the fit")
-        ax.set_xlabel("voltage [V]")
-        ax.set_ylabel(labels[k])
+        draw_trials(ax, k, summary, trials)
+        ax.plot([voltage], [res.model[k]], "s", mfc="none", color="k", ms=8, label="model at the fit")
     axs[0, 0].legend(fontsize=8)
     names = (("B", 1e6, "B [N mm$^2$]"), ("tau", 1.0, r"$\tau$ [s]"), ("kappa_E", 1e-3, r"$\kappa_E$ [1/mm]"))
     best = (res.B, res.tau, res.kappa_E)
