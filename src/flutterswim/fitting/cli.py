@@ -23,7 +23,12 @@ def register(subparsers) -> None:
                                           "(voltage_V, sample, period_s, advance_mm, lateral_mm).")
     p.add_argument("trials")
     p.add_argument("--preset", default="paper", help="geometry and viscosity (default: paper)")
-    p.add_argument("--voltage", type=float, default=None, help="voltage to fit (default: the one with most trials)")
+    p.add_argument("--voltage", type=float, default=None,
+                   help="voltage to fit (default: the one with most trials); with --joint, the voltage at which "
+                        "kappa_E is reported")
+    p.add_argument("--joint", action="store_true",
+                   help="fit every voltage with two or more trials at once, kappa_E proportional to the voltage "
+                        "(the chi-square of the fit tests the proportionality)")
     p.add_argument("--tip", choices=("trailing", "leading"), default="trailing",
                    help="which end's lateral excursion the CSV holds (default: trailing)")
     p.add_argument("--paper-cost", action="store_true", help="the paper's cost and bounds instead of SEM-weighted least squares")
@@ -57,8 +62,13 @@ def _cmd_fit(args) -> int:
     if args.plot:
         check_output_file(args.plot, (".png", ".pdf", ".svg"), what="--plot")
     base = preset(args.preset)
+    if args.joint and (args.paper_cost or args.profiles or args.bootstrap):
+        raise ParameterError("--joint fits by the SEM-weighted cost, without profiles or bootstrap: --paper-cost, "
+                             "--profiles and --bootstrap are for one voltage")
     trials = read_trials(args.trials)
     summary = summarise(trials)
+    if args.joint:
+        return _joint(args, base, trials, summary, out)
     v = args.voltage if args.voltage is not None else float(summary.voltage_V[np.argmax(summary.n)])
     mean, sem = summary.at(v)
     if not args.paper_cost and not np.all(np.isfinite(sem)):
@@ -80,9 +90,50 @@ def _cmd_fit(args) -> int:
     print(f"{out}: B = {res.B * 1e6:.4g} N mm^2 (+-{s[0]:.1%}), tau = {res.tau:.4g} s (+-{s[1]:.1%}), "
           f"kappa_E = {res.kappa_E * 1e-3:.4g} 1/mm (+-{s[2]:.1%}) at {v:g} V; paper cost C = {res.paper_cost:.3g}; "
           f"{res.card.describe()}")
+    _plot(args, res, summary, trials, v)
+    return 0 if res.converged else 1
+
+
+def _plot(args, res, summary, trials, v) -> None:
     if args.plot:
         from .plot import plot_fit
 
         plot_fit(res, summary, trials, args.plot, voltage=v)
         print(f"figure: {args.plot}")
+
+
+def _joint(args, base, trials, summary, out) -> int:
+    import sys
+
+    import numpy as np
+
+    from .._validate import ParameterError
+    from .voltages import fit_voltages
+
+    ok = np.all(np.isfinite(summary.sem), axis=1)
+    if ok.sum() < 2:
+        raise ParameterError(f"--joint needs two or more voltages with two or more trials each; the CSV has "
+                             f"{int(ok.sum())} ({', '.join(f'{v:g} V' for v in summary.voltage_V[ok]) or 'none'})")
+    volts = summary.voltage_V[ok]
+    v_ref = args.voltage if args.voltage is not None else float(volts[np.argmax(summary.n[ok])])
+    res = fit_voltages(volts, summary.mean[ok], summary.sem[ok], v_ref=v_ref, base=base, tip=args.tip,
+                       n_segments=args.segments, extrapolate=not args.no_extrapolate, backend=args.backend,
+                       workers=args.workers)
+    res.save(out)
+    if not ok.all():
+        print("flutterswim fit: note: left out (one trial, no SEM): "
+              + ", ".join(f"{v:g} V" for v in summary.voltage_V[~ok]), file=sys.stderr)
+    few = [(v, int(n)) for v, n in zip(volts, summary.n[ok]) if n < FEW_TRIALS]
+    if few:
+        print("flutterswim fit: note: the SEMs at " + ", ".join(f"{v:g} V ({n} trials)" for v, n in few)
+              + " come from fewer than 5 trials, so the reported 1-sigma and the chi-square test are themselves "
+              "uncertain", file=sys.stderr)
+    s, st = res.sigma_rel, res.settings
+    print(f"{out}: B = {res.B * 1e6:.4g} N mm^2 (+-{s[0]:.1%}), tau = {res.tau:.4g} s (+-{s[1]:.1%}), "
+          f"kappa_E = {res.kappa_E * 1e-3:.4g} 1/mm (+-{s[2]:.1%}) at {v_ref:g} V "
+          f"({st['kappa_E_per_m_per_V'] * 1e-3:.4g} 1/mm per V) from {len(volts)} voltages; chi2 = {st['chi2']:.3g} "
+          f"for {st['dof']} degrees of freedom (p = {st['p_value']:.3g}"
+          + ("; the data reject kappa_E proportional to V, or the model" if st["p_value"] < 0.01 else "")
+          + f"); {res.card.describe()}")
+    _plot(args, res, summary, trials, v_ref)
     return 0 if res.converged else 1

@@ -40,7 +40,9 @@ def paper_cost(measured: np.ndarray, model: np.ndarray) -> float:
 @dataclass(frozen=True)
 class FitResult:
     """Fitted B [N m^2], tau [s], kappa_E [1/m], relative 1-sigma of each, correlations, the
-    identifiability card, profiles and bootstrap if asked, the costs and the settings."""
+    identifiability card, profiles and bootstrap if asked, the costs and the settings.
+    ``measured``, ``sem`` and ``model`` are (3,), or (m, 3) for a joint fit over m voltages
+    (:func:`flutterswim.fitting.fit_voltages`; kappa_E at ``settings["v_ref_V"]``)."""
 
     B: float
     tau: float
@@ -65,6 +67,12 @@ class FitResult:
     #: the unconstrained local problem (finite, never NaN), and the bound itself is reported
     at_bound: tuple = ()
 
+    def _descriptor_names(self) -> list[str]:
+        """Names of the measured descriptors, per voltage for a joint fit ("period@85V")."""
+        names = ["period", "advance", "lateral"]
+        volts = self.settings.get("voltages_V")
+        return [f"{d}@{v:g}V" for v in volts for d in names] if volts else names
+
     def to_dict(self) -> dict[str, Any]:
         def f(v):
             return None if v is None or not math.isfinite(float(v)) else float(v)
@@ -80,7 +88,8 @@ class FitResult:
             "convergence": {"converged": self.converged, "message": self.message,
                             "model_evaluations": self.n_model_evaluations, "wall_time_s": self.wall_time_s},
             "data": {"descriptors": ["period_s", "advance_mm", "lateral_mm"],
-                     "measured": self.measured.tolist(), "sem": [f(s) for s in self.sem],
+                     "measured": self.measured.tolist(),
+                     "sem": np.vectorize(f, otypes=[object])(self.sem).tolist(),
                      "model": self.model.tolist()},
             "identifiability": {"singular_values": self.card.singular_values.tolist(),
                                 "condition_number": self.card.condition_number,
@@ -88,7 +97,7 @@ class FitResult:
                                 "summary": self.card.describe(),
                                 "sensitivities_dlog_descriptor_dlog_parameter":
                                     {d: dict(zip(NAMES, row)) for d, row in
-                                     zip(("period", "advance", "lateral"), self.card.sensitivities.tolist())}},
+                                     zip(self._descriptor_names(), self.card.sensitivities.tolist())}},
             "settings": self.settings,
         }
         if self.profiles:

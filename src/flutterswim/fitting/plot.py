@@ -22,12 +22,17 @@ def plot_fit(res, summary, trials, path=None, *, voltage: float | None = None):
     from .data import draw_trials
 
     fig, axs = plt.subplots(2, 3, figsize=(10.5, 6.4), constrained_layout=True)
-    if voltage is None:
+    if voltage is None and not res.settings.get("voltages_V"):
         voltage = summary.voltage_V[np.argmin(np.sum(np.abs(summary.mean / res.measured - 1), axis=1))]
+    joint = res.settings.get("voltages_V")
     for k in range(3):
         ax = axs[0, k]
         draw_trials(ax, k, summary, trials)
-        ax.plot([voltage], [res.model[k]], "s", mfc="none", color="k", ms=8, label="model at the fit")
+        if joint:  # a joint fit over voltages: the model at each of them
+            ax.plot(joint, np.asarray(res.model)[:, k], "s-", mfc="none", color="k", ms=8, lw=0.8,
+                    label="model at the fit (kappa_E ~ V)")
+        else:
+            ax.plot([voltage], [res.model[k]], "s", mfc="none", color="k", ms=8, label="model at the fit")
     axs[0, 0].legend(fontsize=8)
     names = (("B", 1e6, "B [N mm$^2$]"), ("tau", 1.0, r"$\tau$ [s]"), ("kappa_E", 1e-3, r"$\kappa_E$ [1/mm]"))
     best = (res.B, res.tau, res.kappa_E)
@@ -39,13 +44,19 @@ def plot_fit(res, summary, trials, path=None, *, voltage: float | None = None):
             ax.axhline(1.0, color="tab:blue", ls=":", lw=1, label=r"$\Delta\chi^2 = 1$")
             ax.set_ylabel(r"$\Delta\chi^2$")
         else:
-            ax.text(0.5, 0.5, "profiles not computed\n(--profiles)", ha="center", va="center", transform=ax.transAxes)
+            ax.text(0.5, 0.5, "profiles not computed\n(--profiles, one voltage)", ha="center", va="center",
+                    transform=ax.transAxes)
         ax.axvline(best[k] * scale, color="tab:red", lw=1)
         ax.axvspan(best[k] * scale * (1 - res.sigma_rel[k]), best[k] * scale * (1 + res.sigma_rel[k]),
                    color="tab:red", alpha=0.15, label=r"$\pm 1\sigma$ (Jacobian)")
-        ax.set_xlabel(lab)
+        ax.set_xlabel(lab + (f" at {res.settings['v_ref_V']:g} V" if joint and n == "kappa_E" else ""))
         ax.legend(fontsize=7)
-    fig.suptitle(f"fit: {res.card.describe()}", fontsize=9)
+    head = "fit"
+    if joint:
+        st = res.settings
+        head = (f"joint fit over {len(joint)} voltages, kappa_E ~ V: chi2 = {st['chi2']:.3g} for {st['dof']} "
+                f"degrees of freedom (p = {st['p_value']:.3g})")
+    fig.suptitle(f"{head}\n{res.card.describe()}", fontsize=9)
     if path is not None:
         from .._paths import atomic_path, figure_metadata
 

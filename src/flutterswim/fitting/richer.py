@@ -10,12 +10,12 @@ reports how much each addition shrinks the 1-sigma of B, tau and kappa_E.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from .._validate import ParameterError
+from .voltages import voltage_residuals
 
 __all__ = ["ShapeData", "shape_residuals", "shape_data_from_model", "onset_residuals", "compare_information", "fit_shapes",
            "voltage_residuals"]
@@ -80,16 +80,6 @@ def onset_residuals(model, x: np.ndarray, growth: tuple[float, float], omega: tu
     eta_perp, chi, tau = np.exp(x[:3])
     lam = leading_pair(model.groups(eta_perp, chi), model.n_segments) / tau
     return np.array([(lam.real - growth[0]) / growth[1], (lam.imag - omega[0]) / omega[1]])
-
-
-def voltage_residuals(model, x: np.ndarray, voltages, means, sems, v_ref: float) -> np.ndarray:
-    """Descriptors at several voltages with kappa_E proportional to the voltage:
-    chi(V) = chi_ref V / v_ref; x = (log eta_perp, log chi_ref, log tau)."""
-    out = []
-    for v, mu, se in zip(voltages, means, sems):
-        xv = np.array([x[0], x[1] + math.log(v / v_ref), x[2]])
-        out.append((model(xv) - mu) / se)
-    return np.concatenate(out)
 
 
 def _jac(fun, x: np.ndarray, steps) -> np.ndarray:

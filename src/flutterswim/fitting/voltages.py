@@ -1,0 +1,128 @@
+"""``fit_voltages``: B, tau and kappa_E from the descriptors at several voltages at once.
+
+The active curvature follows the field, kappa_E proportional to the voltage V (the paper's
+Fig. 3b, and the model's kappa_E = chi / l): chi(V) = chi_ref V / v_ref. Each voltage adds three
+descriptors for the same three unknowns, (log eta_perp, log chi_ref, log tau), so the
+B-tau degeneracy of one voltage is broken by how the stroke changes with V, and the chi-square
+of the 3 m residuals against its 3 m - 3 degrees of freedom tests the proportionality itself.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict
+
+import numpy as np
+
+from .._validate import ParameterError, positive
+from ..params import Parameters, preset
+from .fit import PAPER_GUESS, PENALTY, FitResult, model_jacobian, paper_cost
+from .model import DescriptorModel, NotSwimming, to_identifiable, to_physical
+from .uncertainty import covariance, identifiability_card
+
+__all__ = ["fit_voltages", "voltage_residuals"]
+
+
+def _at(x: np.ndarray, v: float, v_ref: float) -> np.ndarray:
+    """Identifiable coordinates at voltage v of the joint x = (log eta_perp, log chi_ref, log tau)."""
+    return np.array([x[0], x[1] + math.log(v / v_ref), x[2]])
+
+
+def voltage_residuals(model, x: np.ndarray, voltages, means, sems, v_ref: float) -> np.ndarray:
+    """Descriptors at several voltages with kappa_E proportional to the voltage:
+    chi(V) = chi_ref V / v_ref; x = (log eta_perp, log chi_ref, log tau)."""
+    return np.concatenate([(model(_at(x, v, v_ref)) - mu) / se for v, mu, se in zip(voltages, means, sems)])
+
+
+def _arrays(voltages, means, sems) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    v = np.asarray(voltages, float).ravel()
+    mu, se = np.asarray(means, float), np.asarray(sems, float)
+    if v.size < 2 or not np.all(np.isfinite(v)) or np.any(v <= 0) or np.unique(v).size != v.size:
+        raise ParameterError(f"voltages={voltages!r} must be two or more distinct positive voltages")
+    if mu.shape != (v.size, 3) or not np.all(np.isfinite(mu)) or np.any(mu <= 0):
+        raise ParameterError(f"means (shape {mu.shape}) must be {v.size} rows of three positive numbers "
+                             "(period s, advance mm, lateral mm), one per voltage")
+    if se.shape != (v.size, 3) or not np.all(np.isfinite(se)) or np.any(se <= 0):
+        raise ParameterError(f"sems (shape {se.shape}) must be {v.size} rows of three positive standard errors "
+                             "(a voltage needs two or more trials)")
+    return v, mu, se
+
+
+def fit_voltages(voltages, means, sems, *, v_ref: float | None = None, base: Parameters | None = None,
+                 guess=PAPER_GUESS, tip: str = "trailing", model=None, n_segments: int = 24,
+                 extrapolate: bool = True, backend: str | None = None, workers: int | None = None) -> FitResult:
+    """Fit (B, tau, kappa_E at ``v_ref``) to the means (m, 3) = (period [s], advance [mm],
+    lateral [mm]) at ``voltages`` (m,) with standard errors ``sems`` (m, 3), kappa_E
+    proportional to the voltage (SEM-weighted least squares, trust-region reflective).
+
+    ``v_ref``: the voltage at which kappa_E is reported and ``guess`` = (B, tau, kappa_E) holds
+    (default: the median voltage). The result's ``measured``, ``sem`` and ``model`` are (m, 3);
+    its settings hold the voltages, kappa_E per volt, and the chi-square test of the fit (3 m
+    residuals, 3 m - 3 degrees of freedom): a small p-value says the data reject kappa_E
+    proportional to V (or the model). Other arguments as :func:`flutterswim.fitting.fit`."""
+    from scipy.optimize import least_squares
+    from scipy.stats import chi2 as chi2_dist
+
+    t0 = time.perf_counter()
+    v, mu, se = _arrays(voltages, means, sems)
+    v_ref = float(np.median(v)) if v_ref is None else positive("v_ref", v_ref)
+    base = preset("paper") if base is None else base
+    if not isinstance(base, Parameters):
+        raise ParameterError(f"base={base!r} must be flutterswim.Parameters")
+    B0, tau0, k0 = (positive(n, g) for n, g in zip(("guess B", "guess tau", "guess kappa_E"), guess))
+    model = DescriptorModel(base, tip=tip, n_segments=n_segments, extrapolate=extrapolate) if model is None else model
+    x0 = to_identifiable(base, B0, tau0, k0)
+
+    def fun(x):
+        try:
+            return voltage_residuals(model, x, v, mu, se, v_ref)
+        except NotSwimming:  # no stroke at one of the voltages
+            return np.full(3 * v.size, PENALTY)
+
+    def jac(x):
+        return np.vstack([model_jacobian(model, _at(x, vk, v_ref), model(_at(x, vk, v_ref))) / sk[:, None]
+                          for vk, sk in zip(v, se)])
+
+    def solve():
+        # (ftol relative: noisy data stop once the chi-square no longer falls by 1e-12 of itself)
+        r = least_squares(fun, x0, jac=jac, method="trf", xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=100)
+        x = r.x
+        y = np.array([model(_at(x, vk, v_ref)) for vk in v])
+        jw = jac(x)
+        return r, x, y, jw
+
+    if backend is not None and hasattr(model, "prefetch"):
+        from ..sweep.backends import check_backend, get_backend
+
+        check_backend(backend, workers=workers)
+        with get_backend(backend, workers=workers) as ex:
+            model.executor = ex
+            try:
+                r, x, y, jw = solve()
+            finally:
+                model.executor = None
+    else:
+        r, x, y, jw = solve()
+    B, tau, kE = to_physical(base, x)
+    sens = np.vstack([model_jacobian(model, _at(x, vk, v_ref), yk) / yk[:, None] for vk, yk in zip(v, y)])
+    cov = covariance(jw)
+    card = identifiability_card(jw, sens)
+    chi2 = float(np.sum(((y - mu) / se) ** 2))
+    dof = 3 * v.size - 3
+    p_value = float(chi2_dist.sf(chi2, dof))
+    settings = {
+        "tip": tip, "n_segments": getattr(model, "n_segments", n_segments),
+        "extrapolate": bool(getattr(model, "_fine", None) is not None),
+        "model": getattr(model, "resolution", type(model).__name__), "guess": list(guess), "cost": "sem",
+        "base": {k: float(val) for k, val in asdict(base).items()},
+        "uncertainty_weights": "sem",
+        "voltages_V": v.tolist(), "v_ref_V": v_ref, "kappa_E_proportional_to_voltage": True,
+        "kappa_E_per_m_per_V": kE / v_ref,
+        "kappa_E_per_m_at_voltages": (kE * v / v_ref).tolist(),
+        "chi2": chi2, "dof": dof, "p_value": p_value,
+    }
+    return FitResult(B, tau, kE, cov.sigma_rel, cov.correlation, chi2,
+                     float(sum(paper_cost(m, yk) for m, yk in zip(mu, y))), "sem", bool(r.success), str(r.message),
+                     getattr(model, "evaluations", getattr(model, "n_evaluations", 0)),
+                     time.perf_counter() - t0, mu, se, y, card, settings=settings)
