@@ -9,6 +9,7 @@ import pytest
 
 import flutterswim as fs
 from flutterswim.analysis.descriptors import describe
+from flutterswim.defaults import N_CYCLES
 from flutterswim.field import Field, Piecewise
 
 
@@ -53,6 +54,10 @@ def test_cli_json_matches_python_api(short_run):
     d = json.loads(given.stdout)
     assert d == json.loads(json.dumps(describe(fs.load(path), n_last=3, period=rough).to_dict()))
     assert d["period_s"] == pytest.approx(json.loads(out.stdout)["period_s"], rel=1e-3)
+    # without --last a run is described over defaults.N_CYCLES cycles (a tracked movie over 5)
+    dflt = subprocess.run([sys.executable, "-m", "flutterswim.cli", "describe", str(path), "--json"],
+                          capture_output=True, text=True, check=True)
+    assert json.loads(dflt.stdout) == json.loads(json.dumps(describe(fs.load(path), n_last=N_CYCLES).to_dict()))
     bad = subprocess.run([sys.executable, "-m", "flutterswim.cli", "describe", str(path), "--period", "-1"],
                          capture_output=True, text=True)
     assert bad.returncode == 2 and "period=-1" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1

@@ -23,7 +23,9 @@ def test_api_cli_demo_and_sweep_share_the_defaults():
         defaults.N_SEGMENTS, defaults.RTOL, defaults.ATOL)
     cli = _cli_defaults("simulate")
     assert (cli["segments"], cli["rtol"], cli["atol"]) == (defaults.N_SEGMENTS, defaults.RTOL, defaults.ATOL)
-    assert _cli_defaults("describe")["last"] == defaults.N_CYCLES
+    # describe's cycles by what it reads: a run N_CYCLES, a tracked movie N_CYCLES_MOVIE (as track's)
+    assert _cli_defaults("describe")["last"] is None
+    assert _cli_defaults("track")["last"] == _cli_defaults("track-batch")["last"] == defaults.N_CYCLES_MOVIE
     import flutterswim.demo as demo
 
     src = inspect.getsource(demo.main)

@@ -96,7 +96,11 @@ def _describe(args: argparse.Namespace) -> int:
     from .analysis.descriptors import describe
 
     kw = {} if args.period is None else {"period": args.period}
-    desc = describe(_load_run_or_track(args.run), n_last=args.last, max_gap=args.max_gap, **kw)
+    obj = _load_run_or_track(args.run)
+    n_last = args.last
+    if n_last is None:
+        n_last = defaults.N_CYCLES_MOVIE if "px_per_mm" in (getattr(obj, "meta", None) or {}) else defaults.N_CYCLES
+    desc = describe(obj, n_last=n_last, max_gap=args.max_gap, **kw)
     d = desc.to_dict()
     if args.json:
         print(json.dumps(d, indent=2))
@@ -180,7 +184,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("describe", help="stroke descriptors of a saved run")
     p.add_argument("run")
-    p.add_argument("--last", type=int, default=defaults.N_CYCLES, help="average over the last N cycles")
+    p.add_argument("--last", type=int, default=None,
+                   help=f"average over the last N cycles (default {defaults.N_CYCLES} for a run, "
+                        f"{defaults.N_CYCLES_MOVIE} for a tracked movie, as the paper measured)")
     p.add_argument("--max-gap", type=float, default=0.25,
                    help="leave out cycles missing frames over more than this many periods (tracked movies; default 0.25)")
     p.add_argument("--period", type=float, default=None, metavar="SECONDS",

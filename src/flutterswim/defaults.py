@@ -23,6 +23,8 @@ FRAMES_PER_TAU = 50
 #: Settled cycles simulated by ``run_to_limit_cycle`` / ``flutterswim simulate`` and averaged
 #: by ``describe``.
 N_CYCLES = 15
+#: cycles a tracked movie is described over (the paper's experiments: advance over 5 cycles)
+N_CYCLES_MOVIE = 5
 
 #: Sweep points: segments and saved frames per tau (a sweep point is analysed, not kept).
 SWEEP_N_SEGMENTS = 24
@@ -39,6 +41,6 @@ MAX_MAP_POINTS = 20_000_000
 SCHEDULER_TIMEOUT_S = 10.0
 
 __all__ = [
-    "N_SEGMENTS", "RTOL", "ATOL", "FRAMES_PER_TAU", "N_CYCLES", "SWEEP_N_SEGMENTS", "SWEEP_FRAMES_PER_TAU",
+    "N_SEGMENTS", "RTOL", "ATOL", "FRAMES_PER_TAU", "N_CYCLES", "N_CYCLES_MOVIE", "SWEEP_N_SEGMENTS", "SWEEP_FRAMES_PER_TAU",
     "SWEEP_PERIOD_ERROR", "SWEEP_ADVANCE_ERROR", "MAX_SWEEP_POINTS", "MAX_MAP_POINTS", "SCHEDULER_TIMEOUT_S",
 ]

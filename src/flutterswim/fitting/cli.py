@@ -115,7 +115,11 @@ def _joint(args, base, trials, summary, out) -> int:
         raise ParameterError(f"--joint needs two or more voltages with two or more trials each; the CSV has "
                              f"{int(ok.sum())} ({', '.join(f'{v:g} V' for v in summary.voltage_V[ok]) or 'none'})")
     volts = summary.voltage_V[ok]
-    v_ref = args.voltage if args.voltage is not None else float(volts[np.argmax(summary.n[ok])])
+    if args.voltage is not None:
+        v_ref = args.voltage
+    else:  # the voltage with most trials, of those the one nearest the middle of the range
+        most = volts[summary.n[ok] == summary.n[ok].max()]
+        v_ref = float(most[np.argmin(np.abs(most - np.median(volts)))])
     res = fit_voltages(volts, summary.mean[ok], summary.sem[ok], v_ref=v_ref, base=base, tip=args.tip,
                        n_segments=args.segments, extrapolate=not args.no_extrapolate, backend=args.backend,
                        workers=args.workers)

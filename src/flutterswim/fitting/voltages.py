@@ -57,7 +57,8 @@ def fit_voltages(voltages, means, sems, *, v_ref: float | None = None, base: Par
     proportional to the voltage (SEM-weighted least squares, trust-region reflective).
 
     ``v_ref``: the voltage at which kappa_E is reported and ``guess`` = (B, tau, kappa_E) holds
-    (default: the median voltage). The result's ``measured``, ``sem`` and ``model`` are (m, 3);
+    (default: the median voltage); when it is one of ``voltages``, the joint fit starts from
+    the fit of its descriptors alone. The result's ``measured``, ``sem`` and ``model`` are (m, 3);
     its settings hold the voltages, kappa_E per volt, and the chi-square test of the fit (3 m
     residuals, 3 m - 3 degrees of freedom): a small p-value says the data reject kappa_E
     proportional to V (or the model). Other arguments as :func:`flutterswim.fitting.fit`."""
@@ -73,6 +74,17 @@ def fit_voltages(voltages, means, sems, *, v_ref: float | None = None, base: Par
     B0, tau0, k0 = (positive(n, g) for n, g in zip(("guess B", "guess tau", "guess kappa_E"), guess))
     model = DescriptorModel(base, tip=tip, n_segments=n_segments, extrapolate=extrapolate) if model is None else model
     x0 = to_identifiable(base, B0, tau0, k0)
+    hit = np.nonzero(np.isclose(v, v_ref, rtol=0.0, atol=1e-9))[0]
+    if hit.size:
+        # start from the fit of v_ref's descriptors alone: the guess then holds at v_ref, and
+        # kappa_E proportional to V carries it to the other voltages
+        from .fit import fit
+
+        try:
+            one = fit(mu[hit[0]], se[hit[0]], base=base, guess=(B0, tau0, k0), model=model)
+            x0 = to_identifiable(base, one.B, one.tau, one.kappa_E)
+        except NotSwimming:
+            pass  # from the guess itself
 
     def fun(x):
         try:
@@ -80,8 +92,17 @@ def fit_voltages(voltages, means, sems, *, v_ref: float | None = None, base: Par
         except NotSwimming:  # no stroke at one of the voltages
             return np.full(3 * v.size, PENALTY)
 
+    def at_voltage(f, x, vk):
+        try:
+            return f(_at(x, vk, v_ref))
+        except NotSwimming as exc:
+            _, _, k = to_physical(base, _at(x, vk, v_ref))
+            raise NotSwimming(f"no stroke at {vk:g} V (kappa_E = {k * 1e-3:.4g} 1/mm, proportional to the voltage "
+                              f"from {v_ref:g} V, where the guess holds; another reference voltage, --voltage, may "
+                              f"start nearer): {exc}") from exc
+
     def jac(x):
-        return np.vstack([model_jacobian(model, _at(x, vk, v_ref), model(_at(x, vk, v_ref))) / sk[:, None]
+        return np.vstack([at_voltage(lambda z: model_jacobian(model, z, model(z)), x, vk) / sk[:, None]
                           for vk, sk in zip(v, se)])
 
     def solve():

@@ -7,6 +7,8 @@ import json
 import math
 import sys
 
+from ..defaults import N_CYCLES_MOVIE
+
 __all__ = ["register"]
 
 
@@ -31,7 +33,8 @@ def register(subparsers) -> None:
                    help="the line's blur, Gaussian sigma [px] (default: measured on the first good frame)")
     p.add_argument("--kymograph", default=None, help="also draw the raw-frame kymographs (Fig. 3c) to this PNG")
     p.add_argument("--json", action="store_true", help="print the descriptors (as flutterswim describe --json)")
-    p.add_argument("--last", type=int, default=5, help="descriptors over the last N cycles (default 5)")
+    p.add_argument("--last", type=int, default=N_CYCLES_MOVIE,
+                   help=f"descriptors over the last N cycles (default {N_CYCLES_MOVIE})")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_track)
 
@@ -45,7 +48,8 @@ def register(subparsers) -> None:
     q.add_argument("--out", default="trials.csv", help="CSV file")
     q.add_argument("--pattern", default=None, help="regular expression with groups (?P<voltage>) and (?P<sample>)")
     q.add_argument("--plot", default=None, help="per-voltage mean +- SEM figure (Fig. 3e) to this PNG")
-    q.add_argument("--last", type=int, default=5, help="descriptors over the last N cycles (default 5)")
+    q.add_argument("--last", type=int, default=N_CYCLES_MOVIE,
+                   help=f"descriptors over the last N cycles (default {N_CYCLES_MOVIE})")
     q.add_argument("--dark-line", action="store_true",
                    help="the filaments are darker than their background (unless a sidecar says dark_line)")
     q.add_argument("--field-angle-deg", type=float, default=None,
