@@ -40,7 +40,7 @@ def register(subparsers) -> None:
     p.add_argument("--no-extrapolate", action="store_true",
                    help="use the orbits of --segments alone, e.g. for data made by a model of that resolution "
                         "(24 alone puts the paper's advance 1.8 %% above the continuum and moves B, tau, kappa_E "
-                        "by 3-5 %%)")
+                        "by 4-6 %%)")
     p.add_argument("--backend", default=None,
                    help="compute the finite-difference orbits in parallel: processes, dask-local, dask (default: here)")
     p.add_argument("--workers", type=int, default=None, help="worker processes for --backend")

@@ -137,7 +137,7 @@ def fit(measured, sem=None, *, base: Parameters | None = None, guess=PAPER_GUESS
     :class:`DescriptorModel` on periodic orbits: the continuum's descriptors, extrapolated from
     ``n_segments`` and twice as many; with ``extrapolate=False`` those of ``n_segments`` alone,
     whose discretisation the reported 1-sigma does not include: 24 alone puts the paper's advance
-    1.8 % above the continuum and moves the fitted B, tau, kappa_E by 3-5 %);
+    1.8 % above the continuum and moves the fitted B, tau, kappa_E by 4-6 %);
     ``backend``, ``workers``:
     a sweep backend (``"processes"``, ``"dask-local"``, ...) on which the finite-difference
     orbits of each Jacobian are computed in parallel (default: in this process)."""
