@@ -554,3 +554,49 @@ def test_a_line_clipped_tenfold_keeps_its_frames(sim):
     with pytest.warns(UserWarning, match="clipped"):
         tr = track(f8, px_per_mm=mv.px_per_mm, fps=FPS, periodic=False)
     assert tr.meta["n_failed"] <= 1, failures(tr)
+
+
+def test_motion_blur_averages_the_line_over_the_exposure():
+    """A straight line moving across itself at constant speed v, shutter open for a fraction e
+    of the frame interval dt: each frame's profile across the line is the PSF convolved with a
+    box of width v e dt centred on the frame's position, so its centroid is the frame's
+    position and its variance grows by (v e dt)^2 / 12 (within the sub-frames' (1 - 1/k^2),
+    k >= 16 here); e = 0 renders exactly the instantaneous line."""
+    t = np.arange(8) * 0.02
+    s = np.linspace(0.0, 1e-3, 21)
+    v_px = 400.0  # px / s: 8 px per frame interval
+    x = np.tile(s, (t.size, 1))
+    y = np.tile(1e-4 + v_px * 14e-6 * t[:, None], (1, s.size))
+    res = SimpleNamespace(t=t, x=x, y=y)
+    sharp = render(res, snr=math.inf, exposure=0.0, margin_px=30)
+    np.testing.assert_array_equal(sharp.frames, render(res, snr=math.inf, margin_px=30).frames)
+    bg = sharp.meta["background"]
+    for e in (0.5, 1.0):
+        mv = render(res, snr=math.inf, exposure=e, margin_px=30, gradient=0.0)
+        for i in (2, 5):
+            prof = mv.frames[i][:, 25:45].mean(axis=1) - bg  # across the line, away from its ends
+            rows = np.arange(prof.size)
+            m0 = prof.sum()
+            c = (rows * prof).sum() / m0
+            var = ((rows - c) ** 2 * prof).sum() / m0
+            assert c == pytest.approx(mv.y_px[i, 10], abs=0.01)
+            box = v_px * e * 0.02
+            assert var - 1.2**2 == pytest.approx(box**2 / 12, rel=0.02), (e, var)
+    with pytest.raises(ParameterError, match="exposure"):
+        render(res, exposure=1.5)
+
+
+def test_motion_blur_of_a_short_exposure_costs_little(sim):
+    """The stroke at 50 fps with the shutter open half the frame interval (10 ms): the lateral
+    excursions lose what the time average over the exposure takes from them (the fundamental
+    by sinc(pi e dt / T), 0.12 %; the trailing end's higher harmonics more), within 0.6 % of
+    the instantaneous truth without noise, and the tips stay within 0.25 px."""
+    mv = render(sim, um_per_px=UM_PER_PX, snr=math.inf, exposure=0.5)
+    tr = track(mv, px_per_mm=mv.px_per_mm, fps=FPS, t0=float(mv.t[0]))
+    _, E, _ = pixel_errors(tr, mv)
+    assert math.sqrt(np.mean(E**2)) < 0.25
+    dt, dm = describe(truth_track(mv)), describe(tr)
+    for k in ("period_s", "advance_per_cycle_mm"):
+        assert getattr(dm, k) == pytest.approx(getattr(dt, k), rel=1e-3), k
+    for k in ("leading_lateral_p2p_mm", "trailing_lateral_p2p_mm"):
+        assert -0.006 < getattr(dm, k) / getattr(dt, k) - 1 < 0.0, k

@@ -87,7 +87,8 @@ def line_image(x: np.ndarray, y: np.ndarray, shape: tuple[int, int], sigma: floa
 def render(result: Any, *, um_per_px: float = 14.0, snr: float = 5.0, psf_sigma: float = 1.2,
            defocus: float = 0.0, background: float = 100.0, gradient: float = 0.3,
            read_noise: float = 3.0, margin_px: int = 24, shape: tuple[int, int] | None = None,
-           dtype: str = "float32", seed: int | None = 0, frames: slice | None = None) -> Movie:
+           dtype: str = "float32", seed: int | None = 0, frames: slice | None = None,
+           exposure: float = 0.0) -> Movie:
     """Render a simulation (any object with t, x, y in metres, e.g. a SimulationResult or
     ``PeriodicOrbit.to_result(n_cycles, frames_per_cycle)``) as a noisy movie, one frame per
     time of the result (the frame rate is that of the result's times).
@@ -97,7 +98,12 @@ def render(result: Any, *, um_per_px: float = 14.0, snr: float = 5.0, psf_sigma:
     blur is sqrt(psf^2 + defocus^2), photons conserved, so the peak drops); background: mean
     background [photons]; gradient: relative background change across the frame (linear, along
     the diagonal); read_noise: camera read noise [photons]; shape: (H, W) or None to fit the
-    path plus ``margin_px``; dtype: "float32" or "uint16" (rounded, clipped).
+    path plus ``margin_px``; dtype: "float32" or "uint16" (rounded, clipped); exposure:
+    the shutter's open time as a fraction of the frame interval (0: instantaneous, 1: open
+    all the time), centred on each frame's time: the line is averaged over it (motion blur;
+    the result's centrelines interpolated in time by cubic splines, sub-frames at most 0.5 px
+    apart at the fastest point). The truth (``x_px``, ``y_px``) stays the centreline at the
+    frame's time.
     """
     um_per_px = positive("um_per_px", um_per_px)
     psf_sigma = positive("psf_sigma", psf_sigma)
@@ -108,9 +114,18 @@ def render(result: Any, *, um_per_px: float = 14.0, snr: float = 5.0, psf_sigma:
         raise ParameterError(f"snr={snr!r} must be a number > 0 (math.inf for a noiseless movie)")
     if dtype not in ("float32", "uint16"):
         raise ParameterError(f"dtype={dtype!r} is unknown; choose 'float32' or 'uint16'")
+    exposure = non_negative("exposure", exposure)
+    if exposure > 1.0:
+        raise ParameterError(f"exposure={exposure!r} must be in [0, 1] (a fraction of the frame interval)")
     t = np.asarray(result.t, float)
     x = np.asarray(result.x, float)
     y = np.asarray(result.y, float)
+    if exposure > 0.0:
+        if t.size < 4:
+            raise ParameterError(f"exposure={exposure!r} needs a result of 4 or more times to interpolate; it has {t.size}")
+        # the whole result's motion (before frames are picked), for the times inside each exposure
+        path_x, path_y = CubicSpline(t, x, axis=0), CubicSpline(t, y, axis=0)
+        dt_frame = float(np.median(np.diff(t)))
     if frames is not None:
         t, x, y = t[frames], x[frames], y[frames]
     if t.size < 1 or x.ndim != 2:
@@ -135,7 +150,18 @@ def render(result: Any, *, um_per_px: float = 14.0, snr: float = 5.0, psf_sigma:
     rng = np.random.default_rng(seed)
     out = np.empty((t.size, H, W), dtype=np.float32 if dtype == "float32" else np.uint16)
     for i in range(t.size):
-        clean = bg + A * height * line_image(xp[i], yp[i], (H, W), sigma)
+        if exposure > 0.0:
+            half = 0.5 * exposure * dt_frame
+            ends = [(path_x(t[i] + h) - origin[0]) / px for h in (-half, half)], \
+                   [(path_y(t[i] + h) - origin[1]) / px for h in (-half, half)]
+            sweep = float(np.max(np.hypot(ends[0][1] - ends[0][0], ends[1][1] - ends[1][0])))
+            k = int(min(max(math.ceil(sweep / 0.5), 2), 64))
+            sub = t[i] + half * (2 * (np.arange(k) + 0.5) / k - 1)  # midpoints of k equal slices
+            line = sum(line_image((path_x(u) - origin[0]) / px, (path_y(u) - origin[1]) / px, (H, W), sigma)
+                       for u in sub) / k
+        else:
+            line = line_image(xp[i], yp[i], (H, W), sigma)
+        clean = bg + A * height * line
         if math.isinf(snr):
             img = clean
         else:
@@ -147,4 +173,5 @@ def render(result: Any, *, um_per_px: float = 14.0, snr: float = 5.0, psf_sigma:
     return Movie(frames=out, t=t, x_px=xp, y_px=yp, um_per_px=um_per_px, fps=fps, snr=float(snr),
                  origin_m=origin, meta={"psf_sigma": psf_sigma, "defocus": defocus,
                                         "background": background, "read_noise": read_noise,
-                                        "gradient": gradient, "amplitude": A * height})
+                                        "gradient": gradient, "amplitude": A * height,
+                                        "exposure": exposure})
