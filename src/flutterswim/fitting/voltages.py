@@ -73,18 +73,21 @@ def fit_voltages(voltages, means, sems, *, v_ref: float | None = None, base: Par
         raise ParameterError(f"base={base!r} must be flutterswim.Parameters")
     B0, tau0, k0 = (positive(n, g) for n, g in zip(("guess B", "guess tau", "guess kappa_E"), guess))
     model = DescriptorModel(base, tip=tip, n_segments=n_segments, extrapolate=extrapolate) if model is None else model
-    x0 = to_identifiable(base, B0, tau0, k0)
     hit = np.nonzero(np.isclose(v, v_ref, rtol=0.0, atol=1e-9))[0]
-    if hit.size:
-        # start from the fit of v_ref's descriptors alone: the guess then holds at v_ref, and
-        # kappa_E proportional to V carries it to the other voltages
-        from .fit import fit
 
-        try:
-            one = fit(mu[hit[0]], se[hit[0]], base=base, guess=(B0, tau0, k0), model=model)
-            x0 = to_identifiable(base, one.B, one.tau, one.kappa_E)
-        except NotSwimming:
-            pass  # from the guess itself
+    def start() -> np.ndarray:
+        x0 = to_identifiable(base, B0, tau0, k0)
+        if hit.size:
+            # from the fit of v_ref's descriptors alone: the guess then holds at v_ref, and
+            # kappa_E proportional to V carries it to the other voltages
+            from .fit import fit
+
+            try:
+                one = fit(mu[hit[0]], se[hit[0]], base=base, guess=(B0, tau0, k0), model=model)
+                x0 = to_identifiable(base, one.B, one.tau, one.kappa_E)
+            except NotSwimming:
+                pass  # from the guess itself
+        return x0
 
     def fun(x):
         try:
@@ -107,7 +110,7 @@ def fit_voltages(voltages, means, sems, *, v_ref: float | None = None, base: Par
 
     def solve():
         # (ftol relative: noisy data stop once the chi-square no longer falls by 1e-12 of itself)
-        r = least_squares(fun, x0, jac=jac, method="trf", xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=100)
+        r = least_squares(fun, start(), jac=jac, method="trf", xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=100)
         x = r.x
         y = np.array([model(_at(x, vk, v_ref)) for vk in v])
         jw = jac(x)
