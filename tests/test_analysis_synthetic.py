@@ -749,5 +749,12 @@ def test_fewer_cycles_than_asked_for_are_said():
     tr = wave_track(duration=2.0, n_frames=501, phase=0.3)  # 5 periods of 0.4 s
     d = describe(tr, n_last=5)
     assert d.n_cycles_used == d.n_cycles_detected < 5
-    assert "fewer than the 5 asked for (n_last)" in d.note and f"holds {d.n_cycles_detected} complete" in d.note
+    assert "fewer than the 5 asked for (n_last, --last)" in d.note and f"holds {d.n_cycles_detected} complete" in d.note
     assert "asked for" not in describe(tr, n_last=d.n_cycles_used).note
+    # frames missing in the middle of a longer record: the cycles left out are counted
+    long = wave_track(duration=6.0, n_frames=1501, phase=0.3)
+    keep = (long.t < 2.9) | (long.t > 3.2)
+    gappy = Track(t=long.t[keep], x=long.x[keep], y=long.y[keep], units=long.units)
+    g = describe(gappy, n_last=15)
+    assert g.n_cycles_used < g.n_cycles_detected < 15
+    assert f"{g.n_cycles_detected - g.n_cycles_used} of its {g.n_cycles_detected} cycles are left out" in g.note

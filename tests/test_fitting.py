@@ -353,3 +353,23 @@ def test_an_unresolved_stroke_is_not_extrapolated(monkeypatch):
         m(to_identifiable(BASE, 1.94e-14, 0.375, 19.1e3))
     with pytest.raises(fs.ParameterError, match="n_segments"):
         DescriptorModel(BASE, n_segments=4)
+
+
+def test_a_fit_that_meets_unresolved_strokes_refines_or_says_it_is_not_a_fit(monkeypatch):
+    """Where N and 2N segments disagree by more than the limit (near the onset of swimming),
+    the extrapolating model refuses the point and the optimiser stops against it as against a
+    wall. The fit then starts again from twice the segments; with none left it is marked not
+    converged and says why. Made to happen at the paper's point by a 2 % limit: 16/32 segments
+    change the advance by 3.4 %, 32/64 by 0.7 %."""
+    from flutterswim.fitting import model as fm
+
+    monkeypatch.setattr(fm, "MAX_REFINEMENT_CHANGE", 0.02)
+    truth = np.array([1.94e-14, 0.375, 19.1e3])
+    y = DescriptorModel(BASE, n_segments=32)(to_identifiable(BASE, *truth))  # data: 32/64
+    res = fit(y, y * REL_SEM, n_segments=16)
+    assert res.converged and res.settings["refined_from_segments"] == 16 and res.settings["n_segments"] == 32
+    assert "refined from 16 to 32 segments" in res.message
+    np.testing.assert_allclose([res.B, res.tau, res.kappa_E], truth, rtol=1e-6)
+    monkeypatch.setattr(fm, "MAX_COARSE_SEGMENTS", 16)  # nothing finer: say so
+    with pytest.raises(fm.Unresolved, match="from 16 to 32 segments"):
+        fit(y, y * REL_SEM, n_segments=16)

@@ -118,3 +118,25 @@ def test_cli_joint_fit_recovers_the_truth_on_orbits(tmp_path, capsys):
     assert d["settings"]["dof"] == 6 and d["settings"]["chi2"] < 1e-6
     assert main(["fit", str(csv), "--joint", "--profiles", "--out", str(tmp_path / "f2.json")]) == 2
     assert "--joint" in capsys.readouterr().err
+
+
+def test_the_p_value_allows_for_sems_from_few_trials():
+    """Trials drawn around a model with kappa_E proportional to V, 3 per voltage: each weighted
+    residual is then Student-t (2 degrees of freedom), so the chi-square distribution rejects
+    the true model far more often than its 1 %; the simulated p-value (n_trials) rejects it at
+    about 1 % (at most 3 % of 300 data sets)."""
+    sur = ScalingSurrogate(BASE)
+    mu = _data(sur)
+    sd = mu * np.array([0.01, 0.05, 0.03])
+    rng = np.random.default_rng(5)
+    p_t, p_chi2 = [], []
+    for _ in range(300):
+        trials = mu[None] + sd[None] * rng.standard_normal((3, 3, 3))  # (trial, voltage, descriptor)
+        mean, sem = trials.mean(axis=0), trials.std(axis=0, ddof=1) / math.sqrt(3)
+        r = fit_voltages(V, mean, sem, model=sur, v_ref=85.0, guess=tuple(TRUTH), n_trials=[3, 3, 3])
+        p_t.append(r.settings["p_value"])
+        p_chi2.append(fit_voltages(V, mean, sem, model=sur, v_ref=85.0, guess=tuple(TRUTH)).settings["p_value"])
+    assert np.mean(np.array(p_t) < 0.01) <= 0.03, np.mean(np.array(p_t) < 0.01)
+    assert np.mean(np.array(p_chi2) < 0.01) > 0.1  # what the chi-square distribution alone would claim
+    with pytest.raises(fs.ParameterError, match="n_trials"):
+        fit_voltages(V, mu, 0.01 * mu, model=sur, n_trials=[3, 1, 3])

@@ -582,6 +582,13 @@ def test_motion_blur_averages_the_line_over_the_exposure():
             assert c == pytest.approx(mv.y_px[i, 10], abs=0.01)
             box = v_px * e * 0.02
             assert var - 1.2**2 == pytest.approx(box**2 / 12, rel=0.02), (e, var)
+    # every second time picked: the movie's frame interval, and so the blur, doubles
+    mv2 = render(res, snr=math.inf, exposure=1.0, margin_px=30, gradient=0.0, frames=slice(None, None, 2))
+    prof = mv2.frames[1][:, 25:45].mean(axis=1) - bg
+    rows = np.arange(prof.size)
+    c = (rows * prof).sum() / prof.sum()
+    var = ((rows - c) ** 2 * prof).sum() / prof.sum()
+    assert var - 1.2**2 == pytest.approx((v_px * 0.04) ** 2 / 12, rel=0.02)
     with pytest.raises(ParameterError, match="exposure"):
         render(res, exposure=1.5)
 

@@ -490,12 +490,16 @@ def describe(
                     f"to cycle of up to {worst[0]:.2g} % in period, {worst[1]:.2g} % in amplitude and "
                     f"{worst[2]:.2g} % in shape would go unseen (tol {100.0 * cyc.tol:.2g} %)")
     if idx.size < n_last:
-        why = (f"the track holds {K} complete cycle{'s' if K != 1 else ''} between section crossings (a "
-               "record of n strokes from an arbitrary phase holds n - 1)" if K < n_last else
-               "the cycles before them are cut off by missing frames or skipped strokes")
+        why = []
+        if K < n_last:
+            why.append(f"the track holds {K} complete cycle{'s' if K != 1 else ''} between section crossings (a "
+                       "record of n strokes from an arbitrary phase holds n - 1)")
+        if idx.size < min(K, n_last):
+            why.append(f"{K - idx.size} of its {K} cycles are left out for missing frames (max_gap, --max-gap) or "
+                       "cut off at skipped strokes")
         note = (note + "; " if note else "") + (
             f"described over {idx.size} cycle{'s' if idx.size != 1 else ''}, fewer than the {n_last} asked for "
-            f"(n_last): {why}")
+            f"(n_last, --last): {'; '.join(why)}")
     if not np.any(np.isfinite(p2p)):
         per_stroke = float(np.mean(per)) / float(np.median(np.diff(tr.t)))
         note = (note + "; " if note else "") + (

@@ -84,7 +84,8 @@ def _cmd_fit(args) -> int:
 
         print(f"flutterswim fit: note: the SEMs at {v:g} V come from {n} trials, so the reported 1-sigma is itself "
               f"uncertain (from {n} trials, within a factor {_sem_factor(n):.2g} either way at 90 %), and it covers "
-              "the trials' scatter only, not an error common to them (tracking, frame rate)",
+              "the trials' scatter only, not an error common to them (tracking, frame rate"
+              + (", the model's resolution: --no-extrapolate" if args.no_extrapolate else "") + ")",
               file=sys.stderr)
     s = res.sigma_rel
     print(f"{out}: B = {res.B * 1e6:.4g} N mm^2 (+-{s[0]:.1%}), tau = {res.tau:.4g} s (+-{s[1]:.1%}), "
@@ -120,7 +121,8 @@ def _joint(args, base, trials, summary, out) -> int:
     else:  # the voltage with most trials, of those the one nearest the middle of the range
         most = volts[summary.n[ok] == summary.n[ok].max()]
         v_ref = float(most[np.argmin(np.abs(most - np.median(volts)))])
-    res = fit_voltages(volts, summary.mean[ok], summary.sem[ok], v_ref=v_ref, base=base, tip=args.tip,
+    res = fit_voltages(volts, summary.mean[ok], summary.sem[ok], v_ref=v_ref, n_trials=summary.n[ok].astype(int),
+                       base=base, tip=args.tip,
                        n_segments=args.segments, extrapolate=not args.no_extrapolate, backend=args.backend,
                        workers=args.workers)
     res.save(out)
@@ -130,8 +132,8 @@ def _joint(args, base, trials, summary, out) -> int:
     few = [(v, int(n)) for v, n in zip(volts, summary.n[ok]) if n < FEW_TRIALS]
     if few:
         print("flutterswim fit: note: the SEMs at " + ", ".join(f"{v:g} V ({n} trials)" for v, n in few)
-              + " come from fewer than 5 trials, so the reported 1-sigma and the chi-square test are themselves "
-              "uncertain", file=sys.stderr)
+              + " come from fewer than 5 trials, so the reported 1-sigma is itself uncertain (the p-value allows "
+              "for it: Student-t residuals)", file=sys.stderr)
     s, st = res.sigma_rel, res.settings
     print(f"{out}: B = {res.B * 1e6:.4g} N mm^2 (+-{s[0]:.1%}), tau = {res.tau:.4g} s (+-{s[1]:.1%}), "
           f"kappa_E = {res.kappa_E * 1e-3:.4g} 1/mm (+-{s[2]:.1%}) at {v_ref:g} V "

@@ -25,7 +25,7 @@ import numpy as np
 from .._validate import ParameterError
 from ..params import Groups, Parameters
 
-__all__ = ["DescriptorModel", "to_physical", "to_identifiable", "LOG_MAP", "NotSwimming"]
+__all__ = ["DescriptorModel", "to_physical", "to_identifiable", "LOG_MAP", "NotSwimming", "Unresolved"]
 
 #: d(log B, log tau, log kappa_E) / d(log eta_perp, log chi, log tau)
 LOG_MAP = np.array([[-1.0, 0.0, -1.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]])
@@ -36,8 +36,17 @@ LOG_MAP = np.array([[-1.0, 0.0, -1.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]])
 MAX_REFINEMENT_CHANGE = 0.10
 
 
+#: the finest coarse level the fits refine to when a stroke is not resolved (its fine level 96)
+MAX_COARSE_SEGMENTS = 48
+
+
 class NotSwimming(RuntimeError):
     """No stable stroke at these parameters (the straight state is stable, or Newton failed)."""
+
+
+class Unresolved(NotSwimming):
+    """The stroke changes by more than MAX_REFINEMENT_CHANGE from N to 2N segments, so no
+    extrapolation is meaningful (near the onset of swimming, or N finds another stroke)."""
 
 
 def to_identifiable(base: Parameters, B: float, tau: float, kappa_E: float) -> np.ndarray:
@@ -69,6 +78,9 @@ class DescriptorModel:
     steps: int = 24
     extrapolate: bool = True
     n_evaluations: int = 0
+    #: points refused as not resolved so far, and the last refusal's message
+    n_unresolved: int = 0
+    last_unresolved: str = ""
     executor: object = field(default=None, repr=False, compare=False)  # for parallel differences
     _cache: list = field(default_factory=list, repr=False)
     _memo: dict = field(default_factory=dict, repr=False)
@@ -81,7 +93,7 @@ class DescriptorModel:
             raise ParameterError(f"tip={self.tip!r} must be 'trailing' or 'leading'")
         if isinstance(self.n_segments, bool) or not isinstance(self.n_segments, (int, np.integer)) \
                 or self.n_segments < 8:
-            raise ParameterError(f"n_segments={self.n_segments!r} must be an integer >= 8")
+            raise ParameterError(f"n_segments={self.n_segments!r} (--segments) must be an integer >= 8")
         if not isinstance(self.extrapolate, (bool, np.bool_)):
             raise ParameterError(f"extrapolate={self.extrapolate!r} must be True or False")
         if self.extrapolate and self._fine is None:
@@ -92,6 +104,14 @@ class DescriptorModel:
     def evaluations(self) -> int:
         """Orbits computed so far (both resolutions when extrapolating)."""
         return self.n_evaluations + (self._fine.n_evaluations if self._fine is not None else 0)
+
+    def finer(self) -> "DescriptorModel | None":
+        """The same extrapolating model from twice the segments, or None (a single
+        resolution, or already at MAX_COARSE_SEGMENTS)."""
+        if self._fine is None or self.n_segments >= MAX_COARSE_SEGMENTS:
+            return None
+        return DescriptorModel(self.base, tip=self.tip, n_segments=2 * int(self.n_segments), steps=self.steps,
+                               executor=self.executor)
 
     @property
     def resolution(self) -> str:
@@ -179,9 +199,12 @@ class DescriptorModel:
                 if not change < MAX_REFINEMENT_CHANGE:
                     # not the same stroke resolved twice (another branch, or too close to onset
                     # for N segments): no extrapolation is meaningful
-                    raise NotSwimming(f"the stroke at eta_perp={eta_perp:.4g}, chi={chi:.4g} changes by "
-                                      f"{100 * change:.3g} % from {self.n_segments} to {self._fine.n_segments} "
-                                      f"segments (limit {100 * MAX_REFINEMENT_CHANGE:g} %): not resolved")
+                    self.n_unresolved += 1
+                    self.last_unresolved = (
+                        f"the stroke at eta_perp={eta_perp:.4g}, chi={chi:.4g} changes by {100 * change:.3g} % from "
+                        f"{self.n_segments} to {self._fine.n_segments} segments (limit "
+                        f"{100 * MAX_REFINEMENT_CHANGE:g} %): not resolved (more segments, --segments)")
+                    raise Unresolved(self.last_unresolved)
                 d = f + (f - d) / 3.0
             self._memo[key] = d
         return self._memo[key].copy()

@@ -25,6 +25,9 @@ from .._validate import ParameterError, non_negative, positive
 
 __all__ = ["Movie", "render", "line_image"]
 
+#: sub-frames of one exposure at most (0.5 px apart up to a 128 px sweep of the fastest point)
+_MAX_SUBFRAMES = 256
+
 
 @dataclass(frozen=True, eq=False)
 class Movie:
@@ -102,7 +105,7 @@ def render(result: Any, *, um_per_px: float = 14.0, snr: float = 5.0, psf_sigma:
     the shutter's open time as a fraction of the frame interval (0: instantaneous, 1: open
     all the time), centred on each frame's time: the line is averaged over it (motion blur;
     the result's centrelines interpolated in time by cubic splines, sub-frames at most 0.5 px
-    apart at the fastest point). The truth (``x_px``, ``y_px``) stays the centreline at the
+    apart at the fastest point, up to 256 of them). The truth (``x_px``, ``y_px``) stays the centreline at the
     frame's time.
     """
     um_per_px = positive("um_per_px", um_per_px)
@@ -123,9 +126,13 @@ def render(result: Any, *, um_per_px: float = 14.0, snr: float = 5.0, psf_sigma:
     if exposure > 0.0:
         if t.size < 4:
             raise ParameterError(f"exposure={exposure!r} needs a result of 4 or more times to interpolate; it has {t.size}")
+        if not np.all(np.diff(t) > 0):
+            raise ParameterError("exposure: the result's times must increase strictly to interpolate the motion")
         # the whole result's motion (before frames are picked), for the times inside each exposure
         path_x, path_y = CubicSpline(t, x, axis=0), CubicSpline(t, y, axis=0)
-        dt_frame = float(np.median(np.diff(t)))
+        picked = t[frames] if frames is not None else t
+        # the movie's frame interval (every second time picked: twice the result's)
+        dt_frame = float(np.median(np.diff(picked if picked.size > 1 else t)))
     if frames is not None:
         t, x, y = t[frames], x[frames], y[frames]
     if t.size < 1 or x.ndim != 2:
@@ -155,7 +162,7 @@ def render(result: Any, *, um_per_px: float = 14.0, snr: float = 5.0, psf_sigma:
             ends = [(path_x(t[i] + h) - origin[0]) / px for h in (-half, half)], \
                    [(path_y(t[i] + h) - origin[1]) / px for h in (-half, half)]
             sweep = float(np.max(np.hypot(ends[0][1] - ends[0][0], ends[1][1] - ends[1][0])))
-            k = int(min(max(math.ceil(sweep / 0.5), 2), 64))
+            k = int(min(max(math.ceil(sweep / 0.5), 2), _MAX_SUBFRAMES))
             sub = t[i] + half * (2 * (np.arange(k) + 0.5) / k - 1)  # midpoints of k equal slices
             line = sum(line_image((path_x(u) - origin[0]) / px, (path_y(u) - origin[1]) / px, (H, W), sigma)
                        for u in sub) / k
