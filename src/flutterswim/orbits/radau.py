@@ -22,6 +22,8 @@ when it is installed (:mod:`flutterswim._jit`).
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import scipy.linalg as sla
 
@@ -70,8 +72,12 @@ def factor(jac: np.ndarray, n: int, consts, kern=None) -> tuple:
     solves. ``kern``: this module's kernels (compiled or not)."""
     r, b, c = reduced(jac, n, consts, kern)
     try:
-        rinv = sla.inv(r, overwrite_a=True, check_finite=False)
-    except np.linalg.LinAlgError:  # singular: a step too long for the stiff dynamics
+        with warnings.catch_warnings():
+            # singular to working precision (reciprocal condition number below eps): an
+            # "inverse" of rounding errors, treated as the singular case (and not printed)
+            warnings.simplefilter("error", sla.LinAlgWarning)
+            rinv = sla.inv(r, overwrite_a=True, check_finite=False)
+    except (np.linalg.LinAlgError, sla.LinAlgWarning):  # singular: a step too long for the stiff dynamics
         rinv = np.full(r.shape, np.nan)
     return np.ascontiguousarray(rinv), b, c
 
