@@ -593,6 +593,7 @@ def test_motion_blur_averages_the_line_over_the_exposure():
         render(res, exposure=1.5)
 
 
+@pytest.mark.slow
 def test_motion_blur_of_a_short_exposure_costs_little(sim):
     """The stroke at 50 fps with the shutter open half the frame interval (10 ms): the lateral
     excursions lose what the time average over the exposure takes from them (the fundamental
