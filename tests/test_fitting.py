@@ -420,3 +420,28 @@ def test_near_onset_the_default_fit_refines_and_recovers_the_truth():
     res = fit(y, y * 0.01)
     assert res.converged and res.settings["refined_from_segments"] == 24 and res.settings["n_segments"] == 48
     np.testing.assert_allclose([res.B, res.tau, res.kappa_E], truth, rtol=1e-6)
+
+
+def test_cli_says_why_a_fit_did_not_converge(tmp_path, monkeypatch, capsys):
+    """A fit that did not converge (e.g. stopped against unresolved strokes) exits 1 with one
+    line giving the fit's own reason; its values are still written to the JSON."""
+    from dataclasses import replace as dc_replace
+
+    import sys
+
+    from flutterswim.cli import main
+
+    ff = sys.modules["flutterswim.fitting.fit"]  # the module (the package's ``fit`` is the function)
+    from flutterswim.fitting.surrogate import ScalingSurrogate
+
+    sur = ScalingSurrogate(BASE)
+    y = sur(to_identifiable(BASE, 1.94e-14, 0.375, 19.1e3))
+    stuck = dc_replace(fit(y, y * REL_SEM, model=sur), converged=False, message="not a fit: stopped at the edge")
+    monkeypatch.setattr(ff, "fit", lambda *a, **k: stuck)
+    csv = tmp_path / "t.csv"
+    csv.write_text("voltage_V,sample,period_s,advance_mm,lateral_mm\n"
+                   + "".join(f"85,{k},{v[0]},{v[1]},{v[2]}\n" for k, v in enumerate((y * 1.01, y * 0.99))))
+    assert main(["fit", str(csv), "--out", str(tmp_path / "f.json")]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1] == "flutterswim fit: failed: not converged: not a fit: stopped at the edge"
+    assert json.loads((tmp_path / "f.json").read_text())["convergence"]["converged"] is False

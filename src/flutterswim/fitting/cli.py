@@ -92,7 +92,17 @@ def _cmd_fit(args) -> int:
           f"kappa_E = {res.kappa_E * 1e-3:.4g} 1/mm (+-{s[2]:.1%}) at {v:g} V; paper cost C = {res.paper_cost:.3g}; "
           f"{res.card.describe()}")
     _plot(args, res, summary, trials, v)
-    return 0 if res.converged else 1
+    return _verdict(res)
+
+
+def _verdict(res) -> int:
+    """0 for a converged fit; otherwise one line saying why (the values are in the JSON) and 1."""
+    if res.converged:
+        return 0
+    import sys
+
+    print(f"flutterswim fit: failed: not converged: {res.message}", file=sys.stderr)
+    return 1
 
 
 def _plot(args, res, summary, trials, v) -> None:
@@ -142,4 +152,4 @@ def _joint(args, base, trials, summary, out) -> int:
           + ("; the data reject kappa_E proportional to V, or the model" if st["p_value"] < 0.01 else "")
           + f"); {res.card.describe()}")
     _plot(args, res, summary, trials, v_ref)
-    return 0 if res.converged else 1
+    return _verdict(res)
