@@ -589,6 +589,19 @@ def test_motion_blur_averages_the_line_over_the_exposure():
     c = (rows * prof).sum() / prof.sum()
     var = ((rows - c) ** 2 * prof).sum() / prof.sum()
     assert var - 1.2**2 == pytest.approx((v_px * 0.04) ** 2 / 12, rel=0.02)
+    # a line oscillating across itself a whole period within each exposure (frames picked
+    # a period apart): every frame is the average over the period, variance sigma^2 + A^2 / 2,
+    # whatever the phase (the motion's path sets the sub-frames, not its end points, which meet)
+    T, A = 0.16, 6.0
+    tt = np.arange(64) * T / 16
+    osc = SimpleNamespace(t=tt, x=np.tile(s, (tt.size, 1)),
+                          y=np.tile(3e-4 + A * 14e-6 * np.sin(2 * np.pi * tt / T)[:, None], (1, s.size)))
+    mv3 = render(osc, snr=math.inf, exposure=1.0, margin_px=30, gradient=0.0, frames=slice(0, None, 16))
+    for i in (1, 2):  # (the first and last exposures reach past the result's times: extrapolated)
+        prof = mv3.frames[i][:, 25:45].mean(axis=1) - bg
+        c = (rows3 := np.arange(prof.size)) @ prof / prof.sum()
+        var = ((rows3 - c) ** 2 * prof).sum() / prof.sum()
+        assert var - 1.2**2 == pytest.approx(A**2 / 2, rel=0.02), (i, var)
     with pytest.raises(ParameterError, match="exposure"):
         render(res, exposure=1.5)
 

@@ -105,8 +105,9 @@ def render(result: Any, *, um_per_px: float = 14.0, snr: float = 5.0, psf_sigma:
     the shutter's open time as a fraction of the frame interval (0: instantaneous, 1: open
     all the time), centred on each frame's time: the line is averaged over it (motion blur;
     the result's centrelines interpolated in time by cubic splines, sub-frames at most 0.5 px
-    apart at the fastest point, up to 256 of them). The truth (``x_px``, ``y_px``) stays the centreline at the
-    frame's time.
+    apart at the fastest point, up to 256 of them; the first and last frames' exposures reach
+    past the result's times, where the splines' end cubics extrapolate the motion). The truth
+    (``x_px``, ``y_px``) stays the centreline at the frame's time.
     """
     um_per_px = positive("um_per_px", um_per_px)
     psf_sigma = positive("psf_sigma", psf_sigma)
@@ -159,9 +160,11 @@ def render(result: Any, *, um_per_px: float = 14.0, snr: float = 5.0, psf_sigma:
     for i in range(t.size):
         if exposure > 0.0:
             half = 0.5 * exposure * dt_frame
-            ends = [(path_x(t[i] + h) - origin[0]) / px for h in (-half, half)], \
-                   [(path_y(t[i] + h) - origin[1]) / px for h in (-half, half)]
-            sweep = float(np.max(np.hypot(ends[0][1] - ends[0][0], ends[1][1] - ends[1][0])))
+            # the longest path of a node during the exposure (sampled at 9 times: a stroke may
+            # turn back within a long exposure)
+            probe = t[i] + np.linspace(-half, half, 9)
+            gx, gy = path_x(probe) / px, path_y(probe) / px  # (9, P)
+            sweep = float(np.max(np.sum(np.hypot(np.diff(gx, axis=0), np.diff(gy, axis=0)), axis=0)))
             k = int(min(max(math.ceil(sweep / 0.5), 2), _MAX_SUBFRAMES))
             sub = t[i] + half * (2 * (np.arange(k) + 0.5) / k - 1)  # midpoints of k equal slices
             line = sum(line_image((path_x(u) - origin[0]) / px, (path_y(u) - origin[1]) / px, (H, W), sigma)
