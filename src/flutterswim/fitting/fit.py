@@ -144,16 +144,23 @@ def fit(measured, sem=None, *, base: Parameters | None = None, guess=PAPER_GUESS
     if backend is None or not hasattr(model if model is not None else DescriptorModel, "prefetch"):
         return _fit(measured, sem, base=base, guess=guess, cost=cost, tip=tip, model=model, profiles=profiles,
                     bootstrap=bootstrap, n_segments=n_segments, extrapolate=extrapolate, seed=seed)
+    base_ = preset("paper") if base is None else base
+    model = DescriptorModel(base_, tip=tip, n_segments=n_segments, extrapolate=extrapolate) if model is None else model
+    return on_backend(model, backend, workers, lambda: _fit(
+        measured, sem, base=base, guess=guess, cost=cost, tip=tip, model=model, profiles=profiles,
+        bootstrap=bootstrap, n_segments=n_segments, extrapolate=extrapolate, seed=seed))
+
+
+def on_backend(model, backend: str, workers: int | None, call) -> FitResult:
+    """``call()`` with the model's finite-difference orbits computed on a sweep backend; the
+    result's settings name the backend."""
     from ..sweep.backends import check_backend, get_backend
 
     check_backend(backend, workers=workers)
-    base_ = preset("paper") if base is None else base
-    model = DescriptorModel(base_, tip=tip, n_segments=n_segments, extrapolate=extrapolate) if model is None else model
     with get_backend(backend, workers=workers) as ex:
         model.executor = ex
         try:
-            res = _fit(measured, sem, base=base, guess=guess, cost=cost, tip=tip, model=model, profiles=profiles,
-                       bootstrap=bootstrap, n_segments=n_segments, extrapolate=extrapolate, seed=seed)
+            res = call()
         finally:
             model.executor = None
     return replace(res, settings={**res.settings, "backend": backend, "workers": workers})
@@ -238,7 +245,6 @@ def _fit_once(measured, sem=None, *, base, guess, cost, tip, model, profiles, bo
     if cost == "sem" and sem_arr is None:
         raise ParameterError("sem=None: the default cost weights by the standard errors; give sem or cost='paper'")
     B0, tau0, k0 = (positive(n, v) for n, v in zip(("guess B", "guess tau", "guess kappa_E"), guess))
-    model = DescriptorModel(base, tip=tip, n_segments=n_segments, extrapolate=extrapolate) if model is None else model
     x0 = to_identifiable(base, B0, tau0, k0)
     from scipy.optimize import least_squares, minimize
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict, replace
+from dataclasses import asdict
 
 import numpy as np
 
@@ -85,7 +85,7 @@ def fit_voltages(voltages, means, sems, *, v_ref: float | None = None, n_trials=
     :func:`flutterswim.fitting.fit`."""
     from scipy.optimize import least_squares
 
-    from .fit import fit, refine_while_stalled
+    from .fit import fit, on_backend, refine_while_stalled
 
     t0 = time.perf_counter()
     v, mu, se = _arrays(voltages, means, sems)
@@ -175,14 +175,5 @@ def fit_voltages(voltages, means, sems, *, v_ref: float | None = None, n_trials=
         return f"chi2 = {res.cost:.3g} for {dof} degrees of freedom"
 
     if backend is not None and hasattr(model, "prefetch"):
-        from ..sweep.backends import check_backend, get_backend
-
-        check_backend(backend, workers=workers)
-        with get_backend(backend, workers=workers) as ex:
-            model.executor = ex
-            try:
-                res = refine_while_stalled(run, model, stalled, misfit)
-            finally:
-                model.executor = None
-        return replace(res, settings={**res.settings, "backend": backend, "workers": workers})
+        return on_backend(model, backend, workers, lambda: refine_while_stalled(run, model, stalled, misfit))
     return refine_while_stalled(run, model, stalled, misfit)
