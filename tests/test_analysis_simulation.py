@@ -234,3 +234,39 @@ def test_a_templates_shared_noise_is_not_borrowed_as_a_harmonic(paper_track):
     assert gated.leading_lateral_p2p_mm == pytest.approx(base.leading_lateral_p2p_mm, rel=1e-3)
     assert abs(control.leading_lateral_p2p_mm / base.leading_lateral_p2p_mm - 1) > 3e-3
     assert gated.trailing_lateral_p2p_mm == pytest.approx(fine.trailing_lateral_p2p_mm, rel=1e-3)
+
+
+def test_a_templates_shared_noise_is_left_out_of_the_waveform_and_a_real_harmonic_kept(paper_track):
+    """A tracked movie's template repeats its coefficient noise in every cycle, so a harmonic
+    the stroke does not hold (the paper's leading end is a pure sine: its 3rd harmonic is 0.2 %
+    of its 1st) is noise that each cycle's fit takes as waveform. With the template's noise
+    given, describe keeps a harmonic beyond the first only when the cycles hold it above that
+    noise (F > 2): a shared 3rd harmonic of 1 % of the excursion, placed to add 2 % to the
+    peak-to-peak, is left out when it is as small as the template's noise (the excursion as
+    without it, within 0.1 %), and kept when the noise is ten times smaller (the excursion as
+    when no noise is given, +2 %)."""
+    tr = paper_track.window(8.0, 12.0)
+
+    def track_of(y, meta):
+        fa = np.asarray(tr.field_angle)
+        return type(tr)(t=tr.t[::4], x=tr.x[::4], y=y, s=tr.s, length=tr.length, meta=meta,
+                        field_angle=fa[::4] if fa.ndim else tr.field_angle)
+
+    y0 = tr.y[::4]
+    base = describe(track_of(y0, {}), n_last=8)
+    assert base.leading_end == "s=l"
+    from flutterswim.analysis.track import UNIT_SCALE
+
+    to_units = 1e-3 / UNIT_SCALE[tr.units]
+    a = 0.01 * base.leading_lateral_p2p_mm * to_units
+    # a 3rd harmonic in phase with the end's own stroke: cos 3 theta = 4 c^3 - 3 c, c = cos theta
+    lead = y0[:, -1]
+    c = (lead - 0.5 * (lead.max() + lead.min())) / (0.5 * np.ptp(lead))
+    y = y0.copy()
+    y[:, -1] += a * (4 * c**3 - 3 * c)
+    noise = describe(track_of(y, {"template_coef_se": [0.0, a]}), n_last=8)
+    signal = describe(track_of(y, {"template_coef_se": [0.0, 0.1 * a]}), n_last=8)
+    control = describe(track_of(y, {}), n_last=8)
+    assert control.leading_lateral_p2p_mm / base.leading_lateral_p2p_mm - 1 == pytest.approx(0.02, abs=2e-3)
+    assert noise.leading_lateral_p2p_mm == pytest.approx(base.leading_lateral_p2p_mm, rel=1e-3)
+    assert signal.leading_lateral_p2p_mm == pytest.approx(control.leading_lateral_p2p_mm, rel=1e-3)
