@@ -119,13 +119,18 @@ def waypoints_csv(path: str | Path, scale: float, start=(0.0, 0.0)) -> RefPath:
     with open(p, newline="") as f:
         for i, row in enumerate(csv.reader(f)):
             try:
-                rows.append([float(row[0]), float(row[1])])
+                xy = [float(row[0]), float(row[1])]
             except (ValueError, IndexError):
                 if i == 0:
                     continue
                 raise ParameterError(f"waypoints={str(p)!r}, line {i + 1}: two numbers x, y are required") from None
+            if not all(map(math.isfinite, xy)):
+                raise ParameterError(f"waypoints={str(p)!r}, line {i + 1}: x, y = {row[0].strip()}, {row[1].strip()} "
+                                     "are not finite; two finite numbers are required")
+            if not rows or xy != rows[-1]:  # a waypoint repeated in a row is one waypoint
+                rows.append(xy)
     if len(rows) < 2:
-        raise ParameterError(f"waypoints={str(p)!r} needs at least two points")
+        raise ParameterError(f"waypoints={str(p)!r} needs at least two distinct points")
     v = (np.array(rows) - rows[0]) * scale + np.asarray(start, float)
     return _polyline(v, False, f"waypoints({p.name})", 1e-5)
 
