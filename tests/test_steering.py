@@ -294,3 +294,31 @@ def test_waypoints_repeated_points_keep_the_corner(tmp_path):
     assert np.allclose(b.points[b.corners], [[5 * L, 0.0]])
     assert b.length == pytest.approx(10 * L)
 
+
+@pytest.mark.parametrize("rows", ["0,0\n10,0\n0,0.2\n", "0,0\n10,0\n0,0\n", "0,0\n1,0\n1,1\n0,1\n"])
+def test_fillet_stays_on_the_path_where_the_arc_does_not_fit(tmp_path, rows):
+    """Where the edges are too short for an arc of the swimmer's turning radius (a hairpin, an
+    exact reversal, a one-body-length square) the rounded path stays within the original
+    path's reach: every point within half an edge of it, no jump between neighbours. (The
+    hairpin's arc began 0.47 m away; the exact reversal asked for 4.6 EiB.)"""
+    from flutterswim.steering.path import fillet, waypoints_csv
+
+    (tmp_path / "w.csv").write_text(rows)
+    p = waypoints_csv(tmp_path / "w.csv", L)
+    f = fillet(p, 1.4 * L)
+    assert np.isfinite(f.points).all()
+    d = np.hypot(f.points[:, None, 0] - p.points[None, ::10, 0], f.points[:, None, 1] - p.points[None, ::10, 1])
+    assert d.min(axis=1).max() <= 0.5 * L + 1e-9
+    assert np.hypot(*np.diff(f.points, axis=0).T).max() < 0.05 * L
+    assert f.length <= p.length + 1e-12
+
+
+def test_min_radius_of_a_path_that_turns_straight_back_is_zero(tmp_path):
+    """A waypoint path reversing on itself has a cusp (radius 0), not an infinite radius, so
+    steer warns that it cannot be followed."""
+    from flutterswim.steering.path import fillet, min_radius, waypoints_csv
+
+    (tmp_path / "w.csv").write_text("0,0\n10,0\n0,0\n")
+    p = waypoints_csv(tmp_path / "w.csv", L)
+    assert min_radius(p, L) < 1e-3 * L
+    assert min_radius(fillet(p, 1.4 * L), L) < 1e-3 * L
