@@ -39,7 +39,7 @@ def check_out(out: str | os.PathLike, targets) -> Path:
     replace must have been written by flutterswim. Checked before any computation."""
     from .._paths import MARKER, check_output_file, check_store_path
 
-    p = check_store_path(out, overwrite=False, what="--out")
+    p = check_store_path(out, overwrite=False, what="--out", kind=STORE_KIND)
     names = ["report.html", "manifest.json"] + [f for t in targets for f in t.outputs]
     for f in names:
         check_output_file(p / f, (Path(f).suffix,), what="--out")
