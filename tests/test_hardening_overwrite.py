@@ -71,3 +71,26 @@ def test_stability_outputs_checked_before_computing(tmp_path):
     with pytest.raises(fs.ParameterError, match="eigenmodes.png"):
         stability_figures(tmp_path, step=1e-6)  # a huge grid: the check must come first
     assert sorted(p.name for p in tmp_path.iterdir()) == ["eigenmodes.png"]
+
+
+def test_a_sweep_never_replaces_a_reproduce_folder_nor_reproduce_a_sweep_store(tmp_path):
+    """Both carry the store marker, with their kind: ``sweep --overwrite`` deleted a reproduce
+    folder (report, manifest, figures) and ``reproduce`` wrote into a sweep's Zarr store and
+    relabelled its marker. Each now refuses the other's folder and leaves it as it was."""
+    from flutterswim.reproduce import reproduce
+
+    rep = tmp_path / "repro"
+    reproduce(rep, targets=["table1"])
+    before = sorted(p.name for p in rep.iterdir())
+    with pytest.raises(fs.ParameterError, match="reproduce"):
+        fs.run_sweep({"kappa_E_ratio": [1.0]}, "paper", out=rep, backend="serial", overwrite=True, progress=False)
+    assert sorted(p.name for p in rep.iterdir()) == before
+
+    store = tmp_path / "s.zarr"
+    fs.run_sweep({"kappa_E_ratio": [0.5]}, "paper", out=store, backend="serial", progress=False)
+    before = sorted(p.name for p in store.iterdir())
+    marker = (store / ".flutterswim-store").read_text()
+    with pytest.raises(fs.ParameterError, match="sweep"):
+        reproduce(store, targets=["table1"])
+    assert sorted(p.name for p in store.iterdir()) == before
+    assert (store / ".flutterswim-store").read_text() == marker

@@ -173,6 +173,22 @@ def test_fig3e_from_a_trials_csv(tmp_path):
         assert np.allclose(d["sem"][k], x.std(axis=0, ddof=1) / np.sqrt(len(x)))
 
 
+
+def test_a_bad_trials_csv_is_refused_before_building(tmp_path, capsys):
+    """A trials CSV without data rows was found only by the last target (Fig. 3e), after every
+    other target had been built (80 s in quick mode), and the run exited 1; it is bad input:
+    one line, exit 2, nothing built."""
+    pytest.importorskip("flutterswim.fitting")
+    from flutterswim.cli import main
+
+    bad = tmp_path / "bad.csv"
+    bad.write_text("a,b\n")
+    out = tmp_path / "r"
+    assert main(["reproduce", "--out", str(out), "--only", "table1", "fig3e", "--trials", str(bad), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "bad.csv" in err and "Traceback" not in err and err.count("\n") == 1
+    assert not out.exists()
+
 @pytest.mark.slow
 def test_quick_run_end_to_end(tmp_path):
     """The whole ``--quick`` run through the CLI: every target ok, videos decodable, report written."""

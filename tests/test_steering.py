@@ -197,3 +197,128 @@ def test_path_min_radius_matches_the_analytic_curvature():
     k = np.abs(a * np.cos(u) * -2 * a * np.sin(2 * u) + a * np.cos(2 * u) * a * np.sin(u)) / (
         (a * np.cos(u)) ** 2 + (a * np.cos(2 * u)) ** 2) ** 1.5
     assert min_radius(figure8(8 * L), L) == pytest.approx(1 / k.max(), rel=2e-3)
+
+
+@pytest.fixture()
+def fast_steer(monkeypatch):
+    """The steer CLI with the slow parts replaced: identify returns the paper's reduced model
+    at once, steer a short run; ``calls`` counts them (checks must come before either)."""
+    import importlib
+
+    red = importlib.import_module("flutterswim.steering.reduced")
+    st = importlib.import_module("flutterswim.steering.steer")
+
+    calls = []
+    model = red.ReducedModel(U=1.06e-3, period=0.378, k=3.83, omega_max=0.26, omega_max_bracket=(0.259, 0.262),
+                             r_min=1.06e-3 / 0.26, onset_time=12.0)
+    run = fs.simulate(P, 0.3, n_segments=8)
+
+    def identify(*a, **kw):
+        calls.append("identify")
+        return model
+
+    def fake(params, factory, reduced, **kw):
+        calls.append("steer")
+        path = factory(np.zeros(2), 0.0)
+        return st.SteerResult(run, path, {"cross_track_rms_bl": 0.05, "cross_track_max_bl": 0.1,
+                                          "corner_overshoot_bl": 0.0, "trapped": False,
+                                          "waypoint_arrival_s": [math.nan]}, True, 0.0)
+
+    monkeypatch.setattr(red, "identify", identify)
+    monkeypatch.setattr(st, "steer", fake)
+    return calls
+
+
+def test_steer_cli_rerun_replaces_its_own_metrics(tmp_path, fast_steer):
+    """The metrics JSON is signed like every other output: the same command run twice replaces
+    its own files instead of refusing them as foreign."""
+    from flutterswim._paths import is_ours
+    from flutterswim.cli import main
+
+    args = ["steer", "--path", "circle", "--out", str(tmp_path / "s.nc"), "--metrics", str(tmp_path / "s.json"),
+            "--quiet"]
+    assert main(args) == 0
+    assert is_ours(tmp_path / "s.json")
+    assert main(args) == 0
+    assert fast_steer == ["identify", "steer"] * 2
+
+
+@pytest.mark.parametrize("option, value", [("--noise-px", "nan"), ("--noise-px", "-1"), ("--noise-px", "inf"),
+                                           ("--um-per-px", "0"), ("--um-per-px", "-14"), ("--um-per-px", "nan")])
+def test_steer_cli_refuses_bad_camera_settings_before_computing(tmp_path, fast_steer, option, value, capsys):
+    from flutterswim.cli import main
+
+    status = main(["steer", "--path", "circle", option, value, "--out", str(tmp_path / "s.nc"),
+                   "--metrics", str(tmp_path / "s.json"), "--quiet"])
+    err = capsys.readouterr().err
+    assert status == 2 and fast_steer == []
+    assert option in err and value in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("rows, words", [("0,0\nnan,1\n5,5\n", "line 2"), ("0,0\ninf,1\n", "line 2"),
+                                         ("0,0\n0,0\n", "two distinct"), ("x,y\n1,2\n", "two")])
+def test_steer_cli_checks_the_waypoints_before_computing(tmp_path, fast_steer, rows, words, capsys):
+    from flutterswim.cli import main
+
+    (tmp_path / "w.csv").write_text(rows)
+    status = main(["steer", "--path", "waypoints", "--waypoints", str(tmp_path / "w.csv"),
+                   "--out", str(tmp_path / "s.nc"), "--metrics", str(tmp_path / "s.json"), "--quiet"])
+    err = capsys.readouterr().err
+    assert status == 2 and fast_steer == [], err
+    assert "w.csv" in err and words in err and len(err.strip().splitlines()) == 1
+
+
+def test_steer_refuses_bad_noise_and_laps():
+    """The API checks its own inputs (NaN noise made every observation NaN and the command ran
+    at the rate limit; NaN laps crashed with a ValueError)."""
+    from flutterswim.steering.reduced import ReducedModel
+
+    model = ReducedModel(U=1e-3, period=0.4, k=4.0, omega_max=0.26, omega_max_bracket=(0.25, 0.27), r_min=1e-3 / 0.26,
+                         onset_time=12.0)
+    make = lambda p, h: circle(2 * L, p, h)  # noqa: E731
+    for kw in ({"noise_px": math.nan}, {"noise_px": -0.2}, {"um_per_px": 0.0}, {"laps": math.nan}, {"laps": 0.0},
+               {"delay_frames": -1}):
+        with pytest.raises(fs.ParameterError, match=next(iter(kw))):
+            steer(P, make, model, **kw)
+
+
+def test_waypoints_repeated_points_keep_the_corner(tmp_path):
+    """A waypoint written twice is one waypoint: the 90 degree turn there is still a corner
+    (it was lost, so it was neither rounded nor measured)."""
+    from flutterswim.steering.path import waypoints_csv
+
+    (tmp_path / "a.csv").write_text("0,0\n5,0\n5,5\n")
+    (tmp_path / "b.csv").write_text("0,0\n5,0\n5,0\n5,5\n")
+    a, b = waypoints_csv(tmp_path / "a.csv", L), waypoints_csv(tmp_path / "b.csv", L)
+    assert len(b.corners) == len(a.corners) == 1
+    assert np.allclose(b.points[b.corners], [[5 * L, 0.0]])
+    assert b.length == pytest.approx(10 * L)
+
+
+@pytest.mark.parametrize("rows", ["0,0\n10,0\n0,0.2\n", "0,0\n10,0\n0,0\n", "0,0\n1,0\n1,1\n0,1\n"])
+def test_fillet_stays_on_the_path_where_the_arc_does_not_fit(tmp_path, rows):
+    """Where the edges are too short for an arc of the swimmer's turning radius (a hairpin, an
+    exact reversal, a one-body-length square) the rounded path stays within the original
+    path's reach: every point within half an edge of it, no jump between neighbours. (The
+    hairpin's arc began 0.47 m away; the exact reversal asked for 4.6 EiB.)"""
+    from flutterswim.steering.path import fillet, waypoints_csv
+
+    (tmp_path / "w.csv").write_text(rows)
+    p = waypoints_csv(tmp_path / "w.csv", L)
+    f = fillet(p, 1.4 * L)
+    assert np.isfinite(f.points).all()
+    d = np.hypot(f.points[:, None, 0] - p.points[None, ::10, 0], f.points[:, None, 1] - p.points[None, ::10, 1])
+    assert d.min(axis=1).max() <= 0.5 * L + 1e-9
+    assert np.hypot(*np.diff(f.points, axis=0).T).max() < 0.05 * L
+    assert f.length <= p.length + 1e-12
+
+
+def test_min_radius_of_a_path_that_turns_straight_back_is_zero(tmp_path):
+    """A waypoint path reversing on itself has a cusp (radius 0), not an infinite radius, so
+    steer warns that it cannot be followed."""
+    from flutterswim.steering.path import fillet, min_radius, waypoints_csv
+
+    (tmp_path / "w.csv").write_text("0,0\n10,0\n0,0\n")
+    p = waypoints_csv(tmp_path / "w.csv", L)
+    assert min_radius(p, L) < 1e-3 * L
+    assert min_radius(fillet(p, 1.4 * L), L) < 1e-3 * L

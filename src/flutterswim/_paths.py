@@ -170,6 +170,19 @@ def has_marker(store: Path) -> bool:
     return (Path(store) / MARKER).is_file()
 
 
+def _check_kind(p: Path, kind: str | None, what: str) -> None:
+    """Refuse one of our folders of another kind (a reproduce folder is no sweep store)."""
+    if kind is None or not has_marker(p):
+        return
+    try:
+        found = json.loads((p / MARKER).read_text()).get("kind")
+    except (OSError, ValueError, AttributeError):
+        found = None  # unreadable: as before, the marker alone decides
+    if found is not None and found != kind:
+        raise ParameterError(f"{what}={str(p)!r} is a flutterswim {found} folder, not a {kind} store; it is "
+                             "never overwritten by another command. Give a new name")
+
+
 def _is_cwd_or_parent(p: Path) -> bool:
     try:
         rp, cwd = p.resolve(), Path.cwd().resolve()
@@ -178,13 +191,14 @@ def _is_cwd_or_parent(p: Path) -> bool:
     return rp == cwd or rp in cwd.parents or rp == Path(rp.anchor)
 
 
-def check_store_path(path: str | os.PathLike, *, overwrite: bool, what: str = "out") -> Path:
+def check_store_path(path: str | os.PathLike, *, overwrite: bool, what: str = "out", kind: str | None = None) -> Path:
     """Check a store directory before computing.
 
     Allowed: a path that does not exist (its folder writable), an empty directory, or one of
     our stores (marker present; it is resumed, or replaced when ``overwrite``). Refused, with
     the reason: the current directory or one of its parents, a file, a non-empty directory
-    without our marker (user files, or a Zarr store of another tool)."""
+    without our marker (user files, or a Zarr store of another tool), and, given ``kind``, one
+    of our folders whose marker names another kind."""
     p = Path(os.fspath(path))
     if str(p) in ("", "."):
         raise ParameterError(f"{what}={str(path)!r} is the current directory; give a new store name "
@@ -200,6 +214,8 @@ def check_store_path(path: str | os.PathLike, *, overwrite: bool, what: str = "o
         why = "a Zarr store written by another tool" if zarrish else "a directory holding other files"
         raise ParameterError(f"{what}={str(p)!r} is {why}, not a flutterswim store (no {MARKER} marker); "
                              "it is never overwritten. Give a new store name")
+    if p.is_dir():
+        _check_kind(p, kind, what)
     if p.is_dir() and not os.access(p, os.W_OK | os.X_OK):
         raise ParameterError(f"{what}={str(p)!r} is not writable")
     if not p.exists():
@@ -207,13 +223,15 @@ def check_store_path(path: str | os.PathLike, *, overwrite: bool, what: str = "o
     return p
 
 
-def remove_own_store(path: str | os.PathLike) -> None:
-    """Delete a store that carries our marker (checked again here); anything else raises."""
+def remove_own_store(path: str | os.PathLike, kind: str | None = None) -> None:
+    """Delete a store that carries our marker (checked again here, with its ``kind`` if
+    given); anything else raises."""
     p = Path(os.fspath(path))
     if not p.exists():
         return
     if not (p.is_dir() and has_marker(p)) or _is_cwd_or_parent(p):
         raise ParameterError(f"{str(p)!r} is not a flutterswim store; it is never deleted")
+    _check_kind(p, kind, "store")
     # rename first: a crash mid-delete leaves a hidden remnant, never a half store at the path
     trash = p.parent / f".{p.name}.deleting-{os.getpid()}"
     os.replace(p, trash)

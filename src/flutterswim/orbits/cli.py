@@ -28,6 +28,8 @@ def register(subparsers) -> None:
 
 
 def _parse_range(text: str) -> tuple[str, float, float]:
+    import math
+
     from .._validate import ParameterError
 
     name, sep, rng = text.partition("=")
@@ -38,6 +40,8 @@ def _parse_range(text: str) -> tuple[str, float, float]:
         lo, hi = float(parts[0]), float(parts[1])
     except ValueError:
         raise ParameterError(f"range={text!r}: FROM and TO must be numbers") from None
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise ParameterError(f"range={text!r}: FROM and TO must be finite numbers")
     return name.strip(), lo, hi
 
 

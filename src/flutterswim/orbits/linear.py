@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from .._validate import ParameterError
+from .._validate import ParameterError, positive_int
 from .parameter import Axis
 from ._threads import one_blas_thread
 from .system import ShapeSystem
@@ -78,6 +78,7 @@ def hopf_point(params, parameter: str = "kappa_E_ratio", *, n_segments: int = 48
     where the leading complex pair crosses the imaginary axis. ``bracket``: values on either
     side; by default it is searched geometrically below and above the base value. ``xtol``
     is relative to the parameter's size."""
+    n_segments = positive_int("n_segments", n_segments, minimum=4)
     axis = Axis(params, parameter)
 
     def growth(v: float) -> float:

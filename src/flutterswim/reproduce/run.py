@@ -39,7 +39,7 @@ def check_out(out: str | os.PathLike, targets) -> Path:
     replace must have been written by flutterswim. Checked before any computation."""
     from .._paths import MARKER, check_output_file, check_store_path
 
-    p = check_store_path(out, overwrite=False, what="--out")
+    p = check_store_path(out, overwrite=False, what="--out", kind=STORE_KIND)
     names = ["report.html", "manifest.json"] + [f for t in targets for f in t.outputs]
     for f in names:
         check_output_file(p / f, (Path(f).suffix,), what="--out")
@@ -61,6 +61,13 @@ def reproduce(out: str | os.PathLike, *, mode: str = "quick", trials: str | os.P
     if trials is not None and not Path(trials).is_file():
         raise ParameterError(f"trials={str(trials)!r} is not a file")
     todo = select(targets)
+    if trials is not None and any(t.name == "fig3e" for t in todo):
+        from .figures_fitting import fitting_available
+
+        if fitting_available():  # a bad CSV is bad input, refused before any target is built
+            from ..fitting import read_trials, summarise
+
+            summarise(read_trials(trials))
     folder = check_out(out, todo)
     folder.mkdir(parents=True, exist_ok=True)
     write_marker(folder, STORE_KIND)

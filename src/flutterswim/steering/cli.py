@@ -60,8 +60,9 @@ def length(name: str, text, body_length: float) -> float:
 def _cmd_steer(args) -> int:
     import json
 
+    from .. import __version__
     from .._paths import atomic_write_text, check_output_file
-    from .._validate import ParameterError
+    from .._validate import ParameterError, non_negative, positive
     from ..params import preset
     from . import path as paths
     from .reduced import identify
@@ -73,6 +74,8 @@ def _cmd_steer(args) -> int:
         check_output_file(args.plot, (".png", ".pdf", ".svg"), what="--plot")
     if args.animate:
         check_output_file(args.animate, (".mp4", ".gif"), what="--animate")
+    non_negative("--noise-px", args.noise_px)
+    positive("--um-per-px", args.um_per_px)
     params = preset(args.preset)
     L = params.l
     if args.path == "square":
@@ -88,11 +91,12 @@ def _cmd_steer(args) -> int:
         if not args.waypoints:
             raise ParameterError("--path waypoints needs --waypoints FILE.csv")
         factory = lambda p, h: paths.waypoints_csv(args.waypoints, L, p)  # noqa: E731
+    factory((0.0, 0.0), 0.0)  # a bad path (e.g. a waypoints CSV) is refused before computing
     reduced = identify(params, n_segments=args.segments)
     res = steer(params, factory, reduced, closed_loop=not args.open_loop, noise_px=args.noise_px,
                 um_per_px=args.um_per_px, n_segments=args.segments, seed=args.seed, progress=not args.quiet)
     res.run.save(out)
-    m = dict(res.metrics)
+    m = {"generator": f"flutterswim {__version__}", **res.metrics}  # signed: a rerun may replace it
     m["reduced_model"] = {"U_mm_s": reduced.U * 1e3, "period_s": reduced.period, "k_per_s": reduced.k,
                           "omega_max_rad_s": reduced.omega_max, "r_min_mm": reduced.r_min * 1e3}
     atomic_write_text(met, json.dumps(_nulls(m), indent=2, allow_nan=False))

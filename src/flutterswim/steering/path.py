@@ -119,13 +119,18 @@ def waypoints_csv(path: str | Path, scale: float, start=(0.0, 0.0)) -> RefPath:
     with open(p, newline="") as f:
         for i, row in enumerate(csv.reader(f)):
             try:
-                rows.append([float(row[0]), float(row[1])])
+                xy = [float(row[0]), float(row[1])]
             except (ValueError, IndexError):
                 if i == 0:
                     continue
                 raise ParameterError(f"waypoints={str(p)!r}, line {i + 1}: two numbers x, y are required") from None
+            if not all(map(math.isfinite, xy)):
+                raise ParameterError(f"waypoints={str(p)!r}, line {i + 1}: x, y = {row[0].strip()}, {row[1].strip()} "
+                                     "are not finite; two finite numbers are required")
+            if not rows or xy != rows[-1]:  # a waypoint repeated in a row is one waypoint
+                rows.append(xy)
     if len(rows) < 2:
-        raise ParameterError(f"waypoints={str(p)!r} needs at least two points")
+        raise ParameterError(f"waypoints={str(p)!r} needs at least two distinct points")
     v = (np.array(rows) - rows[0]) * scale + np.asarray(start, float)
     return _polyline(v, False, f"waypoints({p.name})", 1e-5)
 
@@ -139,26 +144,33 @@ def fillet(path: RefPath, radius: float, step: float = 1e-5) -> RefPath:
     pts = path.points
     out = [pts[0]]
     k_prev = 0
-    for c in path.corners:
+    # the arc of each corner must fit on its edges: at most half of each neighbouring edge (the
+    # whole of a closed path's edge through its start, which is no corner); where it does not,
+    # the radius shrinks (and the path is then tighter than ``radius`` there)
+    ends = [0, *path.corners, len(pts) - 1]
+    for m, c in enumerate(path.corners):
         a, b = pts[max(c - 1, 0)], pts[min(c + 1, len(pts) - 1)]
         d0 = (pts[c] - a) / np.linalg.norm(pts[c] - a)
         d1 = (b - pts[c]) / np.linalg.norm(b - pts[c])
         turn = math.atan2(d0[0] * d1[1] - d0[1] * d1[0], d0 @ d1)
-        dist = radius * math.tan(abs(turn) / 2)
+        room_in = (path.s[c] - path.s[ends[m]]) * (1.0 if m == 0 and path.closed else 0.5)
+        room_out = (path.s[ends[m + 2]] - path.s[c]) * (1.0 if m == len(path.corners) - 1 and path.closed else 0.5)
+        dist = min(radius * math.tan(abs(turn) / 2), room_in, room_out)
+        radius_c = dist / math.tan(abs(turn) / 2)
         p_in = pts[c] - dist * d0
         # straight part up to the arc
         seg = pts[k_prev:c + 1]
         keep = seg[(seg - p_in) @ d0 < 0]
         out.extend(keep)
         nrm = np.array([-d0[1], d0[0]]) * math.copysign(1.0, turn)
-        centre = p_in + radius * nrm
+        centre = p_in + radius_c * nrm
         a0 = math.atan2(p_in[1] - centre[1], p_in[0] - centre[0])
-        n = max(8, int(abs(turn) * radius / step))
+        n = max(8, int(abs(turn) * radius_c / step))
         ang = a0 + np.linspace(0, turn, n + 1)
-        out.extend(centre + radius * np.stack([np.cos(ang), np.sin(ang)], axis=1))
+        out.extend(centre + radius_c * np.stack([np.cos(ang), np.sin(ang)], axis=1))
         p_out = pts[c] + dist * d1
-        rest = pts[c:]
-        k_prev = c + int(np.argmax((rest - p_out) @ d1 > 0))
+        beyond = np.nonzero((pts[c:] - p_out) @ d1 > 0)[0]
+        k_prev = c + int(beyond[0]) if beyond.size else len(pts)  # the arc may end the path
     out.extend(pts[k_prev:])
     p = np.array(out)
     keep = np.r_[True, np.hypot(*np.diff(p, axis=0).T) > 1e-12]
@@ -180,6 +192,9 @@ def min_radius(path: RefPath, scale: float) -> float:
     a, b, c = p[:-2], p[1:-1], p[2:]
     cross = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
     sides = np.linalg.norm(b - a, axis=1) * np.linalg.norm(c - b, axis=1) * np.linalg.norm(c - a, axis=1)
-    with np.errstate(divide="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore"):
         r = sides / (2.0 * np.abs(cross))
+    # a path that turns straight back (a cusp) has collinear neighbours, but no radius at all
+    back = np.einsum("ij,ij->i", b - a, c - b) < 0
+    r = np.where(back & ~(r < math.inf), 0.0, r)
     return float(np.min(r))

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import ParameterError, positive
+from .._validate import ParameterError, non_negative, positive
 from ..params import Parameters
 from .control import Controller, wrap
 from .path import RefPath
@@ -49,6 +49,11 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     if not isinstance(params, Parameters):
         raise ParameterError(f"params={params!r} must be flutterswim.Parameters")
     fps = positive("fps", fps)
+    noise_px = non_negative("noise_px", noise_px)
+    um_per_px = positive("um_per_px", um_per_px)
+    laps = positive("laps", laps)
+    if not isinstance(delay_frames, (int, np.integer)) or delay_frames < 0:
+        raise ParameterError(f"delay_frames={delay_frames!r} must be an integer >= 0")
     dt = 1.0 / fps
     rng = np.random.default_rng(seed)
     sigma = noise_px * um_per_px * 1e-6

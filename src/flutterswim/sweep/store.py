@@ -183,7 +183,7 @@ class SweepStore:
              *, overwrite: bool = False) -> "SweepStore":
         """Open (resume) or create the store and take its writer lock (released by
         :meth:`close` or when the process ends, SIGKILL included)."""
-        path = check_store_path(path, overwrite=overwrite)
+        path = check_store_path(path, overwrite=overwrite, kind="sweep")
         lock = _acquire(path)
         try:
             store = cls._open(path, spec, list(variables), n_state, overwrite=overwrite)
@@ -202,7 +202,7 @@ class SweepStore:
     def _open(cls, path: Path, spec, variables, n_state, *, overwrite):
         if path.exists() and has_marker(path):
             if overwrite:
-                remove_own_store(path)
+                remove_own_store(path, kind="sweep")
             else:
                 return cls._resume(path, spec, variables)
         elif path.is_dir():  # empty directory (checked): replaced by the new store
