@@ -474,10 +474,12 @@ def test_debris_beside_the_body_is_not_a_gap_but_a_piece_beyond_an_end_is(sim):
     assert tr.meta["n_failed"] == 0, failures(tr)
     D, E, _ = pixel_errors(tr, mv)
     assert np.sqrt(np.mean(D**2)) < 0.25 and np.sqrt(np.mean(E**2)) < 0.5
-    # beyond the s = 0 end of frame 0, 10 px along its outward tangent
+    # beyond the s = 0 end of frame 0, 12 px along its outward tangent (the ridge bridges dips of
+    # up to 4 px, so a blob of this size within about 10 px of the end joins the body: at 10 px
+    # the outcome turned on a 2-photon change of the background estimate near the frame's edge)
     tx, ty = x[0] - x[1], y[0] - y[1]
     g = math.hypot(tx, ty)
-    r = track_frame(with_blob(x[0] + 10 * tx / g, y[0] + 10 * ty / g)[0])
+    r = track_frame(with_blob(x[0] + 12 * tx / g, y[0] + 12 * ty / g)[0])
     assert not r["ok"] and r["reason"].startswith(("gap", "length", "tip")), r["reason"]
 
 

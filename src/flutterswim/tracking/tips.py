@@ -8,7 +8,10 @@ centreline and its tangent extension, d across it)::
 (Phi the normal CDF; exact for a straight end, accurate while the radius of curvature is
 much larger than sigma). The four parameters (q_end, sigma, A, b) are fitted to the raw
 pixels with |d| <= 3 sigma and q_end - ``inner`` <= q <= q_end + ``outer`` by variable
-projection (A and b linear). This uses all the light near the end, not one sampled line:
+projection (A and b linear), less the frame's background plane
+(:func:`~flutterswim.tracking.segment.background_plane`): under a background rising along
+the body by 2.5 % of the line's height per px, a constant b moved the ends 0.3-0.6 px towards
+the brighter side. This uses all the light near the end, not one sampled line:
 for Gaussian noise its spread is close to the Cramér-Rao bound sqrt(2) / SNR px.
 """
 
@@ -18,6 +21,8 @@ import math
 
 import numpy as np
 from scipy.interpolate import make_interp_spline
+
+from .segment import background_plane
 
 __all__ = ["refine_tips", "resample"]
 
@@ -42,7 +47,8 @@ def _points(spl, s_end: float, q: np.ndarray) -> np.ndarray:
 
 
 def _fit_end(img: np.ndarray, spl, s_end: float, q0: float, outward: int, sigma0: float,
-             inner: float, outer: float, pivot: float, saturation: float | None = None) -> tuple[float, float, float]:
+             inner: float, outer: float, pivot: float, saturation: float | None = None,
+             plane: np.ndarray | None = None) -> tuple[float, float, float]:
     """Fitted end parameter q_end (same parametrisation as ``spl``), sigma and the bend c
     about the hinge at q0 - outward * pivot; NaN if the fit fails. ``outward`` = +1 for the s_end end, -1 for the s = 0 end."""
     H, W = img.shape
@@ -73,6 +79,8 @@ def _fit_end(img: np.ndarray, spl, s_end: float, q0: float, outward: int, sigma0
     if np.count_nonzero(sel) < 30:
         return math.nan, math.nan, 0.0
     v = v[sel].astype(float)
+    if plane is not None:  # the frame's background plane (refine_tips)
+        v -= plane[r0:r1, c0:c1].ravel()[sel]
     q, d, u = q[sel], d[sel], u[sel]
     hinge = np.maximum(u + pivot, 0.0)
 
@@ -139,17 +147,17 @@ def _levenberg_marquardt(q: np.ndarray, d: np.ndarray, h: np.ndarray, v: np.ndar
 
 
 def _fit_end_twice(img: np.ndarray, spl, s_end: float, q0: float, outward: int, sigma0: float,
-                   inner: float, outer: float, pivot: float, saturation: float | None = None
-                   ) -> tuple[float, float, float]:
+                   inner: float, outer: float, pivot: float, saturation: float | None = None,
+                   plane: np.ndarray | None = None) -> tuple[float, float, float]:
     """:func:`_fit_end`, and once more with the pixels re-centred on its result when that
     moved the end by more than 2 px (a skeleton tip may be several px short). Returns
     (q_end, c, hinge parameter)."""
-    qe, _, c = _fit_end(img, spl, s_end, q0, outward, sigma0, inner, outer, pivot, saturation)
+    qe, _, c = _fit_end(img, spl, s_end, q0, outward, sigma0, inner, outer, pivot, saturation, plane)
     if saturation is not None and not np.isfinite(qe):
         # clipped so heavily that the unclipped pixels do not hold the end: fit them all
-        return _fit_end_twice(img, spl, s_end, q0, outward, sigma0, inner, outer, pivot)
+        return _fit_end_twice(img, spl, s_end, q0, outward, sigma0, inner, outer, pivot, None, plane)
     if np.isfinite(qe) and abs(qe - q0) > 2.0:
-        q2, _, c2 = _fit_end(img, spl, s_end, qe, outward, sigma0, inner, outer, pivot, saturation)
+        q2, _, c2 = _fit_end(img, spl, s_end, qe, outward, sigma0, inner, outer, pivot, saturation, plane)
         if np.isfinite(q2):
             return q2, c2, qe - outward * pivot
     return qe, c, q0 - outward * pivot
@@ -229,8 +237,9 @@ def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float =
     s, spl = _curve(x2, y2)
     L = float(s[-1])
     pivot = min(6.0 * sigma if pivot is None else float(pivot), inner)
-    qa, ca, ha = _fit_end_twice(img, spl, L, 0.0, -1, sigma, inner, outer, pivot, saturation)
-    qb, cb, hb = _fit_end_twice(img, spl, L, L, +1, sigma, inner, outer, pivot, saturation)
+    plane = background_plane(img)
+    qa, ca, ha = _fit_end_twice(img, spl, L, 0.0, -1, sigma, inner, outer, pivot, saturation, plane)
+    qb, cb, hb = _fit_end_twice(img, spl, L, L, +1, sigma, inner, outer, pivot, saturation, plane)
     xa = qa if np.isfinite(qa) else 0.0
     xb = qb if np.isfinite(qb) else L
     xo, yo = resample(x2, y2, xa, xb, n, (ca, cb), (ha, hb))
