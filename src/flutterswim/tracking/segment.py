@@ -43,22 +43,20 @@ def _plane(small: np.ndarray) -> np.ndarray:
     robust SD above the first plane (the line and debris, a large share of a small frame's
     light, would tilt it)."""
     Hc, Wc = small.shape
-    r = np.broadcast_to((np.arange(Hc) - 0.5 * (Hc - 1))[:, None], small.shape).ravel()
-    c = np.broadcast_to((np.arange(Wc) - 0.5 * (Wc - 1))[None, :], small.shape).ravel()
-    v = np.asarray(small, np.float64).ravel()
-    X = np.stack([np.ones_like(v), r, c], -1)
-    use = np.ones(v.size, bool)
-    coef = np.zeros(3)
-    for _ in range(2):
-        coef = np.linalg.lstsq(X[use], v[use], rcond=None)[0]
-        res = v - X @ coef
-        med = float(np.median(res))
-        sd = 1.4826 * float(np.median(np.abs(res - med)))
-        keep = res <= med + 3.0 * sd
-        if not sd > 0 or keep.sum() < 3 or np.array_equal(keep, use):
-            break
-        use = keep
-    return coef
+    r = (np.arange(Hc) - 0.5 * (Hc - 1))[:, None]
+    c = (np.arange(Wc) - 0.5 * (Wc - 1))[None, :]
+    v = np.asarray(small, np.float64)
+    # all blocks: the grid's columns are orthogonal
+    coef = np.array([v.mean(), np.sum(r * v) / (Wc * np.sum(r * r)), np.sum(c * v) / (Hc * np.sum(c * c))])
+    res = v - (coef[0] + coef[1] * r + coef[2] * c)
+    med = float(np.median(res))
+    sd = 1.4826 * float(np.median(np.abs(res - med)))
+    keep = res <= med + 3.0 * sd
+    if not sd > 0 or keep.all() or keep.sum() < 3:
+        return coef
+    rr, cc = np.broadcast_to(r, v.shape)[keep], np.broadcast_to(c, v.shape)[keep]
+    X = np.stack([np.ones_like(rr), rr, cc])
+    return np.linalg.solve(X @ X.T, X @ v[keep])
 
 
 def _plane_at(coef: np.ndarray, shape: tuple[int, int], reduced: tuple[int, int], k: int) -> np.ndarray:
@@ -87,23 +85,24 @@ def background_plane(img: np.ndarray, k: int = 4) -> np.ndarray:
     return _plane_at(_plane(small), a.shape, small.shape, k).astype(np.float32)
 
 
-def matched_filter(img: np.ndarray, sigma: float = 1.2, background_sigma: float = BACKGROUND_SIGMA) -> np.ndarray:
+def matched_filter(img: np.ndarray, sigma: float = 1.2, background_sigma: float = BACKGROUND_SIGMA,
+                   plane: np.ndarray | None = None) -> np.ndarray:
     """(H, W) -> (H, W) float32: G_sigma * img minus a broad background estimate.
 
-    The broad estimate smooths the frame less its least-squares plane and adds the plane back:
-    a Gaussian leaves a plane as it is inside the frame but flattens it at the edges (the
-    frame continued by its edge values), where a background slope of 0.1 noise sd per px
-    (a camera's bright background with a 30 % gradient) left bands of 45 sd along the edges,
-    taken for the body ("out of view")."""
+    The broad estimate smooths the frame less its plane (:func:`background_plane`, or
+    ``plane`` when given) and adds the plane back: a Gaussian leaves a plane as it is inside
+    the frame but flattens it at the edges (the frame continued by its edge values), where a
+    background slope of 0.1 noise sd per px (a camera's bright background with a 30 % gradient)
+    left bands of 45 sd along the edges, taken for the body ("out of view")."""
     a = np.asarray(img, dtype=np.float32)
     f = ndi.gaussian_filter(a, sigma, mode="nearest")
     k = 4
     H, W = a.shape
     Hc, Wc = H // k, W // k
     if Hc >= 4 and Wc >= 4:
-        small = _reduced(a, k)
-        coef = _plane(small)
-        small = ndi.gaussian_filter(small - _plane_at(coef, (Hc, Wc), (Hc, Wc), 1), background_sigma / k, mode="nearest")
+        if plane is None:
+            plane = background_plane(a, k)
+        small = ndi.gaussian_filter(_reduced(a - plane, k), background_sigma / k, mode="nearest")
         zr = np.clip((np.arange(H) + 0.5) / k - 0.5, 0, Hc - 1)
         zc = np.clip((np.arange(W) + 0.5) / k - 0.5, 0, Wc - 1)
         # separable linear interpolation back to full size
@@ -112,7 +111,7 @@ def matched_filter(img: np.ndarray, sigma: float = 1.2, background_sigma: float 
         r1, c1 = np.minimum(r0 + 1, Hc - 1), np.minimum(c0 + 1, Wc - 1)
         fr, fc = (zr - r0)[:, None], (zc - c0)[None, :]
         rows = small[r0] * (1 - fr) + small[r1] * fr
-        bg = rows[:, c0] * (1 - fc) + rows[:, c1] * fc + _plane_at(coef, (H, W), (Hc, Wc), k)
+        bg = rows[:, c0] * (1 - fc) + rows[:, c1] * fc + plane
     else:
         bg = ndi.gaussian_filter(a, background_sigma, mode="nearest")
     return (f - bg).astype(np.float32)
@@ -193,12 +192,13 @@ def robust_noise(f: np.ndarray) -> tuple[float, float]:
 
 
 def segment(img: np.ndarray, *, sigma: float = 1.2, k_low: float = 2.0, k_high: float = 5.0,
-            min_pixels: int = 20) -> Segmentation:
+            min_pixels: int = 20, plane: np.ndarray | None = None) -> Segmentation:
     """Matched filter, hysteresis threshold (skimage.filters.apply_hysteresis_threshold) at
-    median + k sd, and the component with the largest summed filtered intensity."""
+    median + k sd, and the component with the largest summed filtered intensity; ``plane``:
+    the frame's background plane, when already known (:func:`background_plane`)."""
     from skimage.filters import apply_hysteresis_threshold
 
-    f = matched_filter(img, sigma)
+    f = matched_filter(img, sigma, plane=plane)
     med, sd = robust_noise(f)
     if not sd > 0:
         return Segmentation(f, None, med, sd, 0, False, "flat frame (no noise, no contrast)")

@@ -186,7 +186,8 @@ def resample(x: np.ndarray, y: np.ndarray, q_a: float, q_b: float, n_points: int
 def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float = 1.2,
                 inner: float = 14.0, outer: float = 6.0, pivot: float | None = None, trim: float = 5.0,
                 span: float = 40.0, hook: float = 6.0, hook_deg: float = 25.0, degree: int = 4,
-                saturation: float | None = None) -> tuple[np.ndarray, np.ndarray, float, float]:
+                saturation: float | None = None, plane: np.ndarray | None = None
+                ) -> tuple[np.ndarray, np.ndarray, float, float]:
     """Move both ends of the centreline (x, y) (P,) [px] to the line ends fitted on the raw
     frame ``img`` (H, W) (end position along the curve and a small rotation of the last
     ``pivot`` px, default 6 ``sigma`` (at most ``inner``), fitted over the last ``inner`` px;
@@ -202,7 +203,8 @@ def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float =
     ~0.5 %; quartic over 40 px had the least bias on rendered strokes. Returns (x, y) resampled at P equal steps
     between the refined ends, and the two end corrections along the curve [px] (NaN where a
     fit failed; that end is then kept). ``saturation``: the value at which the frame is clipped;
-    pixels at it are left out of the end fits."""
+    pixels at it are left out of the end fits. ``plane``: the frame's background plane
+    (:func:`~flutterswim.tracking.segment.background_plane`), when already known."""
     n = x.size
     x = np.asarray(x, float)
     y = np.asarray(y, float)
@@ -237,7 +239,7 @@ def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float =
     s, spl = _curve(x2, y2)
     L = float(s[-1])
     pivot = min(6.0 * sigma if pivot is None else float(pivot), inner)
-    plane = background_plane(img)
+    plane = background_plane(img) if plane is None else plane
     qa, ca, ha = _fit_end_twice(img, spl, L, 0.0, -1, sigma, inner, outer, pivot, saturation, plane)
     qb, cb, hb = _fit_end_twice(img, spl, L, L, +1, sigma, inner, outer, pivot, saturation, plane)
     xa = qa if np.isfinite(qa) else 0.0

@@ -49,7 +49,7 @@ from .._validate import ParameterError, positive, positive_int
 from ..analysis.track import Track
 from .centreline import fit_centreline
 from .io import open_frames
-from .segment import BACKGROUND_SIGMA, clean_frame, segment
+from .segment import BACKGROUND_SIGMA, background_plane, clean_frame, segment
 from .tips import refine_tips
 
 __all__ = ["track", "track_frame", "track_image", "coarse_box", "orient", "failures", "START_ENDS"]
@@ -137,7 +137,8 @@ def track_frame(img: np.ndarray, *, n_points: int = 49, sigma: float = 1.2, k_lo
     out: dict[str, Any] = {"x": nan, "y": nan, "length": math.nan, "contrast": math.nan, "ok": False,
                            "reason": "", "saturated": sat is not None}
     img = clean_frame(img)
-    seg = segment(img, sigma=max(sigma, _MIN_FILTER_SIGMA), k_low=k_low, k_high=k_high)
+    plane = background_plane(img)
+    seg = segment(img, sigma=max(sigma, _MIN_FILTER_SIGMA), k_low=k_low, k_high=k_high, plane=plane)
     if not seg.ok:
         out["reason"] = f"lost contrast: {seg.reason}"
         return out
@@ -170,7 +171,7 @@ def track_frame(img: np.ndarray, *, n_points: int = 49, sigma: float = 1.2, k_lo
         return out
     x, y = c.x, c.y
     if refine:
-        x, y, da, db = refine_tips(img, x, y, sigma=sigma, saturation=sat)
+        x, y, da, db = refine_tips(img, x, y, sigma=sigma, saturation=sat, plane=plane)
         if not (math.isfinite(da) and math.isfinite(db)):
             out["reason"] = "tip not found: the line-end fit failed"
             return out
