@@ -101,6 +101,10 @@ def _lateral_series(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray) -> l
 # 0.36 % short: 19 frames per stroke hold 4 of their own)
 _POOLED_HARMONICS = 5
 _POOLED_MIN_F = 10.0
+# against a tracked movie's template noise: at SNR 3 the trailing end's 5th harmonic (0.4 % of
+# its excursion) gave F 2.4-15 and came and went at 10; noise alone (the leading end's) gave at
+# most 4.5 over 16 movies (chance of 5 or more for noise alone: exp(-5) = 0.7 %)
+_POOLED_MIN_F_TEMPLATE = 5.0
 # the pooled phases must resolve the harmonics: the smallest eigenvalue of the harmonic block's
 # normalised Gram matrix (1 for phases spread evenly over the cycle, 0 when a whole number of
 # frames per stroke puts every cycle's frames at the same few phases) at least this
@@ -228,12 +232,12 @@ def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmoni
                 low, rss_h, _ = _pooled_p2p(steady, h)
                 # only harmonics the data hold (nested F test), not noise or timing jitter
                 F = ((rss_h - rss) / (2 * (top - h))) / (rss / dof) if rss > 0 else math.inf
-                if se > 0:
-                    # nor the noise of a tracked movie's periodic template, which every cycle
-                    # shares: each added harmonic's rss drop, n/2 (a^2 + b^2), against its
-                    # coefficients' variance se^2
-                    F = min(F, (rss_h - rss) / (2 * (top - h) * 0.5 * n_pooled * se**2))
-                if F >= _POOLED_MIN_F and low > 0 and 1 / _POOLED_MAX_FACTOR <= full / low <= _POOLED_MAX_FACTOR:
+                # nor the noise of a tracked movie's periodic template, which every cycle shares:
+                # each added harmonic's rss drop, n/2 (a^2 + b^2), against its coefficients'
+                # variance se^2 (mean 1 for noise alone)
+                F_se = (rss_h - rss) / ((top - h) * n_pooled * se**2) if se > 0 else math.inf
+                if (F >= _POOLED_MIN_F and F_se >= _POOLED_MIN_F_TEMPLATE and low > 0
+                        and 1 / _POOLED_MAX_FACTOR <= full / low <= _POOLED_MAX_FACTOR):
                     factor[h] = full / low
             for k, h in enumerate(own):
                 out[k] *= factor.get(h, 1.0)  # in proportion: a growing stroke keeps its shape
