@@ -504,8 +504,12 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         why = ", ".join(f"{k} ({v})" for k, v in counts.items() if k)
         hint = ""
         if counts.get("lost contrast", 0) > T // 2:
-            hint = ("; if the filament is brighter than its background, leave out dark_line (--dark-line)"
-                    if dark_line else "; if the filament is darker than its background, give dark_line=True (--dark-line)")
+            c = contrast[np.isfinite(contrast)]
+            level = (f"; the ridge stands {float(np.median(c)):.2g} noise SD above the background (median over "
+                     f"{c.size} frames; {min_contrast:g} needed): too noisy a movie, or") if c.size else ";"
+            hint = (f"{level} if the filament is brighter than its background, leave out dark_line (--dark-line)"
+                    if dark_line else f"{level} if the filament is darker than its background, give dark_line=True "
+                    "(--dark-line)")
         raise ParameterError(f"input={frames.source!r}: {n_ok} of {T} frames were tracked; at least 2 are required "
                              f"(failures: {why or 'none'}){hint}")
     Lgood = length[ok]
