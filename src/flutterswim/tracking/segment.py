@@ -122,9 +122,9 @@ def clean_hot_pixels(img: np.ndarray, k: float = 8.0) -> np.ndarray:
     rays) replaced by their neighbourhood: a pixel is hot when it exceeds all 8 neighbours by
     more than ``k`` noise standard deviations (from the differences of horizontally adjacent
     pixels) and by more than half its height over the frame's median, and replaced by the
-    brightest neighbour; two touching pixels are a hot pair when each exceeds all its
-    neighbours but the other by as much (each then takes the brightest of its other
-    neighbours). A line blurred by the optics has neighbours as bright as itself along it and
+    brightest neighbour; two touching pixels, each the other's brightest neighbour, are a hot
+    pair when both exceed all the pair's other neighbours by as much (both then take the
+    brightest of those). A line blurred by the optics has neighbours as bright as itself along it and
     across it (at 1 px, 0.7 of its height for a blur of 1.2 px), so it is never touched.
     Returns ``img`` itself when nothing is hot."""
     a = np.asarray(img, dtype=np.float32)
@@ -150,23 +150,25 @@ def clean_hot_pixels(img: np.ndarray, k: float = 8.0) -> np.ndarray:
         # spike, not a noiseless ridge
         return (v - ref > k * sd) & (v - ref > 0.5 * (v - med))
 
-    hot = spike(nb1)
-    # pairs: each over all its neighbours but the other, which is its brightest
-    cand = spike(nb2) & ~hot
-    if cand.any():
-        is_cand = np.zeros(a.shape, bool)
-        is_cand[r[cand], c[cand]] = True
-        step = np.array(offs)[order[-1]]  # (n, 2): towards the brightest neighbour
-        pr = np.clip(r + step[:, 0], 0, a.shape[0] - 1)
-        pc = np.clip(c + step[:, 1], 0, a.shape[1] - 1)
-        pair = cand & is_cand[pr, pc]
-    else:
-        pair = np.zeros_like(hot)
+    # pairs: two touching pixels, each the other's brightest neighbour, both over all the
+    # pair's other neighbours as a lone hot pixel is over its own (a line's end pixel and the
+    # next are not: the line goes on beyond the next)
+    idx = -np.ones(a.shape, np.int64)
+    idx[r, c] = np.arange(r.size)
+    step = np.array(offs)[order[-1]]  # (n, 2): towards the brightest neighbour
+    q = idx[np.clip(r + step[:, 0], 0, a.shape[0] - 1), np.clip(c + step[:, 1], 0, a.shape[1] - 1)]
+    pair = (q >= 0) & (q != np.arange(r.size))
+    qq = np.where(pair, q, 0)
+    pair &= order[-1][qq] == 7 - order[-1]  # mutual: the offsets are listed symmetrically
+    low = np.minimum(v, v[qq])
+    other = np.maximum(nb2, nb2[qq])  # the brightest neighbour of the pair
+    pair &= (low - other > k * sd) & (low - other > 0.5 * (low - med))
+    hot = spike(nb1) & ~pair
     if not (hot.any() or pair.any()):
         return img
     out = a.copy()
     out[r[hot], c[hot]] = nb1[hot]
-    out[r[pair], c[pair]] = nb2[pair]
+    out[r[pair], c[pair]] = other[pair]
     return out
 
 
