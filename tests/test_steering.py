@@ -41,6 +41,10 @@ def test_csv_schedule(tmp_path):
     bad.write_text("t,angle\n0,0\n1,x\n")
     with pytest.raises(fs.ParameterError, match="line 3"):
         from_csv(bad)
+    # a non-finite entry names its file and line (it was 'values has 1 non-finite entries')
+    bad.write_text("t,angle\n0,0\n1,nan\n")
+    with pytest.raises(fs.ParameterError, match=r"bad.csv.*line 3.*not finite"):
+        from_csv(bad)
 
 
 def test_circle_fit_and_cycle_average_are_exact():
@@ -322,3 +326,16 @@ def test_min_radius_of_a_path_that_turns_straight_back_is_zero(tmp_path):
     p = waypoints_csv(tmp_path / "w.csv", L)
     assert min_radius(p, L) < 1e-3 * L
     assert min_radius(fillet(p, 1.4 * L), L) < 1e-3 * L
+
+
+def test_a_trapped_run_says_why_in_one_line():
+    """steer exits 1 when the swimmer is trapped; the reason is one line naming the trap, when
+    the run was stopped for it, and its speed against the free swimmer's (it printed only
+    'trapped: True' in the summary)."""
+    from flutterswim.steering.cli import trapped_reason
+
+    m = {"trapped": True, "trapped_at_s": 12.5, "mean_speed_mm_s": 0.04, "reduced_model": {"U_mm_s": 0.61}}
+    line = trapped_reason(m)
+    assert "\n" not in line and line.startswith("failed:")
+    assert "bent equilibrium" in line and "t = 12.5 s" in line and "0.04 mm/s" in line and "0.61 mm/s" in line
+    assert "t = " not in trapped_reason({**m, "trapped_at_s": None})  # found at the end (the JSON's null)

@@ -85,3 +85,15 @@ def test_second_writer_is_refused(tmp_path):
         first.close()
     ds = sweep({"chi": [1.0, 2.0]}, out=str(out), backend="serial", point_fn=_const, progress=False)
     assert ds["done"].all()
+
+
+def test_a_grid_axis_with_a_repeated_value_is_refused():
+    """A grid's axis is a coordinate of the store: kappa_E_ratio=1,1 gave two rows labelled 1.0
+    (xarray's sel returned both). It is refused, naming the axis and the value; a list sweep,
+    which pairs values, may repeat them."""
+    with pytest.raises(ParameterError, match=r"'kappa_E_ratio' repeats the values \[1.0\]"):
+        SweepSpec.build(["kappa_E_ratio=1,1"])
+    with pytest.raises(ParameterError, match="repeats"):
+        SweepSpec.build(["tau=0.3,0.4,0.3", "chi=1,2"])
+    s = SweepSpec.build({"chi": [1, 1], "tau": [0.1, 0.2]}, mode="list")
+    assert s.n_points == 2

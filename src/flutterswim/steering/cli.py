@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import math
+import sys
+
 __all__ = ["register"]
 
 
@@ -113,7 +116,19 @@ def _cmd_steer(args) -> int:
 
         animate(res.run, args.animate, speed=8.0, max_frames=600, progress=not args.quiet)
         print(f"animation: {args.animate}")
-    return 1 if m["trapped"] else 0
+    if m["trapped"]:
+        print(trapped_reason(m), file=sys.stderr)
+        return 1
+    return 0
+
+
+def trapped_reason(m: dict) -> str:
+    """The one line that says why a steering run failed: the swimmer was trapped."""
+    at = m.get("trapped_at_s")
+    when = f" at t = {at:.3g} s" if isinstance(at, float) and math.isfinite(at) else ""
+    return (f"failed: the swimmer stopped{when}, trapped in a bent equilibrium (mean speed "
+            f"{m['mean_speed_mm_s']:.3g} mm/s, swimming freely {m['reduced_model']['U_mm_s']:.3g} mm/s); a sudden "
+            "turn of the field can do this: give the path gentler turns")
 
 
 def _nulls(v):

@@ -80,11 +80,15 @@ def from_csv(path: str | Path) -> Field:
             if not row or row[0].strip().startswith("#"):
                 continue
             try:
-                rows.append([float(v) for v in row[:3]])
+                vals = [float(v) for v in row[:3]]
             except ValueError:
                 if i == 0:
                     continue  # a header
                 raise ParameterError(f"field CSV={str(p)!r}, line {i + 1}: numbers t, angle[, strength] are required") from None
+            if not all(np.isfinite(vals)):
+                raise ParameterError(f"field CSV={str(p)!r}, line {i + 1}: {row[:3]} is not finite; finite t, angle[, "
+                                     "strength] are required")
+            rows.append(vals)
     if len(rows) < 1 or any(len(r) < 2 for r in rows):
         raise ParameterError(f"field CSV={str(p)!r} needs rows of t, angle_deg[, strength]")
     a = np.array([r[:2] for r in rows])

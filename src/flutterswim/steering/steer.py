@@ -112,6 +112,7 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     met["path_min_radius_bl"] = r_path / params.l
     met["path_feasible"] = bool(r_path >= 0.95 * reduced.r_min)
     met["trapped"] = bool(math.isfinite(trapped_at)) or met["trapped"]
+    met["trapped_at_s"] = trapped_at  # when the run was stopped for it (NaN: not stopped)
     met.update(closed_loop=closed_loop, noise_px=noise_px, um_per_px=um_per_px, fps=fps, delay_frames=delay_frames,
                path=path.name, lookahead_bl=lookahead_bl, correction_bl=correction_bl)
     return SteerResult(run, path, met, closed_loop, onset)

@@ -191,6 +191,14 @@ class SweepSpec:
             raise ParameterError("kappa_E_ratio cannot be swept together with kappa_E or chi")
         if self.mode not in ("grid", "list"):
             raise ParameterError(f"mode={self.mode!r} is unknown; choose 'grid' or 'list'")
+        if self.mode == "grid":
+            # a grid's axis is a coordinate of the store: a repeated value would label two rows
+            # alike (xarray's sel then returns both)
+            for a in axes:
+                seen = sorted({v for v in a.values if a.values.count(v) > 1})
+                if seen:
+                    raise ParameterError(f"sweep axis {a.name!r} repeats the values {seen}; a grid's values must "
+                                         "differ (mode='list' pairs values and may repeat them)")
         if self.mode == "list" and len({len(a.values) for a in axes}) > 1:
             raise ParameterError(
                 f"mode='list' zips the axes, which need equal lengths; got "
