@@ -215,8 +215,8 @@ def estimate_blur(img: np.ndarray, x: np.ndarray, y: np.ndarray, sigma_filter: f
     """Gaussian sigma [px] of the line's cross profile (PSF and defocus together): the profiles
     across the middle 80 % of the centreline (x, y), every px, of the frame smoothed by
     ``sigma_filter``, each less its own baseline (its outer samples), are averaged and fitted
-    by b + b_d d + A exp(-(d - m)^2 / 2 w^2) (the slope: a background rising across the body
-    by 2.5 % of the line's height per px read 1.33 px for 1.2 without it); then
+    by b + b_d d + A exp(-(d - m)^2 / 2 w^2) (the slope: without it, a background rising across
+    the body by 2.5 % of the line's height per px read 1.33 px where a flat one read 1.27); then
     sigma^2 = w^2 - sigma_filter^2."""
     from scipy.optimize import curve_fit
 
