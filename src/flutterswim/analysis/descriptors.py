@@ -10,7 +10,16 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from .._validate import ParameterError
-from .cycles import _MAX_RESOLVABLE, GAP_MARGIN, Cycles, detect_cycles, fourier_fit, sample_cycle, tip_index
+from .cycles import (
+    _MAX_RESOLVABLE,
+    GAP_MARGIN,
+    Cycles,
+    _fourier_columns,
+    detect_cycles,
+    fourier_fit,
+    sample_cycle,
+    tip_index,
+)
 from .intersection import self_intersections
 from .track import Track, as_track
 
@@ -51,8 +60,7 @@ def _fourier_p2p(phase: np.ndarray, q: np.ndarray, harmonics: int, keep: np.ndar
     k = np.ones(H, bool)  # harmonics beyond those tested are kept
     k[: min(H, keep.size)] = keep[:H]
     use = np.concatenate([[True], k, k])
-    arg = np.outer(phase, 2 * np.pi * np.arange(1, H + 1))
-    A = np.hstack([np.ones((phase.size, 1)), np.cos(arg), np.sin(arg)])[:, use]
+    A = _fourier_columns(phase, H)[:, use]
     coef = np.zeros(2 * H + 1)
     coef[use] = np.linalg.lstsq(A, q, rcond=None)[0]
     return _waveform_p2p(coef[1:], H)
@@ -122,19 +130,31 @@ def _pooled_p2p(series: list, H: int) -> tuple[float, float, int]:
     n = sum(c[0].size for c in cyc)
     if not cyc or n - len(cyc) - 1 < 4 * H:
         return math.nan, math.nan, 0
-    ph = np.concatenate([c[0] for c in cyc])
-    q = np.concatenate([c[1] for c in cyc])
-    who = np.repeat(np.arange(len(cyc)), [c[0].size for c in cyc])
-    arg = np.outer(ph, 2 * np.pi * np.arange(1, H + 1))
-    harm = np.hstack([np.cos(arg), np.sin(arg)])
+    who, harm, q = _pooled_design(cyc, np.arange(1, H + 1))
     # coverage: the harmonic columns with each cycle's mean removed (what the offsets leave)
     means = np.stack([np.bincount(who, col) for col in harm.T], 1) / np.bincount(who)[:, None]
     centred = harm - means[who]
     if np.linalg.eigvalsh(centred.T @ centred / (0.5 * n))[0] < _POOLED_MIN_COVERAGE:
         return math.nan, math.nan, 0
-    A = np.hstack([(who[:, None] == np.arange(len(cyc))[None, :]).astype(float), harm])
+    coef, rss, A = _pooled_lstsq(who, harm, q, len(cyc))
+    return _waveform_p2p(coef[len(cyc):], H), rss, n - A.shape[1]
+
+
+def _pooled_design(cyc: list, harmonics: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """All cycles' (phase, q) together: each sample's cycle, the cos then sin columns of the
+    given harmonics, and q."""
+    ph = np.concatenate([c[0] for c in cyc])
+    who = np.repeat(np.arange(len(cyc)), [c[0].size for c in cyc])
+    arg = np.outer(ph, 2 * np.pi * np.asarray(harmonics, float))
+    return who, np.hstack([np.cos(arg), np.sin(arg)]), np.concatenate([c[1] for c in cyc])
+
+
+def _pooled_lstsq(who: np.ndarray, harm: np.ndarray, q: np.ndarray, n_cycles: int):
+    """Least squares of q on an offset per cycle and the harmonic columns: (coefficients,
+    residual sum of squares, design matrix)."""
+    A = np.hstack([(who[:, None] == np.arange(n_cycles)[None, :]).astype(float), harm])
     coef = np.linalg.lstsq(A, q, rcond=None)[0]
-    return _waveform_p2p(coef[len(cyc):], H), float(np.sum((q - A @ coef) ** 2)), n - A.shape[1]
+    return coef, float(np.sum((q - A @ coef) ** 2)), A
 
 
 # a tracked movie's lateral waveform keeps a harmonic beyond the first only when the pooled cycles
@@ -146,13 +166,8 @@ def _pooled_rss(steady: list, harmonics: np.ndarray) -> tuple[float, int]:
     """Residual sum of squares of the Fourier series of the given harmonics fitted to all
     cycles' (phase, q) at once, with an offset per cycle, and the number of samples."""
     cyc = [c for c in steady if c is not None]
-    ph = np.concatenate([c[0] for c in cyc])
-    q = np.concatenate([c[1] for c in cyc])
-    who = np.repeat(np.arange(len(cyc)), [c[0].size for c in cyc])
-    arg = np.outer(ph, 2 * np.pi * np.asarray(harmonics, float))
-    A = np.hstack([(who[:, None] == np.arange(len(cyc))[None, :]).astype(float), np.cos(arg), np.sin(arg)])
-    coef = np.linalg.lstsq(A, q, rcond=None)[0]
-    return float(np.sum((q - A @ coef) ** 2)), int(q.size)
+    who, harm, q = _pooled_design(cyc, harmonics)
+    return _pooled_lstsq(who, harm, q, len(cyc))[1], int(q.size)
 
 
 def _template_harmonics(steady: list, H: int, se: float) -> np.ndarray | None:
