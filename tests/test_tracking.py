@@ -369,6 +369,43 @@ def test_mp4_within_one_percent_of_lossless(snr3, tmp_path):
     for k in ("period_s", "advance_per_cycle_mm", "leading_lateral_p2p_mm", "trailing_lateral_p2p_mm",
               "body_length_mm"):
         assert getattr(b, k) == pytest.approx(getattr(a, k), rel=0.01), k
+    # a well-encoded movie keeps its noise: few pixels repeat between frames (float frames: not counted)
+    assert tm.meta["unchanged_fraction"] < 0.2
+    assert math.isnan(tr.meta["unchanged_fraction"])
+
+
+def test_heavily_compressed_movie_is_reported(snr3, tmp_path):
+    """H.264 at CRF 25 on a low-gain 8-bit movie (noise 6 grey levels) drops the noise in skipped
+    blocks, and detail with it: ``track`` says so, and keeps the share in the record."""
+    pytest.importorskip("imageio_ffmpeg")
+    mv, _ = snr3
+    _write_mp4(tmp_path / "low.mp4", mv.frames, 0.0, 255.0 / 0.6, quality=None, output_params=["-crf", "25"])
+    with pytest.warns(UserWarning, match="keep their exact value"):
+        tm = track(tmp_path / "low.mp4", px_per_mm=mv.px_per_mm, t0=float(mv.t[0]))
+    assert tm.meta["unchanged_fraction"] > 0.5
+
+
+def test_unchanged_pixels_of_noise_and_of_a_still_background():
+    """Camera noise changes most pixels between frames; a background copied from frame to frame
+    (a codec's skipped blocks) does not; a black level clipped at 0 is not counted as still."""
+    from flutterswim.tracking.track import _StillPixels
+
+    rng = np.random.default_rng(3)
+    noisy = rng.poisson(60.0, (6, 64, 64)).astype(np.uint8)  # integers, as a movie reader gives them in floats
+    still = np.repeat(noisy[:1], 6, axis=0)
+    still[:, 30:34, :] = noisy[:, 30:34, :]  # a moving line
+    black = np.clip(rng.normal(0.0, 2.0, (6, 64, 64)), 0, 255).astype(np.uint8)  # mostly 0s
+    shares = []
+    for movie in (noisy, still, black.astype(np.float32)):
+        sp = _StillPixels()
+        for f in movie:
+            sp.add(f)
+        shares.append(sp.fraction())
+    assert shares[0] < 0.15 and shares[1] > 0.9 and shares[2] < 0.5, shares
+    sp = _StillPixels()
+    for f in still.astype(np.float32) + 0.25:  # fractional values: a rendered movie
+        sp.add(f)
+    assert math.isnan(sp.fraction())
 
 
 def test_mjpeg_avi_within_one_percent_of_lossless(snr3, tmp_path):

@@ -7,6 +7,7 @@ samples). Failed frames have NaN coordinates, ``tracked = 0`` and their ``failur
 from __future__ import annotations
 
 import json
+import math
 import os
 from pathlib import Path
 
@@ -67,6 +68,9 @@ def to_xarray(tr: Track):
         # NetCDF has no boolean attribute: 1 for a line darker than its background
         "dark_line": int(bool(m.get("dark_line", False))),
     })
+    if math.isfinite(m.get("unchanged_fraction", math.nan)):
+        # share of pixels keeping their exact value between frames (a lossy codec's skipped blocks)
+        ds.attrs.update({"unchanged_fraction": float(m["unchanged_fraction"]), "unchanged_fraction_units": "1"})
     if "template_coef_se" in m:  # the periodic template's coefficient noise at (s = 0, s = l)
         ds.attrs.update({"template_coef_se": np.asarray(m["template_coef_se"], float),
                          "template_coef_se_units": "mm"})
@@ -107,6 +111,8 @@ def load_track(path: str | os.PathLike) -> Track:
             "length_px": float(a["body_length"]) * a["px_per_mm"],
             "length_std_px": float(a["body_length_std"]) * a["px_per_mm"],
             "length_spread": float(a["body_length_spread"]), "frames": frames}
+    if "unchanged_fraction" in a:
+        meta["unchanged_fraction"] = float(a["unchanged_fraction"])
     if "template_coef_se" in a:
         meta["template_coef_se"] = [float(v) for v in np.atleast_1d(a["template_coef_se"])]
     return Track(t=ds["time"].values[ok], x=ds["x"].values[ok], y=ds["y"].values[ok], s=ds["s"].values,
