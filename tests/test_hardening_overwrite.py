@@ -94,3 +94,35 @@ def test_a_sweep_never_replaces_a_reproduce_folder_nor_reproduce_a_sweep_store(t
         reproduce(store, targets=["table1"])
     assert sorted(p.name for p in store.iterdir()) == before
     assert (store / ".flutterswim-store").read_text() == marker
+
+
+@pytest.mark.parametrize("suffix", [".nc", ".png", ".pdf", ".svg", ".jpg", ".gif", ".mp4", ".json", ".csv", ".html"])
+def test_a_file_that_only_mentions_flutterswim_is_not_ours(tmp_path, suffix):
+    """The signature must sit in the format's own metadata: a user's notes, data or figure
+    that merely contain the word (as text, as a JSON value, in a CSV cell) were taken for ours
+    and replaced by ``simulate --out`` and ``track-batch --out``."""
+    f = tmp_path / f"notes{suffix}"
+    text = {".json": '{"note": "flutterswim 0.1.0 made the data"}',
+            ".csv": "voltage_V,sample,notes\n85,1,compare with flutterswim 0.1.0 later\n"}
+    f.write_text(text.get(suffix, "my notes about flutterswim 0.1.0, precious\n" * 3))
+    assert not is_ours(f)
+
+
+def test_simulate_refuses_a_netcdf_path_holding_a_users_notes(tmp_path):
+    notes = tmp_path / "notes.nc"
+    notes.write_text("my flutterswim notes, precious")
+    r = subprocess.run([sys.executable, "-m", "flutterswim", "simulate", "--t-end", "0.1", "--segments", "8",
+                        "--out", str(notes), "--quiet"], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and "not written by flutterswim" in r.stderr, r.stderr
+    assert notes.read_text() == "my flutterswim notes, precious"
+
+
+def test_own_jpeg_json_and_csv_are_recognised(run, tmp_path):
+    from flutterswim.plotting import plot_swimmer
+
+    plot_swimmer(run, tmp_path / "f.jpg")
+    assert is_ours(tmp_path / "f.jpg")
+    (tmp_path / "d.json").write_text('{"generator": "flutterswim 0.1.0", "period_s": 0.4}')
+    assert is_ours(tmp_path / "d.json")
+    (tmp_path / "t.csv").write_text("trial,period_s,tracked_by\na.tif,0.4,flutterswim 0.1.0\n")
+    assert is_ours(tmp_path / "t.csv")

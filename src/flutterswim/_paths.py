@@ -14,6 +14,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import re
 import shutil
 import tempfile
 from pathlib import Path
@@ -26,25 +27,122 @@ __all__ = ["MARKER", "SIGNATURE", "is_ours", "figure_metadata", "mark_gif", "che
 
 #: File inside every store flutterswim creates; nothing without it is ever deleted.
 MARKER = ".flutterswim-store"
-#: Bytes every file flutterswim writes contains (NetCDF attributes, figure metadata, GIF
-#: comment, MP4 tag): an existing file without them is never overwritten.
+#: What every file flutterswim writes carries, in a field of its format's own metadata (a NetCDF
+#: file's ``source`` attribute, a figure's Software/Creator/comment, a GIF or MP4 comment, a
+#: JSON file's ``generator``, a CSV's ``tracked_by`` column, an HTML report's generator tag).
 SIGNATURE = b"flutterswim"
 _SCAN = 64 << 20
+_TAG = re.compile(rb"flutterswim[ :]")
+
+
+def _scan(p: Path, pattern: re.Pattern) -> bool:
+    """The pattern in the file's first or last 64 MiB."""
+    size = p.stat().st_size
+    with open(p, "rb") as f:
+        if pattern.search(f.read(_SCAN)):
+            return True
+        if size > _SCAN:
+            f.seek(max(_SCAN - 4096, size - _SCAN))
+            return bool(pattern.search(f.read()))
+    return False
+
+
+def _netcdf_ours(p: Path) -> bool:
+    with open(p, "rb") as f:
+        if f.read(8) != b"\x89HDF\r\n\x1a\n":
+            return False
+    import h5py
+
+    with h5py.File(p, "r") as h:
+        src = h.attrs.get("source", b"")
+    src = src.decode("utf-8", "replace") if isinstance(src, bytes) else str(src)
+    return src.startswith("flutterswim ")
+
+
+def _json_ours(p: Path) -> bool:
+    if p.stat().st_size > _SCAN:
+        return False
+    d = json.loads(p.read_text(encoding="utf-8"))
+    if not isinstance(d, dict):
+        return False
+    tag = d.get("generator", d.get("software"))
+    return isinstance(tag, str) and _TAG.match(tag.encode()) is not None
+
+
+def _csv_ours(p: Path) -> bool:
+    import csv
+
+    with open(p, newline="", encoding="utf-8") as f:
+        rows = csv.reader(f)
+        head = next(rows, [])
+        if "tracked_by" not in head:
+            return False
+        k = head.index("tracked_by")
+        return any(len(r) > k and r[k].startswith("flutterswim ") for r in rows)
+
+
+def _png_ours(p: Path) -> bool:
+    with open(p, "rb") as f:
+        if f.read(8) != b"\x89PNG\r\n\x1a\n":
+            return False
+        while True:
+            head = f.read(8)
+            if len(head) < 8:
+                return False
+            n, kind = int.from_bytes(head[:4], "big"), head[4:]
+            if kind in (b"tEXt", b"iTXt") and n < 1 << 16:
+                key, _, text = f.read(n).partition(b"\x00")
+                if key == b"Software" and (text.startswith(b"flutterswim ") or b"\x00flutterswim " in text):
+                    return True
+                f.seek(4, 1)
+            elif kind == b"IEND":
+                return False
+            else:
+                f.seek(n + 4, 1)
+
+
+def _jpeg_ours(p: Path) -> bool:
+    with open(p, "rb") as f:
+        if f.read(2) != b"\xff\xd8":
+            return False
+        while True:
+            m = f.read(4)
+            if len(m) < 4 or m[0] != 0xFF or m[1] in (0xD9, 0xDA):  # end of image, start of scan
+                return False
+            n = int.from_bytes(m[2:], "big") - 2
+            if m[1] == 0xFE:
+                if f.read(n).startswith(b"flutterswim "):
+                    return True
+            else:
+                f.seek(n, 1)
+
+
+# signatures inside a file's own metadata structures (what matplotlib, the GIF marker, ffmpeg's
+# comment and the report template write), never a bare word in its content
+_PATTERNS = {
+    ".pdf": re.compile(rb"/Creator\s*\(flutterswim "),
+    ".svg": re.compile(rb"<dc:creator>\s*<cc:Agent>\s*<dc:title>flutterswim "),
+    ".gif": re.compile(rb"\x21\xfe" + bytes([len(b"flutterswim animation")]) + rb"flutterswim animation\x00"),
+    ".mp4": re.compile(rb"\xa9cmt.{4,16}?data.{8}flutterswim animation", re.S),
+    ".html": re.compile(rb'<meta name="generator" content="flutterswim '),
+}
+_READERS = {".nc": _netcdf_ours, ".nc4": _netcdf_ours, ".h5": _netcdf_ours, ".hdf5": _netcdf_ours,
+            ".json": _json_ours, ".csv": _csv_ours, ".png": _png_ours, ".jpg": _jpeg_ours, ".jpeg": _jpeg_ours}
 
 
 def is_ours(path: str | os.PathLike) -> bool:
-    """True if the file carries :data:`SIGNATURE` (searched in its first and last 64 MiB)."""
+    """True if the file carries flutterswim's signature in its format's own metadata (a NetCDF
+    ``source`` attribute starting "flutterswim ", a PNG's Software text, a PDF's Creator, a
+    JSON ``generator``, ...); a file that merely mentions the word, or of a kind flutterswim
+    does not write, is not ours."""
     p = Path(os.fspath(path))
+    sfx = p.suffix.lower()
     try:
-        size = p.stat().st_size
-        with open(p, "rb") as f:
-            head = f.read(_SCAN)
-            if SIGNATURE in head:
-                return True
-            if size > _SCAN:
-                f.seek(max(_SCAN - len(SIGNATURE), size - _SCAN))
-                return SIGNATURE in f.read()
-    except OSError:
+        if sfx in _READERS:
+            return bool(_READERS[sfx](p))
+        if sfx in _PATTERNS:
+            return _scan(p, _PATTERNS[sfx])
+    except Exception:  # unreadable, malformed or truncated: not provably ours
         return False
     return False
 
