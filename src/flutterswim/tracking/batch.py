@@ -12,8 +12,9 @@ the named groups ``voltage`` and ``sample`` (default :data:`DEFAULT_PATTERN`, e.
 
 Columns (the last, tracked_by, signs the file as ours): advance_mm is the advance per cycle along the field (its magnitude); lateral_mm is
 the lateral peak-to-peak of the trailing end (the fitting's default), leading_lateral_mm that
-of the leading end. A trial that cannot be tracked is left out of the CSV and listed, with
-its reason, in ``<out stem>_failed.csv``.
+of the leading end. A trial that cannot be tracked (any error) is left out of the CSV and listed, with
+its reason, in ``<out stem>_failed.csv`` (an old one of ours is removed when none failed); the
+batch goes on. The sidecars, the options and the output files are checked before the first trial.
 """
 
 from __future__ import annotations
@@ -96,7 +97,8 @@ def _sidecar_options(meta: dict, cand: Path) -> dict:
 
 
 def find_trials(folder: str | os.PathLike, pattern: str = DEFAULT_PATTERN) -> list[Trial]:
-    """Trials of ``folder`` (sorted by name) with their voltage and sample."""
+    """Trials of ``folder`` (sorted by name) with their voltage and sample; the sidecars'
+    values are checked here (a bad one is a ParameterError naming its file)."""
     root = Path(os.fspath(folder))
     if not root.is_dir():
         raise ParameterError(f"folder={str(root)!r} is not a directory")
