@@ -12,8 +12,9 @@ the named groups ``voltage`` and ``sample`` (default :data:`DEFAULT_PATTERN`, e.
 
 Columns (the last, tracked_by, signs the file as ours): advance_mm is the advance per cycle along the field (its magnitude); lateral_mm is
 the lateral peak-to-peak of the trailing end (the fitting's default), leading_lateral_mm that
-of the leading end. A trial that cannot be tracked is left out of the CSV and listed, with
-its reason, in ``<out stem>_failed.csv``.
+of the leading end. A trial that cannot be tracked (any error) is left out of the CSV and listed, with
+its reason, in ``<out stem>_failed.csv`` (an old one of ours is removed when none failed); the
+batch goes on. The sidecars, the options and the output files are checked before the first trial.
 """
 
 from __future__ import annotations
@@ -29,8 +30,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .._validate import ParameterError
-from .io import FRAME_SUFFIXES, MOVIE_SUFFIXES, STACK_SUFFIXES
+from .._validate import ParameterError, finite, positive, positive_int
+from .io import FRAME_SUFFIXES, MOVIE_SUFFIXES, STACK_SUFFIXES, parse_roi
 
 __all__ = ["DEFAULT_PATTERN", "CSV_COLUMNS", "Trial", "failures_path", "find_trials", "track_batch"]
 
@@ -56,18 +57,48 @@ def _is_trial(p: Path) -> bool:
     return p.suffix.lower() in STACK_SUFFIXES + MOVIE_SUFFIXES
 
 
-def _sidecar(p: Path) -> dict | None:
+def _sidecar(p: Path) -> tuple[dict, Path] | None:
+    """The sidecar's JSON object and its path, or None without one."""
     for cand in ([p / "trial.json"] if p.is_dir() else []) + [p.with_suffix(".json") if p.is_file() else p.parent / f"{p.name}.json"]:
         if cand.is_file():
             try:
-                return json.loads(cand.read_text())
+                meta = json.loads(cand.read_text())
             except (json.JSONDecodeError, UnicodeDecodeError) as exc:
                 raise ParameterError(f"sidecar={str(cand)!r} is not valid JSON ({exc})") from None
+            if not isinstance(meta, dict):
+                raise ParameterError(f"sidecar={str(cand)!r} is not a JSON object (it holds a {type(meta).__name__}); "
+                                     '{"voltage_V": ..., "sample": ...} is required')
+            return meta, cand
     return None
 
 
+def _sidecar_options(meta: dict, cand: Path) -> dict:
+    """The tracking options of a sidecar, checked (before any trial is tracked); a null value
+    is no value."""
+    from .track import START_ENDS
+
+    opts = {k: meta[k] for k in ("px_per_mm", "fps", "roi", "field_angle_deg", "start_end", "dark_line")
+            if meta.get(k) is not None}
+    try:
+        for k in ("px_per_mm", "fps"):
+            if k in opts:
+                opts[k] = positive(k, opts[k])
+        if "field_angle_deg" in opts:
+            opts["field_angle_deg"] = finite("field_angle_deg", opts["field_angle_deg"])
+        if "roi" in opts:
+            parse_roi(opts["roi"], None)
+        if "start_end" in opts and opts["start_end"] not in START_ENDS:
+            raise ParameterError(f"start_end={opts['start_end']!r} is not allowed; choose one of {', '.join(START_ENDS)}")
+        if "dark_line" in opts and not isinstance(opts["dark_line"], bool):
+            raise ParameterError(f"dark_line={opts['dark_line']!r} is not allowed; give true or false")
+    except ParameterError as exc:
+        raise ParameterError(f"sidecar={str(cand)!r}: {exc}") from None
+    return opts
+
+
 def find_trials(folder: str | os.PathLike, pattern: str = DEFAULT_PATTERN) -> list[Trial]:
-    """Trials of ``folder`` (sorted by name) with their voltage and sample."""
+    """Trials of ``folder`` (sorted by name) with their voltage and sample; the sidecars'
+    values are checked here (a bad one is a ParameterError naming its file)."""
     root = Path(os.fspath(folder))
     if not root.is_dir():
         raise ParameterError(f"folder={str(root)!r} is not a directory")
@@ -81,14 +112,16 @@ def find_trials(folder: str | os.PathLike, pattern: str = DEFAULT_PATTERN) -> li
     for p in sorted(root.iterdir()):
         if not _is_trial(p):
             continue
-        meta = _sidecar(p)
-        if meta is not None:
+        side = _sidecar(p)
+        where = f"trial {str(p)!r}"
+        if side is not None:
+            meta, cand = side
             v = meta.get("voltage_V", meta.get("voltage"))
             smp = meta.get("sample")
             if v is None or smp is None:
                 raise ParameterError(f"the sidecar of trial {str(p)!r} needs the keys voltage_V and sample")
-            opts = {k: meta[k] for k in ("px_per_mm", "fps", "roi", "field_angle_deg", "start_end",
-                                             "dark_line") if k in meta}
+            opts = _sidecar_options(meta, cand)
+            where = f"sidecar={str(cand)!r}"
         else:
             m = rx.search(p.stem if p.is_file() else p.name)
             if m is None:
@@ -98,7 +131,9 @@ def find_trials(folder: str | os.PathLike, pattern: str = DEFAULT_PATTERN) -> li
         try:
             v = float(v)
         except (TypeError, ValueError):
-            raise ParameterError(f"trial {str(p)!r}: voltage {v!r} is not a number") from None
+            raise ParameterError(f"{where}: voltage {v!r} is not a number") from None
+        if not math.isfinite(v):
+            raise ParameterError(f"{where}: voltage {v!r} is not finite; a finite number of volts is required")
         out.append(Trial(p, v, str(smp), opts))
     if not out:
         raise ParameterError(f"folder={str(root)!r} holds no trials (TIFF stacks, movies or folders of frames)")
@@ -125,15 +160,26 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
     ``plot``). A sidecar's px_per_mm / fps override the arguments. Returns (CSV path, rows,
     failures [(trial, reason)])."""
     from .. import __version__
-    from .._paths import atomic_write_text, check_output_file
+    from .._paths import atomic_write_text, check_output_file, is_ours
     from ..analysis.descriptors import describe
-    from .track import track
+    from .track import START_ENDS, track
 
+    # every input checked before the first trial is tracked
     out_p = check_output_file(out, (".csv",), what="out")
     if plot is not None:
         check_output_file(plot, (".png", ".pdf", ".svg"), what="plot")
-    failed_p = failures_path(out_p)
+    failed_p = check_output_file(failures_path(out_p), (".csv",), what="failures file")
+    px_per_mm = None if px_per_mm is None else positive("px_per_mm", px_per_mm)
+    fps = None if fps is None else positive("fps", fps)
+    n_last = positive_int("n_last", n_last)
+    if "field_angle" in track_kwargs:
+        track_kwargs["field_angle"] = finite("field_angle", track_kwargs["field_angle"])
+    if track_kwargs.get("start_end", "left") not in START_ENDS:
+        raise ParameterError(f"start_end={track_kwargs['start_end']!r} is not allowed; choose one of {', '.join(START_ENDS)}")
     trials = find_trials(folder, pattern)
+    for tr_ in trials:
+        if tr_.options.get("px_per_mm", px_per_mm) is None:
+            raise ParameterError(f"px_per_mm is needed for trial {str(tr_.path)!r}: give --px-per-mm or put it in the sidecar")
     rows: list[dict] = []
     failed: list[tuple[str, str]] = []
     it = trials
@@ -145,17 +191,17 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
         o = dict(tr_.options)
         ppm = o.pop("px_per_mm", px_per_mm)
         f = o.pop("fps", fps)
-        if ppm is None:
-            raise ParameterError(f"px_per_mm is needed for trial {str(tr_.path)!r}: give --px-per-mm or put it in the sidecar")
         kw = dict(track_kwargs)
         if "field_angle_deg" in o:
-            kw["field_angle"] = math.radians(float(o.pop("field_angle_deg")))
+            kw["field_angle"] = math.radians(o.pop("field_angle_deg"))
         kw.update(o)
         try:
             tk = track(tr_.path, px_per_mm=ppm, fps=f, **kw)
             d = describe(tk, n_last=n_last)
-        except ParameterError as exc:
-            failed.append((str(tr_.path), " ".join(str(exc).split())))
+        except Exception as exc:  # noqa: BLE001 - one trial's failure, with its reason; the batch goes on
+            why = " ".join(str(exc).split())
+            failed.append((str(tr_.path), why if isinstance(exc, ParameterError) else
+                           f"{type(exc).__name__}: {why}" if why else type(exc).__name__))
             continue
         if abs(math.cos(math.radians(d.direction_to_field_deg))) < math.cos(math.radians(45.0)):
             # the stroke swims along the field: this far across it, the field's direction is wrong
@@ -185,6 +231,8 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
         fw.writerow(("trial", "reason", "tracked_by"))
         fw.writerows([(a, b, f"flutterswim {__version__}") for a, b in failed])
         atomic_write_text(failed_p, fb.getvalue())
+    elif failed_p.is_file() and is_ours(failed_p):
+        failed_p.unlink()  # our failures of an earlier run: none of them failed now
     if plot is not None and rows:
         from ..fitting.data import plot_trials, read_trials, summarise
 

@@ -7,6 +7,7 @@ import json
 import math
 import sys
 
+from .._validate import finite, positive, positive_int
 from ..defaults import N_CYCLES_MOVIE
 
 __all__ = ["register"]
@@ -66,6 +67,8 @@ def _cmd_track(args) -> int:
     from .netcdf import save_track
     from .track import failures, track
 
+    positive_int("--last", args.last)  # checked before tracking, as the output paths
+    finite("--field-angle-deg", args.field_angle_deg)
     out = check_output_file(args.out, (".nc",), what="--out")
     if args.kymograph:
         check_output_file(args.kymograph, (".png", ".pdf", ".svg"), what="--kymograph")
@@ -98,6 +101,12 @@ def _cmd_track(args) -> int:
 def _cmd_batch(args) -> int:
     from .batch import DEFAULT_PATTERN, failures_path, track_batch
 
+    positive_int("--last", args.last)  # checked before tracking (track_batch checks them again)
+    for name, v in (("--px-per-mm", args.px_per_mm), ("--fps", args.fps)):
+        if v is not None:
+            positive(name, v)
+    if args.field_angle_deg is not None:
+        finite("--field-angle-deg", args.field_angle_deg)
     out, rows, failed = track_batch(args.folder, args.out, px_per_mm=args.px_per_mm, fps=args.fps,
                                     pattern=args.pattern or DEFAULT_PATTERN, n_last=args.last, plot=args.plot,
                                     progress=not args.quiet, dark_line=args.dark_line,

@@ -69,9 +69,9 @@ class Frames:
             yield self._crop(_gray(a))
 
 
-def parse_roi(roi: Any, shape: tuple[int, int]) -> tuple[int, int, int, int] | None:
+def parse_roi(roi: Any, shape: tuple[int, int] | None) -> tuple[int, int, int, int] | None:
     """(x0, y0, x1, y1) from a tuple or the string "x0,y0,x1,y1", checked against the frame
-    shape (H, W)."""
+    shape (H, W) (None: only the numbers and their order)."""
     if roi is None:
         return None
     if isinstance(roi, str):
@@ -80,8 +80,13 @@ def parse_roi(roi: Any, shape: tuple[int, int]) -> tuple[int, int, int, int] | N
         parts = list(roi)
     try:
         x0, y0, x1, y1 = (int(float(v)) for v in parts)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ParameterError(f"roi={roi!r} must be four integers x0,y0,x1,y1 (pixels)") from None
+    if shape is None:  # the numbers alone (the frame not read yet)
+        if not (0 <= x0 < x1 and 0 <= y0 < y1) or x1 - x0 < 8 or y1 - y0 < 8:
+            raise ParameterError(f"roi={roi!r} must satisfy 0 <= x0 < x1 and 0 <= y0 < y1 and span at least "
+                                 "8 x 8 pixels")
+        return x0, y0, x1, y1
     H, W = shape
     if not (0 <= x0 < x1 <= W and 0 <= y0 < y1 <= H) or x1 - x0 < 8 or y1 - y0 < 8:
         raise ParameterError(f"roi={roi!r} must satisfy 0 <= x0 < x1 <= {W} and 0 <= y0 < y1 <= {H} "
@@ -148,13 +153,19 @@ def _tiff_stack(p: Path) -> Frames:
 
 
 def _read_image(p: Path) -> np.ndarray:
-    if p.suffix.lower() in STACK_SUFFIXES:
-        import tifffile
+    try:
+        if p.suffix.lower() in STACK_SUFFIXES:
+            import tifffile
 
-        return tifffile.imread(p)
-    import imageio.v3 as iio
+            return tifffile.imread(p)
+        import imageio.v3 as iio
 
-    return iio.imread(p)
+        return iio.imread(p)
+    except (MemoryError, PermissionError):
+        raise
+    except Exception as exc:  # a damaged (e.g. truncated) frame fails in many ways inside the readers
+        raise ParameterError(f"frame {str(p)!r} cannot be read as an image ({type(exc).__name__}: "
+                             f"{' '.join(str(exc).split())})") from None
 
 
 def _image_shape(p: Path) -> tuple[int, ...]:
@@ -191,22 +202,42 @@ def _folder(p: Path) -> Frames:
                   lambda: (_read_image(f) for f in files))
 
 
+def _ffmpeg_said(exc: BaseException) -> str:
+    """A short reason from an imageio-ffmpeg error, whose text holds ffmpeg's whole log: its
+    first line and the log's last line (ffmpeg's verdict), without the "[in#0 @ 0x...]" tags."""
+    lines = [" ".join(re.sub(r"\[[^\]]*@ 0x[0-9a-f]+\]", "", ln).split()) for ln in str(exc).splitlines()]
+    lines = [ln for ln in lines if ln and not ln.startswith("===")]
+    if not lines:
+        return type(exc).__name__
+    said = lines[0] if len(lines) == 1 else f"{lines[0]}: {lines[-1]}"
+    return said if len(said) <= 200 else said[:197] + "..."
+
+
 def _movie(p: Path) -> Frames:
     import imageio_ffmpeg
 
-    gen = imageio_ffmpeg.read_frames(str(p), pix_fmt="gray", bpp=1)
-    meta = gen.__next__()
-    gen.close()
-    W, H = meta["size"]
-    fps = float(meta.get("fps") or 0) or None
-    n, _ = imageio_ffmpeg.count_frames_and_secs(str(p))
+    try:
+        gen = imageio_ffmpeg.read_frames(str(p), pix_fmt="gray", bpp=1)
+        meta = gen.__next__()
+        gen.close()
+        W, H = meta["size"]
+        fps = float(meta.get("fps") or 0) or None
+        n, _ = imageio_ffmpeg.count_frames_and_secs(str(p))
+    except (MemoryError, PermissionError):
+        raise
+    except Exception as exc:  # an empty, truncated or foreign file: ffmpeg's log is in the message
+        raise ParameterError(f"input={str(p)!r} cannot be read as a movie ({_ffmpeg_said(exc)})") from None
 
     def it() -> Iterator[np.ndarray]:
         g = imageio_ffmpeg.read_frames(str(p), pix_fmt="gray", bpp=1)
-        g.__next__()
         try:
+            g.__next__()
             for buf in g:
                 yield np.frombuffer(buf, np.uint8).reshape(H, W)
+        except (MemoryError, GeneratorExit):
+            raise
+        except Exception as exc:  # damaged after its header
+            raise ParameterError(f"input={str(p)!r} cannot be read as a movie ({_ffmpeg_said(exc)})") from None
         finally:
             g.close()
 

@@ -15,13 +15,14 @@ background.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from .._validate import ParameterError, non_negative, positive
+from .._validate import ParameterError, finite, finite_array, non_negative, positive, positive_int
 
 __all__ = ["Movie", "render", "line_image"]
 
@@ -114,8 +115,14 @@ def render(result: Any, *, um_per_px: float = 14.0, snr: float = 5.0, psf_sigma:
     defocus = non_negative("defocus", defocus)
     background = positive("background", background)
     read_noise = non_negative("read_noise", read_noise)
-    if not (isinstance(snr, (int, float)) and snr > 0):
+    if isinstance(snr, (bool, np.bool_)) or not isinstance(snr, numbers.Real) or not snr > 0:
         raise ParameterError(f"snr={snr!r} must be a number > 0 (math.inf for a noiseless movie)")
+    gradient = finite("gradient", gradient)
+    if not abs(gradient) < 2.0:  # the background 1 + gradient (u - 1/2), u in [0, 1], stays > 0
+        raise ParameterError(f"gradient={gradient!r} must satisfy -2 < gradient < 2 (the background stays positive)")
+    margin_px = positive_int("margin_px", margin_px, 0)
+    if seed is not None:
+        seed = positive_int("seed", seed, 0)
     if dtype not in ("float32", "uint16"):
         raise ParameterError(f"dtype={dtype!r} is unknown; choose 'float32' or 'uint16'")
     exposure = non_negative("exposure", exposure)
@@ -134,10 +141,17 @@ def render(result: Any, *, um_per_px: float = 14.0, snr: float = 5.0, psf_sigma:
         picked = t[frames] if frames is not None else t
         # the movie's frame interval (every second time picked: twice the result's)
         dt_frame = float(np.median(np.diff(picked if picked.size > 1 else t)))
+    if t.ndim != 1 or x.ndim != 2 or x.shape != y.shape or x.shape[0] != t.size:
+        raise ParameterError(f"result must hold t (T,) and x, y (T, P) of one shape; t has shape {t.shape}, "
+                             f"x {x.shape} and y {y.shape}")
     if frames is not None:
         t, x, y = t[frames], x[frames], y[frames]
-    if t.size < 1 or x.ndim != 2:
+    if t.size < 1:
         raise ParameterError("result must hold t (T,) and x, y (T, P) with T >= 1")
+    for name, a in (("t", t), ("x", x), ("y", y)):
+        finite_array(f"result.{name}", a)
+    if t.size > 1 and not np.all(np.diff(t) > 0):
+        raise ParameterError("result.t must increase strictly (the frames' times; the frame rate is taken from them)")
     px = um_per_px * 1e-6
     origin = np.array([x.min() - margin_px * px, y.min() - margin_px * px])
     xp, yp = (x - origin[0]) / px, (y - origin[1]) / px

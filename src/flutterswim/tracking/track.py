@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage as ndi
 
-from .._validate import ParameterError, positive, positive_int
+from .._validate import ParameterError, finite, non_negative, positive, positive_int
 from ..analysis.track import Track
 from .centreline import fit_centreline
 from .io import open_frames
@@ -377,6 +377,13 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     tip_k = positive("tip_k", tip_k)
     tip_floor_px = positive("tip_floor_px", tip_floor_px)
     sig = 1.2 if sigma is None else positive("sigma", sigma)  # checked before any frame is read
+    field_angle = finite("field_angle", field_angle)
+    t0 = finite("t0", t0)
+    min_contrast = non_negative("min_contrast", min_contrast)  # NaN would switch the checks off
+    length_tol = positive("length_tol", length_tol)
+    jump_tol = positive("jump_tol", jump_tol)
+    gap_fraction = non_negative("gap_fraction", gap_fraction)
+    window_px = non_negative("window_px", window_px)
     if smooth_frames != 0 and not (isinstance(smooth_frames, (int, np.integer)) and smooth_frames >= 7):
         raise ParameterError(f"smooth_frames={smooth_frames!r} is not allowed; give 0 (off) or a whole number "
                              "of frames >= 7 (the window of a quartic in time)")

@@ -1,0 +1,247 @@
+"""Tracking inputs: bad input is refused in one line before any long computation, and a batch
+records a failed trial and goes on (its finished trials kept)."""
+
+from __future__ import annotations
+
+import csv
+import importlib
+import json
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+pytest.importorskip("skimage")
+tifffile = pytest.importorskip("tifffile")
+
+import flutterswim as fs  # noqa: E402
+from flutterswim.cli import main  # noqa: E402
+from flutterswim.tracking import render, track, track_batch  # noqa: E402
+from flutterswim.tracking.io import open_frames, parse_roi  # noqa: E402
+
+FPS = 50.0
+trk = importlib.import_module("flutterswim.tracking.track")  # the module (the package's ``track`` is the function)
+
+
+def wave(T: int = 40, P: int = 25) -> SimpleNamespace:
+    """A 1 mm line carrying a travelling wave (5 Hz), advancing 1 mm/s: 4 strokes in T = 40 frames."""
+    t = np.arange(T) / FPS
+    s = np.linspace(0.0, 1e-3, P)[None, :]
+    x = s + 1e-3 * t[:, None]
+    y = 0.08e-3 * (s / 1e-3) * np.sin(2 * np.pi * s / 1.2e-3 - 2 * np.pi * 5.0 * t[:, None])
+    return SimpleNamespace(t=t, x=x, y=y)
+
+
+@pytest.fixture(scope="module")
+def movie():
+    return render(wave(), um_per_px=14.0, snr=8.0, seed=1, dtype="uint16")
+
+
+def _trials(folder, movie, names=("80V_sample1.tif",)):
+    folder.mkdir()
+    for n in names:
+        tifffile.imwrite(folder / n, movie.frames, photometric="minisblack")
+    return folder
+
+
+def _rows(p):
+    with open(p) as f:
+        return list(csv.DictReader(f))
+
+
+# ---- batch: a failed trial is recorded and the batch goes on --------------------------------------------------------
+
+def test_batch_corrupt_movie_is_a_failed_trial_and_the_others_are_kept(movie, tmp_path, capsys):
+    folder = _trials(tmp_path / "t", movie, ("80V_sample1.tif", "90V_sample3.tif"))
+    (folder / "85V_sample2.mp4").write_bytes(b"not a movie" * 20)
+    out = tmp_path / "trials.csv"
+    rc = main(["track-batch", str(folder), "--px-per-mm", str(movie.px_per_mm), "--fps", "50", "--last", "3",
+               "--out", str(out), "--quiet"])
+    cap = capsys.readouterr()
+    assert rc == 0, cap.err
+    assert [r["sample"] for r in _rows(out)] == ["1", "3"]
+    failed = _rows(tmp_path / "trials_failed.csv")
+    assert len(failed) == 1 and "85V_sample2.mp4" in failed[0]["trial"]
+    assert "cannot be read as a movie" in failed[0]["reason"] and len(failed[0]["reason"]) < 400
+    assert "tracked 2 of 3 trials" in cap.out
+
+
+def test_batch_any_error_of_one_trial_is_recorded(movie, tmp_path, monkeypatch):
+    """An unexpected exception (not a ParameterError) of one trial is that trial's failure."""
+    real = trk.track
+
+    def flaky(source, **kw):
+        if "sample2" in str(source):
+            raise ValueError("something broke\ninside")
+        return real(source, **kw)
+
+    monkeypatch.setattr(trk, "track", flaky)
+    folder = _trials(tmp_path / "t", movie, ("80V_sample1.tif", "85V_sample2.tif"))
+    p, rows, failed = track_batch(folder, tmp_path / "o.csv", px_per_mm=movie.px_per_mm, fps=FPS, n_last=3)
+    assert len(rows) == 1 and len(failed) == 1
+    assert "sample2" in failed[0][0] and failed[0][1] == "ValueError: something broke inside"
+    assert len(_rows(p)) == 1
+
+
+@pytest.mark.parametrize("sidecar, match", [
+    ({"voltage_V": 85, "sample": "s2", "field_angle_deg": "abc"}, "field_angle_deg='abc'"),
+    ({"voltage_V": 85, "sample": "s2", "fps": -3}, "fps=-3"),
+    ({"voltage_V": 85, "sample": "s2", "px_per_mm": "nan"}, "px_per_mm='nan'"),
+    ({"voltage_V": "inf", "sample": "s2"}, "voltage"),
+    ({"voltage_V": 85, "sample": "s2", "start_end": "up"}, "start_end='up'"),
+    ({"voltage_V": 85, "sample": "s2", "dark_line": "yes"}, "dark_line='yes'"),
+    ({"voltage_V": 85, "sample": "s2", "roi": "0,0,inf,100"}, "roi="),
+    ([1, 2], "not a JSON object"),
+])
+def test_batch_bad_sidecar_is_bad_input_before_any_trial_is_tracked(movie, tmp_path, monkeypatch, sidecar, match):
+    monkeypatch.setattr(trk, "track", lambda *a, **k: pytest.fail("a trial was tracked"))
+    folder = _trials(tmp_path / "t", movie, ("80V_sample1.tif", "b.tif"))
+    (folder / "b.json").write_text(json.dumps(sidecar))
+    with pytest.raises(fs.ParameterError, match=match) as exc:
+        track_batch(folder, tmp_path / "o.csv", px_per_mm=70.0, fps=FPS)
+    assert "b.json" in str(exc.value)
+    assert not (tmp_path / "o.csv").exists()
+
+
+def test_batch_missing_px_per_mm_is_bad_input_before_any_trial_is_tracked(movie, tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(trk, "track", lambda *a, **k: pytest.fail("a trial was tracked"))
+    folder = _trials(tmp_path / "t", movie, ("80V_sample1.tif", "b.tif"))
+    (folder / "80V_sample1.json").write_text(json.dumps({"voltage_V": 80, "sample": "1", "px_per_mm": 70}))
+    (folder / "b.json").write_text(json.dumps({"voltage_V": 85, "sample": "s2"}))
+    rc = main(["track-batch", str(folder), "--fps", "50", "--out", str(tmp_path / "o.csv"), "--quiet"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "px_per_mm" in err and "b.tif" in err
+
+
+@pytest.mark.parametrize("opt", [["--last", "0"], ["--fps", "nan"], ["--px-per-mm", "-3"],
+                                 ["--field-angle-deg", "nan"]])
+def test_batch_bad_global_option_exits_2_before_tracking(movie, tmp_path, monkeypatch, capsys, opt):
+    monkeypatch.setattr(trk, "track", lambda *a, **k: pytest.fail("a trial was tracked"))
+    folder = _trials(tmp_path / "t", movie)
+    args = {"--px-per-mm": "70", "--fps": "50"}
+    args[opt[0]] = opt[1]
+    rc = main(["track-batch", str(folder), *sum(map(list, args.items()), []), "--out", str(tmp_path / "o.csv"),
+               "--quiet"])
+    err = capsys.readouterr().err
+    assert rc == 2 and opt[0].lstrip("-").replace("-", "_")[:4] in err.replace("-", "_")
+    assert not (tmp_path / "o.csv").exists()
+
+
+def test_batch_foreign_failures_file_is_refused_before_computing(movie, tmp_path, monkeypatch):
+    monkeypatch.setattr(trk, "track", lambda *a, **k: pytest.fail("a trial was tracked"))
+    folder = _trials(tmp_path / "t", movie)
+    (tmp_path / "o_failed.csv").write_text("somebody else's table\n")
+    with pytest.raises(fs.ParameterError, match="o_failed.csv"):
+        track_batch(folder, tmp_path / "o.csv", px_per_mm=70.0, fps=FPS)
+    assert not (tmp_path / "o.csv").exists()
+
+
+def test_batch_stale_failures_file_of_ours_does_not_survive_a_clean_rerun(movie, tmp_path):
+    folder = _trials(tmp_path / "t", movie)
+    (folder / "85V_sample2.mp4").write_bytes(b"not a movie" * 20)
+    out = tmp_path / "o.csv"
+    _, rows, failed = track_batch(folder, out, px_per_mm=movie.px_per_mm, fps=FPS, n_last=3)
+    assert len(rows) == 1 and len(failed) == 1 and (tmp_path / "o_failed.csv").exists()
+    (folder / "85V_sample2.mp4").unlink()
+    _, rows, failed = track_batch(folder, out, px_per_mm=movie.px_per_mm, fps=FPS, n_last=3)
+    assert len(rows) == 1 and not failed
+    assert not (tmp_path / "o_failed.csv").exists()
+
+
+# ---- track: options checked before any frame is read ----------------------------------------------------------------
+
+@pytest.mark.parametrize("kw, match", [
+    ({"field_angle": math.nan}, "field_angle=nan"), ({"jump_tol": math.nan}, "jump_tol=nan"),
+    ({"min_contrast": math.nan}, "min_contrast=nan"), ({"window_px": math.nan}, "window_px=nan"),
+    ({"length_tol": math.nan}, "length_tol=nan"), ({"length_tol": -1.0}, "length_tol=-1"),
+    ({"window_px": -5.0}, "window_px=-5"), ({"gap_fraction": math.nan}, "gap_fraction=nan"),
+])
+def test_track_bad_options_are_refused_before_any_frame_is_read(tmp_path, kw, match):
+    with pytest.raises(fs.ParameterError, match=match):
+        track(tmp_path / "not-read.tif", px_per_mm=70.0, fps=50.0, **kw)
+
+
+@pytest.mark.parametrize("opt", [["--last", "0"], ["--field-angle-deg", "nan"]])
+def test_cli_track_bad_option_exits_2_before_writing(movie, tmp_path, capsys, monkeypatch, opt):
+    monkeypatch.setattr(trk, "track", lambda *a, **k: pytest.fail("tracked"))
+    tifffile.imwrite(tmp_path / "m.tif", movie.frames[:4], photometric="minisblack")
+    out = tmp_path / "m.nc"
+    rc = main(["track", str(tmp_path / "m.tif"), "--px-per-mm", "70", "--fps", "50", "--out", str(out),
+               "--json", "--quiet", *opt])
+    err = capsys.readouterr().err
+    assert rc == 2 and opt[0] in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+# ---- io: damaged inputs named in one short line ---------------------------------------------------------------------
+
+@pytest.mark.parametrize("roi", ["inf,0,100,100", "0,0,100,-inf", (0, 0, math.inf, 100)])
+def test_roi_not_finite_is_a_parameter_error(roi):
+    with pytest.raises(fs.ParameterError, match="roi="):
+        parse_roi(roi, (200, 200))
+
+
+@pytest.mark.parametrize("data", [b"", b"not a movie" * 20])
+def test_damaged_movie_is_a_short_parameter_error_naming_the_input(tmp_path, data):
+    p = tmp_path / "m.mp4"
+    p.write_bytes(data)
+    with pytest.raises(fs.ParameterError, match="input=.*m.mp4.*cannot be read as a movie") as exc:
+        open_frames(p)
+    assert len(str(exc.value)) < 400 and "ffmpeg version" not in str(exc.value)
+
+
+def test_truncated_png_in_a_frame_folder_is_named(tmp_path):
+    import imageio.v3 as iio
+
+    frames = np.random.default_rng(0).integers(0, 255, (4, 40, 50)).astype(np.uint8)
+    for i, f in enumerate(frames):
+        iio.imwrite(tmp_path / f"f{i}.png", f)
+    data = (tmp_path / "f2.png").read_bytes()
+    (tmp_path / "f2.png").write_bytes(data[: len(data) // 2])
+    fr = open_frames(tmp_path)
+    with pytest.raises(fs.ParameterError, match="f2.png"):
+        for _ in fr:
+            pass
+
+
+# ---- render: inputs -------------------------------------------------------------------------------------------------
+
+def _line(T=3, P=9):
+    t = np.arange(T) / FPS
+    x = np.linspace(0.0, 0.5e-3, P)[None, :] + 1e-4 * t[:, None]
+    return SimpleNamespace(t=t, x=x, y=np.zeros_like(x))
+
+
+@pytest.mark.parametrize("change, kw, match", [
+    (None, {"gradient": math.nan}, "gradient=nan"),
+    (None, {"gradient": 5.0}, "gradient=5"),
+    (None, {"gradient": -2.0}, "gradient=-2"),
+    (None, {"margin_px": -3}, "margin_px=-3"),
+    (None, {"snr": True}, "snr=True"),
+    (None, {"seed": "a"}, "seed='a'"),
+    ("nan", {}, "x"),
+    ("shape", {}, "shape"),
+    ("short_t", {}, "t"),
+    ("reversed_t", {}, "increas"),
+    ("repeated_t", {}, "increas"),
+])
+def test_render_bad_inputs_are_parameter_errors(change, kw, match):
+    r = _line()
+    if change == "nan":
+        r.x[1, 2] = np.nan
+    elif change == "shape":
+        r.y = r.y[:, :-1]
+    elif change == "short_t":
+        r.t = r.t[:2]
+    elif change == "reversed_t":
+        r.t = r.t[::-1].copy()
+    elif change == "repeated_t":
+        r.t = np.array([0.0, 0.02, 0.02])
+    with pytest.raises(fs.ParameterError, match=match):
+        render(r, **kw)
+
+
+def test_render_accepts_numpy_numbers():
+    mv = render(_line(), snr=np.float32(5.0), seed=np.int64(3), margin_px=np.int64(8), gradient=-1.5)
+    assert mv.frames.shape[0] == 3 and mv.fps == pytest.approx(FPS)
