@@ -126,3 +126,13 @@ def test_own_jpeg_json_and_csv_are_recognised(run, tmp_path):
     assert is_ours(tmp_path / "d.json")
     (tmp_path / "t.csv").write_text("trial,period_s,tracked_by\na.tif,0.4,flutterswim 0.1.0\n")
     assert is_ours(tmp_path / "t.csv")
+
+
+def test_a_batch_csv_of_only_its_header_is_ours_a_users_header_is_not(tmp_path):
+    """A batch whose trials all failed writes only the header: a rerun must be able to replace it."""
+    from flutterswim.tracking.batch import CSV_COLUMNS
+
+    (tmp_path / "t.csv").write_text(",".join(CSV_COLUMNS) + "\n")
+    assert is_ours(tmp_path / "t.csv")
+    (tmp_path / "u.csv").write_text("voltage_V,sample,tracked_by\n")
+    assert not is_ours(tmp_path / "u.csv")

@@ -39,6 +39,8 @@ DEFAULT_PATTERN = r"(?P<voltage>\d+(?:[.p]\d+)?)\s*V.*?sample[-_ ]?(?P<sample>[A
 CSV_COLUMNS = ("voltage_V", "sample", "period_s", "advance_mm", "lateral_mm", "leading_lateral_mm",
                "period_std_s", "advance_std_mm", "n_cycles", "body_length_mm", "body_length_spread",
                "n_frames", "n_failed_frames", "trial", "tracked_by")
+#: Columns of the failures file (``failures_path``).
+FAILED_COLUMNS = ("trial", "reason", "tracked_by")
 
 
 @dataclass(frozen=True)
@@ -228,7 +230,7 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
         check_output_file(failed_p, (".csv",), what="failures file")
         fb = io.StringIO()
         fw = csv.writer(fb, lineterminator="\n")
-        fw.writerow(("trial", "reason", "tracked_by"))
+        fw.writerow(FAILED_COLUMNS)
         fw.writerows([(a, b, f"flutterswim {__version__}") for a, b in failed])
         atomic_write_text(failed_p, fb.getvalue())
     elif failed_p.is_file() and is_ours(failed_p):
