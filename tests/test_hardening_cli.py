@@ -147,3 +147,46 @@ def test_saving_a_run_without_xarray_names_the_extra(tmp_path, monkeypatch):
         with pytest.raises(ModuleNotFoundError, match=r"flutterswim\[io\]") as info:
             call()
         assert info.value.name == "xarray"
+
+
+def test_interrupt_inside_a_compiled_kernel_exits_130(monkeypatch, capsys):
+    """Ctrl-C inside a numba kernel surfaces as a SystemError whose context is the interrupt:
+    exit 130 and 'interrupted', not 'failed: SystemError' with status 1."""
+    from flutterswim import cli
+
+    def kernel_interrupted(args):
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt:
+            raise SystemError("CPUDispatcher(<function jacobian>) returned a result with an exception set")  # noqa: B904 - the implicit context, as numba leaves it
+
+    monkeypatch.setattr(cli, "_describe", kernel_interrupted)
+    assert cli.main(["describe", "x.nc"]) == 130
+    assert "interrupted" in capsys.readouterr().err
+    assert not cli._interrupted(SystemError("no interrupt here"))
+
+
+def test_negative_roi_is_a_value_not_an_option():
+    from flutterswim.cli import build_parser
+
+    a = build_parser().parse_args(["track", "m.tif", "--px-per-mm", "70", "--roi", "-5,0,100,100", "--out", "o.nc"])
+    assert a.roi == "-5,0,100,100"
+
+
+def test_tracked_movie_animates_and_a_too_short_one_is_named(tmp_path):
+    """``animate`` takes a tracked movie as ``plot`` and ``describe`` do; describing a track of
+    three frames names the file in its one line."""
+    from types import SimpleNamespace
+
+    from flutterswim.tracking import render, track
+    from flutterswim.tracking.netcdf import save_track
+
+    run = fs.simulate(fs.PAPER, 0.3, n_segments=8, frame_dt=0.02)
+    mv = render(SimpleNamespace(t=run.t, x=run.x, y=run.y), um_per_px=14.0, snr=10.0, seed=0)
+    save_track(track(mv, px_per_mm=mv.px_per_mm, fps=50.0, periodic=False), tmp_path / "t.nc")
+    out = _cli("animate", tmp_path / "t.nc", tmp_path / "t.gif", "--quiet")
+    assert out.returncode == 0, out.stderr
+    assert (tmp_path / "t.gif").stat().st_size > 0
+    save_track(track(mv.frames[:3], px_per_mm=mv.px_per_mm, fps=50.0, periodic=False), tmp_path / "t3.nc")
+    line = _one_line_error(_cli("describe", tmp_path / "t3.nc"))
+    assert "t3.nc" in line

@@ -25,7 +25,8 @@ class _Parser(argparse.ArgumentParser):
     def __init__(self, *a, **kw):
         super().__init__(*a, **kw)
         self._negative_number_matcher = re.compile(
-            r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
+            r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?(,[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?)*$"
+            r"|^-(inf|infinity|nan)(,.*)?$", re.IGNORECASE)  # also "--roi -5,0,100,100"
 
     def error(self, message: str):  # noqa: D401 - argparse API
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
@@ -100,7 +101,12 @@ def _describe(args: argparse.Namespace) -> int:
     n_last = args.last
     if n_last is None:
         n_last = defaults.N_CYCLES_MOVIE if "px_per_mm" in (getattr(obj, "meta", None) or {}) else defaults.N_CYCLES
-    desc = describe(obj, n_last=n_last, max_gap=args.max_gap, **kw)
+    from ._validate import ParameterError
+
+    try:
+        desc = describe(obj, n_last=n_last, max_gap=args.max_gap, **kw)
+    except ParameterError as exc:  # name the file (e.g. a track of too few frames)
+        raise ParameterError(f"run={args.run!r}: {exc}") from None
     d = desc.to_dict()
     if args.json:
         print(json.dumps(d, indent=2))
@@ -140,9 +146,8 @@ def _animate(args: argparse.Namespace) -> int:
 
     check_output_file(args.out, (".mp4", ".gif"), what="out")
     from .plotting.animation import animate
-    from .result import load
 
-    animate(load(args.run), args.out, fps=args.fps, progress=not args.quiet)
+    animate(_load_run_or_track(args.run), args.out, fps=args.fps, progress=not args.quiet)
     print(f"wrote {args.out}")
     return 0
 
@@ -293,6 +298,19 @@ def _quiet_warnings() -> None:
     warnings.showwarning = show
 
 
+def _interrupted(exc: BaseException) -> bool:
+    """True if a KeyboardInterrupt is in the exception's chain (numba's dispatcher reports an
+    interrupt inside a kernel as "SystemError: ... returned a result with an exception set")."""
+    seen = set()
+    e: BaseException | None = exc
+    while e is not None and id(e) not in seen:
+        if isinstance(e, KeyboardInterrupt):
+            return True
+        seen.add(id(e))
+        e = e.__cause__ or e.__context__
+    return False
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
@@ -318,6 +336,9 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:
         return 1
     except Exception as exc:  # noqa: BLE001 - every error becomes one line (traceback with --debug)
+        if _interrupted(exc):  # Ctrl-C inside a compiled kernel surfaces as its SystemError
+            print(f"flutterswim {args.command}: interrupted", file=sys.stderr)
+            return 130
         if debug:
             import traceback
 
