@@ -5,6 +5,7 @@ stability and fit commands' up-front checks, and the trial file's checks."""
 import math
 import warnings
 
+import numpy as np
 import pytest
 
 from flutterswim import cli
@@ -86,3 +87,81 @@ def test_plot_sweep_branch_is_checked(tmp_path, capsys):
     sweep(["kappa_E_ratio=1,2"], out=str(plain), backend="serial", point_fn=fake, progress=False)
     assert cli.main(["plot-sweep", str(plain), "--branch", "down", "--out", str(png)]) == 2
     assert "branch" in capsys.readouterr().err and not png.exists()
+
+
+# ---------------------------------------------------------------------------------- orbit branches
+@pytest.fixture(scope="module")
+def tau_branch(tmp_path_factory):
+    """A branch below its Hopf point (the stroke exists for tau below tau_Hopf ~ 1.2)."""
+    pytest.importorskip("matplotlib")
+    d = tmp_path_factory.mktemp("tau")
+    out, png = d / "tau.nc", d / "tau.png"
+    rc = cli.main(["branch", "tau=0.1:2", "--segments", "8", "--steps", "16", "--points", "5", "--quiet",
+                   "--out", str(out), "--plot", str(png)])
+    return rc, out, png
+
+
+def _straight_line(fig):
+    ax = fig.axes[0]
+    return [ln for ln in ax.lines if ln.get_color() == "0.5"][0]
+
+
+def test_branch_below_the_hopf_point_is_drawn_on_the_requested_range(tau_branch):
+    import xarray as xr
+
+    from flutterswim.orbits.plot import plot_branch
+
+    rc, out, png = tau_branch
+    assert rc == 0 and png.is_file()
+    ds = xr.open_dataset(out, engine="h5netcdf")
+    x, hopf = ds["tau"].values, ds.attrs["hopf_tau"]
+    assert np.all(x < hopf) and x.min() == pytest.approx(0.1)
+    for fig in (plot_branch(ds, x_range=(0.1, 2.0)), plot_branch(ds)):  # the CLI's range, the file's
+        lo, hi = fig.axes[0].get_xlim()
+        assert lo <= 0.1 and hi >= 2.0 and lo < hopf < hi
+        # the straight state is stable above the Hopf point (supercritical, branch below)
+        xs = sorted(_straight_line(fig).get_xdata())
+        assert xs[0] == pytest.approx(hopf) and xs[1] == pytest.approx(2.0)
+
+
+def test_plot_branch_of_a_file_with_range_end_runs_forwards(tau_branch, tmp_path):
+    import xarray as xr
+
+    from flutterswim.orbits.plot import plot_branch
+
+    _, out, _ = tau_branch
+    ds = xr.open_dataset(out, engine="h5netcdf").load()
+    ds.attrs["range_end"] = 3.0
+    ds = ds.isel(tau=slice(0, 6))  # a short branch: far from its end of the range
+    fig = plot_branch(ds)
+    lo, hi = fig.axes[0].get_xlim()
+    assert lo < hi and lo <= float(ds["tau"].min()) and hi >= 3.0
+    png = tmp_path / "b.png"
+    src = tmp_path / "b.nc"
+    ds.to_netcdf(src, engine="h5netcdf")
+    assert cli.main(["plot-branch", str(src), "--out", str(png)]) == 0 and png.is_file()
+
+
+def test_branch_stopping_short_exits_1_and_keeps_the_file(tmp_path, monkeypatch, capsys):
+    from flutterswim.orbits import continuation
+
+    real = continuation.continue_orbits
+    monkeypatch.setattr(continuation, "continue_orbits", lambda *a, **kw: real(*a, **kw, max_points=3))
+    out = tmp_path / "s.nc"
+    rc = cli.main(["branch", "kappa_E_ratio=0.6:2", "--segments", "8", "--steps", "16", "--points", "5",
+                   "--quiet", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert rc == 1 and out.is_file()
+    assert err.count("\n") == 1 and "max_points=3" in err and str(out) in err
+
+
+def test_branch_at_large_eta_perp_reaches_the_end(tmp_path):
+    """The closing tolerance is relative to the state's scale: at N = 8 the absolute 1e-10 was
+    below the round-off floor near eta_perp = 163 and the branch stopped there."""
+    import xarray as xr
+
+    out = tmp_path / "eta.nc"
+    rc = cli.main(["branch", "eta_perp=10:300", "--segments", "8", "--steps", "16", "--points", "5", "--quiet",
+                   "--out", str(out)])
+    assert rc == 0
+    assert xr.open_dataset(out, engine="h5netcdf")["eta_perp"].values[-1] == 300.0
