@@ -2,6 +2,7 @@
 file, axis parsing, orbit branches that stop short or lie below the Hopf point, the
 stability and fit commands' up-front checks, and the trial file's checks."""
 
+import importlib
 import math
 import warnings
 
@@ -165,3 +166,65 @@ def test_branch_at_large_eta_perp_reaches_the_end(tmp_path):
                    "--out", str(out)])
     assert rc == 0
     assert xr.open_dataset(out, engine="h5netcdf")["eta_perp"].values[-1] == 300.0
+
+
+# ---------------------------------------------------------------------------------- stability, fit
+def test_stability_step_too_large_is_refused_before_any_file(tmp_path, capsys):
+    out = tmp_path / "st"
+    assert cli.main(["stability", "--out", str(out), "--step", "1000", "--quiet"]) == 2
+    assert not out.exists() and "step" in capsys.readouterr().err
+
+
+HEADER = "voltage_V,sample,period_s,advance_mm,lateral_mm\n"
+
+
+def _no_fit(*a, **kw):
+    raise AssertionError("the fit ran")
+
+
+def test_fit_bootstrap_negative_is_refused_before_fitting(tmp_path, monkeypatch, capsys):
+    fit_module = importlib.import_module("flutterswim.fitting.fit")
+
+    csv = tmp_path / "t.csv"
+    csv.write_text(HEADER + "3,a,0.5,0.30,1.0\n3,b,0.6,0.32,1.1\n3,c,0.55,0.28,0.9\n")
+    monkeypatch.setattr(fit_module, "fit", _no_fit)
+    out = tmp_path / "f.json"
+    assert cli.main(["fit", str(csv), "--bootstrap", "-3", "--no-extrapolate", "--out", str(out)]) == 2
+    assert "--bootstrap=-3" in capsys.readouterr().err and not out.exists()
+    monkeypatch.undo()
+
+    class Model:  # any use of the model means the fit started
+        def __getattr__(self, name):
+            raise AssertionError("the fit ran")
+
+    with pytest.raises(ParameterError, match="bootstrap=-3"):
+        fit_module.fit([0.5, 0.3, 1.0], [0.01, 0.01, 0.01], model=Model(), bootstrap=-3)
+
+
+def test_trials_with_a_nan_voltage_name_the_file_and_row(tmp_path):
+    from flutterswim.fitting.data import read_trials
+
+    csv = tmp_path / "t.csv"
+    csv.write_text(HEADER + "3,a,0.5,0.3,1.0\nnan,b,0.6,0.3,1.1\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ParameterError, match=r"t\.csv.*row 3.*voltage_V"):
+            read_trials(csv)
+
+
+def test_identical_trials_are_named_with_their_voltage_and_rows(tmp_path, monkeypatch, capsys):
+    fit_module = importlib.import_module("flutterswim.fitting.fit")
+    from flutterswim.fitting.data import read_trials, summarise
+
+    csv = tmp_path / "same.csv"
+    csv.write_text(HEADER + "2,x,0.4,0.2,0.8\n3,a,0.5,0.3,1.0\n3,a,0.5,0.3,1.0\n3,a,0.5,0.3,1.0\n")
+    with pytest.warns(UserWarning, match="rows 3, 4, 5"):
+        trials = read_trials(csv)
+    # no spread: the standard error is exactly zero (std of equal numbers), not round-off
+    assert np.all(summarise(trials).at(3.0)[1] == 0.0)
+    monkeypatch.setattr(fit_module, "fit", _no_fit)
+    out = tmp_path / "f.json"
+    assert cli.main(["fit", str(csv), "--no-extrapolate", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "same.csv" in err and "3 V" in err and "rows 3, 4, 5" in err and "identical" in err
+    assert not out.exists()
