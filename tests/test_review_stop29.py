@@ -3,7 +3,6 @@ file, axis parsing, orbit branches that stop short or lie below the Hopf point, 
 stability and fit commands' up-front checks, and the trial file's checks."""
 
 import importlib
-import math
 import warnings
 
 import numpy as np
