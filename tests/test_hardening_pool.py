@@ -202,12 +202,31 @@ def test_unreachable_scheduler_fails_fast_naming_the_address(tmp_path):
     assert "tcp://127.0.0.1:9" in r.stderr and len(r.stderr.strip().splitlines()) == 1
 
 
-def test_failure_reasons_are_listed_with_no_progress(tmp_path):
+def _fails_above_one(task):
+    if task["values"]["chi"] > 1.0:
+        raise RuntimeError("the solver failed at t=0.5")
+    return {"a": 1.0}
+
+
+_fails_above_one.variables = ["a"]
+
+
+def test_failure_reasons_are_listed_with_no_progress(tmp_path, capsys):
+    from flutterswim.sweep import sweep
+
+    ds = sweep({"chi": [1.0, 2.0]}, out=str(tmp_path / "f.zarr"), backend="serial", progress=False,
+               point_fn=_fails_above_one)
+    err = capsys.readouterr().err
+    assert ds.attrs["n_failed"] == 1
+    assert "1 of 2 points failed" in err and "the solver failed at t=0.5" in err
+
+
+def test_bad_axis_value_is_refused_before_any_point(tmp_path):
     r = subprocess.run([sys.executable, "-m", "flutterswim", "sweep", "tau=0.375,-1", "--out", str(tmp_path / "f.zarr"),
                         "--backend", "serial", "--no-progress", "--n-segments", "8", "--t-cap", "1",
                         "--n-cycles", "1"], capture_output=True, text=True, timeout=120)
-    assert r.returncode == 1 and "Traceback" not in r.stderr
-    assert "1 of 2 points failed" in r.stderr and "tau=-1.0" in r.stderr
+    assert r.returncode == 2 and "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert "tau=-1.0" in r.stderr and not (tmp_path / "f.zarr").exists()
 
 
 def test_bad_sweep_settings_are_refused_before_any_point(tmp_path):

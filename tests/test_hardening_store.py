@@ -11,6 +11,7 @@ import pytest
 import xarray as xr
 
 import flutterswim as fs
+from flutterswim._validate import ParameterError
 from flutterswim.sweep import SweepStoreError, sweep
 from flutterswim.sweep.store import SweepStore
 
@@ -152,15 +153,20 @@ def test_xarray_reads_the_store_without_flutterswim(tmp_path):
 
 def test_real_sweep_variables_have_units_and_failure_reasons_are_strings(tmp_path):
     out = tmp_path / "r.zarr"
-    sweep({"tau": [0.375, -1.0]}, base=fs.PAPER.replace(kappa_E=0.0), out=str(out), backend="serial",
-          progress=False, settings={"n_segments": 8, "t_cap": 2.0, "chunk": 1.0, "n_cycles": 1})
+    kw = dict(base=fs.PAPER.replace(kappa_E=0.0), out=str(out), backend="serial", progress=False,
+              settings={"n_segments": 8, "t_cap": 2.0, "chunk": 1.0, "n_cycles": 1})
+    # a bad axis value is refused before the store is created (the checks a point makes)
+    with pytest.raises(ParameterError, match="tau=-1.0"):
+        sweep({"tau": [0.375, -1.0]}, **kw)
+    assert not out.exists()
+    sweep({"tau": [0.375, 0.5]}, **kw)
     ds = xr.open_zarr(str(out))
     assert list(ds["period_s"].dims) == ["tau"]
     for name in ds.variables:
         assert ds[name].attrs.get("units") is not None and ds[name].attrs.get("long_name"), name
     assert ds["period_s"].attrs["units"] == "s" and ds["frequency_hz"].attrs["units"] == "Hz"
     reasons = [str(r) for r in ds["reason"].values]
-    assert reasons[0] == "" and "tau=-1.0" in reasons[1]
+    assert reasons == ["", ""]
 
 
 def test_continuation_store_has_a_branch_dimension(tmp_path):

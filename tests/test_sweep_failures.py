@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from flutterswim._validate import ParameterError
 from flutterswim.sweep import open_sweep, sweep
 
 
@@ -45,13 +46,14 @@ def test_failures_are_recorded_and_do_not_stop(tmp_path, backend, capsys):
     assert list(again["reason"].values) == list(reason)
 
 
-def test_real_point_failure_is_recorded():
-    """A real simulation point with an invalid parameter fails with the parameter's message;
-    the valid point still runs (and is the straight state at zero field)."""
-    ds = sweep({"tau": [0.375, -1.0]}, base=__import__("flutterswim").PAPER.replace(kappa_E=0.0),
-               backend="serial", progress=False,
-               settings={"n_segments": 8, "t_cap": 2.0, "chunk": 1.0, "rtol": 1e-3, "atol": 1e-5, "n_cycles": 1})
-    assert ds["done"].all()
-    np.testing.assert_array_equal(ds["failed"].values, [False, True])
-    assert "tau=-1.0" in str(ds["reason"].values[1]) and "> 0" in str(ds["reason"].values[1])
+def test_real_point_with_a_bad_parameter_is_refused_up_front():
+    """A sweep with an invalid parameter value is refused before any point runs, with the
+    parameter's message (the checks a point makes); a valid point runs (and is the straight
+    state at zero field)."""
+    kw = dict(base=__import__("flutterswim").PAPER.replace(kappa_E=0.0), backend="serial", progress=False,
+              settings={"n_segments": 8, "t_cap": 2.0, "chunk": 1.0, "rtol": 1e-3, "atol": 1e-5, "n_cycles": 1})
+    with pytest.raises(ParameterError, match=r"tau=-1.0 must be > 0"):
+        sweep({"tau": [0.375, -1.0]}, **kw)
+    ds = sweep({"tau": [0.375]}, **kw)
+    assert ds["done"].all() and not ds["failed"].any()
     assert bool(ds["straight"].values[0])

@@ -53,15 +53,16 @@ def _cmd_fit(args) -> int:
     import numpy as np
 
     from .._paths import check_output_file
-    from .._validate import ParameterError
+    from .._validate import ParameterError, positive_int
     from ..params import preset
-    from .data import read_trials, summarise
+    from .data import check_spread, read_trials, summarise
     from .fit import fit
 
     out = check_output_file(args.out, (".json",))
     if args.plot:
         check_output_file(args.plot, (".png", ".pdf", ".svg"), what="--plot")
     base = preset(args.preset)
+    positive_int("--bootstrap", args.bootstrap, minimum=0)  # before the data are read or anything is fitted
     if args.joint and (args.paper_cost or args.profiles or args.bootstrap):
         raise ParameterError("--joint fits by the SEM-weighted cost, without profiles or bootstrap: --paper-cost, "
                              "--profiles and --bootstrap are for one voltage")
@@ -71,6 +72,8 @@ def _cmd_fit(args) -> int:
         return _joint(args, base, trials, summary, out)
     v = args.voltage if args.voltage is not None else float(summary.voltage_V[np.argmax(summary.n)])
     mean, sem = summary.at(v)
+    if not args.paper_cost:
+        check_spread(trials, summary, [summary.voltage_V[np.isclose(summary.voltage_V, v)][0]])
     if not args.paper_cost and not np.all(np.isfinite(sem)):
         raise ParameterError(f"voltage {v:g} V has {int(summary.n[np.isclose(summary.voltage_V, v)][0])} trial(s): "
                              "the SEM needs at least two (or use --paper-cost)")
@@ -122,6 +125,9 @@ def _joint(args, base, trials, summary, out) -> int:
     from .voltages import fit_voltages
 
     ok = np.all(np.isfinite(summary.sem), axis=1)
+    from .data import check_spread
+
+    check_spread(trials, summary, summary.voltage_V[ok])
     if ok.sum() < 2:
         raise ParameterError(f"--joint needs two or more voltages with two or more trials each; the CSV has "
                              f"{int(ok.sum())} ({', '.join(f'{v:g} V' for v in summary.voltage_V[ok]) or 'none'})")

@@ -15,7 +15,7 @@ import numpy as np
 
 from .._validate import ParameterError
 
-__all__ = ["Trials", "Summary", "read_trials", "summarise", "plot_trials", "COLUMNS"]
+__all__ = ["Trials", "Summary", "read_trials", "summarise", "check_spread", "plot_trials", "COLUMNS"]
 
 COLUMNS = ("voltage_V", "sample", "period_s", "advance_mm", "lateral_mm")
 DESCRIPTORS = ("period_s", "advance_mm", "lateral_mm")
@@ -28,6 +28,7 @@ class Trials:
     voltage_V: np.ndarray
     sample: np.ndarray
     values: np.ndarray  # (n, 3): period_s, advance_mm, lateral_mm
+    source: str = ""  # the file read (for messages)
 
 
 @dataclass(frozen=True)
@@ -72,10 +73,44 @@ def read_trials(path: str | Path) -> Trials:
         except (TypeError, ValueError):
             raise ParameterError(f"trials={str(p)!r}, row {i + 2}: a number is required in "
                                  f"{', '.join(('voltage_V',) + DESCRIPTORS)}") from None
+        if not math.isfinite(volt[i]):
+            raise ParameterError(f"trials={str(p)!r}, row {i + 2}: voltage_V={r['voltage_V']!r} is not finite; "
+                                 "a finite voltage is required")
     if not (np.all(np.isfinite(vals)) and np.all(vals[:, 0] > 0) and np.all(vals[:, 1:] >= 0)):
         raise ParameterError(f"trials={str(p)!r}: periods must be > 0 and advances and lateral "
                              "excursions >= 0, all finite")
-    return Trials(volt, np.array([r["sample"] for r in rows]), vals)
+    _warn_repeated(p, rows)
+    return Trials(volt, np.array([r["sample"] for r in rows]), vals, str(p))
+
+
+def _warn_repeated(p: Path, rows: list[dict]) -> None:
+    """Warn (not refuse: real trials may coincide) about rows that repeat another row."""
+    import warnings
+
+    seen: dict[tuple, list[int]] = {}
+    for i, r in enumerate(rows):
+        seen.setdefault(tuple(str(r[c]).strip() for c in COLUMNS), []).append(i + 2)
+    repeats = [g for g in seen.values() if len(g) > 1]
+    if repeats:
+        warnings.warn(f"trials={str(p)!r}: rows {'; '.join(', '.join(map(str, g)) for g in repeats)} repeat the "
+                      "same trial (copied rows?)", UserWarning, stacklevel=3)
+
+
+def check_spread(trials: Trials, summary: "Summary", voltages=None) -> None:
+    """Refuse voltages (default: all with two or more trials) whose trials have no spread in a
+    descriptor: its standard error is 0 and cannot weight a fit (identical trials)."""
+    vs = summary.voltage_V if voltages is None else np.atleast_1d(np.asarray(voltages, float))
+    for v in vs:
+        at = trials.voltage_V == v
+        if at.sum() < 2:
+            continue
+        same = [c for k, c in enumerate(DESCRIPTORS) if np.ptp(trials.values[at, k]) == 0]
+        if same:
+            rows = ", ".join(str(i + 2) for i in np.nonzero(at)[0])
+            raise ParameterError(
+                f"trials={trials.source!r}: at {v:g} V the {int(at.sum())} trials (rows {rows}) have the same "
+                f"{' and '.join(same)}: no spread, so the standard error is 0 and cannot weight the fit (identical "
+                "trials: copied rows?); correct the file, or use the paper's cost (--paper-cost)")
 
 
 def summarise(trials: Trials) -> Summary:
@@ -86,6 +121,9 @@ def summarise(trials: Trials) -> Summary:
     mean = np.array([trials.values[trials.voltage_V == v].mean(axis=0) for v in vs])
     sem = np.array([trials.values[trials.voltage_V == v].std(axis=0, ddof=1) / math.sqrt(k) if k > 1
                     else np.full(3, np.nan) for v, k in zip(vs, n)])
+    # identical trials have no spread: exactly 0 (not the round-off of their mean)
+    for i, v in enumerate(vs):
+        sem[i, np.ptp(trials.values[trials.voltage_V == v], axis=0) == 0] = 0.0 if n[i] > 1 else np.nan
     return Summary(vs, n, mean, sem)
 
 

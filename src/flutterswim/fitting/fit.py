@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validate import ParameterError, positive
+from .._validate import ParameterError, positive, positive_int
 from ..params import Parameters, preset
 from .model import DescriptorModel, NotSwimming, Unresolved, to_identifiable, to_physical
 from .uncertainty import NAMES, covariance, identifiability_card
@@ -141,6 +141,7 @@ def fit(measured, sem=None, *, base: Parameters | None = None, guess=PAPER_GUESS
     ``backend``, ``workers``:
     a sweep backend (``"processes"``, ``"dask-local"``, ...) on which the finite-difference
     orbits of each Jacobian are computed in parallel (default: in this process)."""
+    bootstrap = positive_int("bootstrap", bootstrap, minimum=0)  # before any orbit is computed
     if backend is None or not hasattr(model if model is not None else DescriptorModel, "prefetch"):
         return _fit(measured, sem, base=base, guess=guess, cost=cost, tip=tip, model=model, profiles=profiles,
                     bootstrap=bootstrap, n_segments=n_segments, extrapolate=extrapolate, seed=seed)

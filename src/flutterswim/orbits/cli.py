@@ -84,6 +84,12 @@ def _cmd_branch(args) -> int:
 
         plot_branch(ds, args.plot, x_range=(min(lo, hi), max(lo, hi)))
         print(f"figure: {args.plot}")
+    if br.values[-1] != to:  # the last corrector lands exactly on `to` when the range is reached
+        import sys
+
+        print(f"flutterswim branch: the branch stopped short of {name}={to:g} ({br.message}); the partial "
+              f"branch ({len(br.values)} orbits up to {name}={br.values[-1]:.6g}) is saved in {out}", file=sys.stderr)
+        return 1
     return 0
 
 
@@ -106,7 +112,6 @@ def _cmd_plot(args) -> int:
         raise ParameterError(f"branch={str(src)!r} is not a readable NetCDF file ({exc.__class__.__name__})") from None
     if "parameter" not in ds.attrs or ds.attrs["parameter"] not in ds.coords:
         raise ParameterError(f"branch={str(src)!r} is not a flutterswim branch (no 'parameter' attribute)")
-    lo = ds.attrs.get("range_start")
-    plot_branch(ds, out, x_range=(lo, float(ds[ds.attrs['parameter']].max())) if lo is not None else None)
+    plot_branch(ds, out)  # the range from the file's range_start/range_end and the branch itself
     print(f"figure: {out}")
     return 0

@@ -141,7 +141,8 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
                     max_newton: int = 8, progress: bool = False, max_points: int | None = None) -> Branch:
     """Continue the stroke from the Hopf point along ``parameter`` up to ``to``, with at least
     ``n_points`` orbits (more where the branch bends). The default resolution is the sweeps'
-    (``flutterswim.defaults.SWEEP_N_SEGMENTS``, with its stated accuracy)."""
+    (``flutterswim.defaults.SWEEP_N_SEGMENTS``, with its stated accuracy). ``tol``: closing
+    residual max|Phi(u) - u| relative to 1 + max|u| (see :func:`_scaled`)."""
     t_start = time.perf_counter()
     axis = Axis(params, parameter)
     to = finite("to", to)
@@ -264,7 +265,7 @@ def _newton_bordered(axis, n, steps, x, warm, conditions, cond_tol, tol, max_new
         r = fl.y[-1, 2:] - u
         res = float(np.max(np.abs(r)))
         c, rows = conditions(x)
-        if res < tol and np.max(np.abs(c)) < cond_tol:
+        if res < _scaled(tol, u) and np.max(np.abs(c)) < cond_tol:
             _, final = _closing(axis, n, steps, u, T, p, fl, True)
             return x, sysm, final, float(np.max(np.abs(final.y[-1, 2:] - u))), it
         if dphi_dp is None:
@@ -280,6 +281,15 @@ def _newton_bordered(axis, n, steps, x, warm, conditions, cond_tol, tol, max_new
         if not (np.all(np.isfinite(x)) and x[m] > 0):
             raise OrbitNotFound(f"{what}: Newton left the admissible region at iteration {it}")
     raise OrbitNotFound(f"{what}: no convergence in {max_newton} iterations (residual {res:.3g})")
+
+
+def _scaled(tol: float, u: np.ndarray) -> float:
+    """The closing tolerance relative to the state's scale: the residual Phi(u) - u is a
+    difference of states of size max|u| (curvatures kappa l reach ~20 on the branch), and the
+    flow solves its stage equations to 1e-13 (1 + max|u|) per step (shooting.flow), errors the
+    stiff steps amplify (large eta_perp, few segments) to ~1e-9 at max|u| ~ 17: an absolute
+    1e-10 is below that floor, so Newton wanders there (eta_perp ~ 163, N = 8, 16 steps)."""
+    return tol * (1.0 + float(np.max(np.abs(u))))
 
 
 def _hopf_bracket(axis: Axis, n: int, base: float, to: float) -> tuple[float, float] | None:
@@ -331,8 +341,8 @@ def _newton_natural(axis, n, steps, xk, warm, p, tol, max_newton):
 
     m = xk.size - 2
     sysm = _systems(axis, p, n)
-    u, T, fl, res, it = solve_orbit(sysm, xk[:m], xk[m], steps=steps, tol=tol, max_newton=max_newton,
-                                    u_ref=xk[:m])
+    u, T, fl, res, it = solve_orbit(sysm, xk[:m], xk[m], steps=steps, tol=_scaled(tol, xk[:m]),
+                                    max_newton=max_newton, u_ref=xk[:m])
     return np.concatenate((u, [T, p])), fl, res, it
 
 

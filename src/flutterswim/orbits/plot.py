@@ -1,6 +1,7 @@
 """Figure of a stroke branch (the paper's Fig. 4b, done by continuation): advance per cycle,
 period and the lateral excursions of both ends against the parameter, with the straight
-state from linear theory below the Hopf point and self-intersecting strokes in red."""
+state from linear theory on its stable side of the Hopf point (the branch may lie above or
+below it) and self-intersecting strokes in red."""
 
 from __future__ import annotations
 
@@ -20,7 +21,9 @@ def _segments(ax, x, y, red, **kw):
 
 
 def plot_branch(ds, path=None, *, x_range: tuple[float, float] | None = None):
-    """Draw the branch Dataset of :meth:`flutterswim.orbits.Branch.to_dataset`. Returns the figure."""
+    """Draw the branch Dataset of :meth:`flutterswim.orbits.Branch.to_dataset`. Returns the figure.
+    ``x_range``: the requested parameter range (default: the file's ``range_start`` or
+    ``range_end`` with the branch's own values); the axis spans it, the branch and the Hopf point."""
     import matplotlib
 
     if path is not None:
@@ -36,11 +39,25 @@ def plot_branch(ds, path=None, *, x_range: tuple[float, float] | None = None):
     tunit = "s" if si else "tau"
     red = ds.self_intersecting.values.astype(bool)
     unstable = ~ds.stable.values.astype(bool)
-    lo = min(x_range[0], hopf) if x_range else hopf - 0.1 * (x.max() - hopf)
+    # the branch may lie on either side of the Hopf point; the straight state is stable on the
+    # other side (supercritical) or on the branch's side (subcritical: unstable orbits)
+    side = 1.0 if np.nanmedian(x) >= hopf else -1.0
+    stable_side = side if ds.attrs.get("bifurcation") == "subcritical" else -side
+    if x_range is None:  # the requested range, as far as the file records it
+        ends = [float(ds.attrs[k]) for k in ("range_start", "range_end") if k in ds.attrs]
+        x_range = (min(ends), max(ends)) if ends else None
+    pts = np.r_[hopf, x[np.isfinite(x)]]
+    lo, hi = float(pts.min()), float(pts.max())
+    if x_range is not None:
+        lo, hi = min(lo, *x_range), max(hi, *x_range)
+    elif stable_side != side:  # no range recorded: show a tenth of the branch's extent of the stable side
+        pad = 0.1 * (hi - lo)
+        lo, hi = (lo - pad, hi) if stable_side < 0 else (lo, hi + pad)
+    straight_end = lo if stable_side < 0 else hi
     xs = np.r_[hopf, x]
     fig, axes = plt.subplots(3, 1, figsize=(6.0, 8.0), sharex=True, constrained_layout=True)
     ax = axes[0]
-    ax.plot([lo, hopf], [0, 0], color="0.5", lw=1.8, label="straight, stable (linear theory)")
+    ax.plot(sorted([straight_end, hopf]), [0, 0], color="0.5", lw=1.8, label="straight, stable (linear theory)")
     _segments(ax, xs, np.r_[0.0, ds.advance.values * lscale], np.r_[False, red], lw=1.8,
               label="stroke (periodic orbit)")
     ax.set_ylabel(f"advance per cycle [{lunit}]")
@@ -59,8 +76,11 @@ def plot_branch(ds, path=None, *, x_range: tuple[float, float] | None = None):
         a.axvline(hopf, color="0.3", ls=":", lw=1)
         if np.any(unstable):
             a.plot(x[unstable], np.full(unstable.sum(), np.nan))
-        a.set_xlim(lo, x.max())
-    axes[0].text(hopf, 0.97, f" Hopf {hopf:.4g}", transform=axes[0].get_xaxis_transform(), fontsize=8, va="top")
+        a.set_xlim(lo, hi)
+    # the label on the side of the Hopf line with more room, inside the axes
+    right = hopf - lo < hi - hopf
+    axes[0].text(hopf, 0.97, f" Hopf {hopf:.4g} ", transform=axes[0].get_xaxis_transform(), fontsize=8, va="top",
+                 ha="left" if right else "right")
     handles = [Line2D([], [], color="0.5", lw=1.8, label="straight, stable (linear theory)"),
                Line2D([], [], color="k", lw=1.8, label="stroke (periodic orbit)"),
                Line2D([], [], color="tab:red", lw=1.8, label="self-intersecting stroke"),

@@ -16,6 +16,9 @@ from .stability_map import stability_map
 
 __all__ = ["StabilityFigures", "stability_figures"]
 
+#: Largest chi of the map and of the chi bifurcation plot.
+CHI_MAX = 130.0
+
 
 @dataclass(frozen=True)
 class StabilityFigures:
@@ -37,6 +40,10 @@ def stability_figures(out_dir, *, params: Parameters = PAPER, step: float = 0.1,
     from .._paths import check_output_dir, check_output_file
 
     step = positive("step", step)
+    # the chi bifurcation plot runs over (0, 130] at this step: it needs two values
+    if step > CHI_MAX / 2:
+        raise ParameterError(f"step={step!r} is too large; at most {CHI_MAX / 2:g} (the bifurcation plot in chi "
+                             f"runs over (0, {CHI_MAX:g}] and needs at least two values)")
     if dtype not in ("float64", "float32"):
         raise ParameterError(f"dtype={dtype!r} is not allowed; use 'float64' or 'float32'")
     out = check_output_dir(out_dir, what="out_dir")
@@ -66,7 +73,7 @@ def _figures(out: Path, params: Parameters, step: float, netcdf: bool, progress:
             smap.save(nc_path, dtype=dtype)
     plot_map(smap, neutral=nc, path=out / "stability_map.png", operating_point=(g.eta_perp, g.chi),
              operating_label="operating point" if params != PAPER else "paper's operating point")
-    b1 = bifurcation(parameter="chi", values=np.arange(step, 130.0 + step / 2, step), fixed=g.eta_perp)
+    b1 = bifurcation(parameter="chi", values=np.arange(step, CHI_MAX + step / 2, step), fixed=g.eta_perp)
     b2 = bifurcation(parameter="eta_perp", values=np.arange(step, 350.0 + step / 2, step), fixed=g.chi)
     plot_bifurcation([b1, b2], path=out / "bifurcation.png")
     modes = eigenmodes(g.chi, g.eta_perp)

@@ -51,6 +51,11 @@ def _cmd_sweep(args) -> int:
         from .._paths import check_output_file
 
         check_output_file(args.plot, (".png", ".pdf", ".svg"), what="--plot")
+        if args.mode == "grid" and len(args.axes) > 1:  # before any point runs
+            from .._validate import ParameterError
+
+            raise ParameterError(f"--plot={args.plot!r} draws 1-d sweeps; this grid has {len(args.axes)} axes "
+                                 f"({' '.join(args.axes)}): sweep one axis, use --mode list, or leave out --plot")
 
     settings = {k: v for k, v in (("n_cycles", args.n_cycles), ("t_cap", args.t_cap), ("n_segments", args.n_segments),
                                   ("rtol", args.rtol), ("atol", args.atol)) if v is not None}

@@ -54,7 +54,13 @@ def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str
     import matplotlib.pyplot as plt
 
     if "branch" in ds.dims:
+        allowed = [str(b) for b in ds["branch"].values]
+        if branch is not None and branch not in allowed:
+            raise ParameterError(f"branch={branch!r} is not a branch of this sweep; choose one of {allowed}")
         ds = ds.sel(branch=branch or "up")
+    elif branch is not None:
+        raise ParameterError(f"branch={branch!r} given, but this sweep has no branches (only continuation "
+                             "sweeps have 'up' and 'down'); leave it out")
     dims = [d for d in ds[advance].dims]
     if len(dims) != 1:
         raise ParameterError(f"plot_sweep needs a 1-d sweep; {advance} has dims {dims}")

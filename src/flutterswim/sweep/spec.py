@@ -1,6 +1,6 @@
 """Sweep definition: swept axes, base parameters, per-point settings, and grid parsing.
 
-An axis is written ``name=lo:hi:n`` (n equally spaced values, ends included),
+An axis is written ``name=lo:hi:n`` (n >= 2 equally spaced values, ends included),
 ``name=v1,v2,...`` (a list) or ``name=v`` (one value). Names: the physical parameters
 (``l, a, b, B, tau, kappa_E, mu``), the groups (``eta_par, eta_perp, chi``) and
 ``kappa_E_ratio`` (kappa_E over the base kappa_E, e.g. the paper's kappa_E/kappa_E_fit).
@@ -61,22 +61,28 @@ def parse_axis(text: str) -> Axis:
             if len(parts) != 3:
                 raise ValueError
             lo, hi, n = float(parts[0]), float(parts[1]), int(parts[2])
-            if n < 1:
-                raise ValueError
+            if not (math.isfinite(lo) and math.isfinite(hi)):  # before linspace (which warns)
+                raise ParameterError(f"sweep axis {text!r} has a non-finite end; a range lo:hi:n needs "
+                                     "finite lo and hi")
+            if n < 2:  # lo:hi:1 would silently drop hi
+                raise ParameterError(f"sweep axis {text!r} has n={n}; a range lo:hi:n needs n >= 2 "
+                                     f"(write {name}={parts[0]} for one value)")
             if n > MAX_SWEEP_POINTS:  # before anything is allocated
                 too_many = n
                 raise ValueError
-            vals = np.linspace(lo, hi, n) if n > 1 else np.array([lo])
+            vals = np.linspace(lo, hi, n)
             # round to suppress linspace noise so the definition is reproducible as text
             vals = [float(f"{v:.12g}") for v in vals]
         else:
             vals = [float(v) for v in rhs.split(",") if v.strip()]
+    except ParameterError:
+        raise
     except ValueError:
         if too_many:
             raise ParameterError(f"sweep axis {text!r} has {too_many} values; at most {MAX_SWEEP_POINTS} points "
                                  "are allowed in a sweep (flutterswim.defaults.MAX_SWEEP_POINTS)") from None
         raise ParameterError(
-            f"sweep axis {text!r} is not understood; write name=lo:hi:n (n >= 1 integer), "
+            f"sweep axis {text!r} is not understood; write name=lo:hi:n (n >= 2 integer), "
             "name=v1,v2,... or name=v"
         ) from None
     return Axis(name, tuple(vals))
@@ -212,6 +218,13 @@ class SweepSpec:
             raise ParameterError(f"the sweep has {n} points; at most {MAX_SWEEP_POINTS} are allowed "
                                  "(flutterswim.defaults.MAX_SWEEP_POINTS); split it into several sweeps")
         object.__setattr__(self, "axes", axes)
+        # every point's parameters, with the checks a point makes, before any store is created
+        for i in range(self.n_values):
+            values = self.values(i)
+            try:
+                point_params(self.base, values)
+            except ParameterError as exc:
+                raise ParameterError(f"sweep point {values}: {exc}") from None
 
     @classmethod
     def build(cls, axes: Iterable[str | Axis] | Mapping[str, Iterable[float]], base: Any = "paper",

@@ -14,7 +14,7 @@ Durability:
   :data:`flutterswim._paths.MARKER`, and nothing without that marker is ever replaced;
 - only the parent process writes, under an exclusive lock (``.<name>.lock`` next to the
   store; the file is opened close-on-exec and workers are separate programs, so only the
-  parent holds it);
+  parent holds it; the file is removed when the run ends, if this run created it);
 - each point is written as its own region, ``done`` last (Zarr writes each chunk file
   atomically): a kill between the value writes and ``done`` leaves the point undone, and
   it is recomputed on resume;
@@ -86,6 +86,9 @@ def variable_attrs(name: str, time_unit: str) -> dict[str, str]:
                                        "measured from the run (small-amplitude part)"),
         "lateral_leading_mm": ("mm" if phys else "1e-3 l", "lateral peak-to-peak excursion of the leading end"),
         "lateral_trailing_mm": ("mm" if phys else "1e-3 l", "lateral peak-to-peak excursion of the trailing end"),
+        # speeds: length per time ("_s" here is "per second", not a time)
+        "speed_mm_s": ("mm/s" if phys else "1e-3 l/tau", "swimming speed"),
+        "speed_bl_s": ("1/s" if phys else "1/tau", "swimming speed in body lengths per unit time"),
         "max_multiplier": ("1", "largest modulus of the non-trivial Floquet multipliers"),
         "oscillation_amplitude": ("rad", "half-range of the body-frame tangent angle over the last chunk"),
         "amplitude_growth_rate": ("1/tau", "growth rate of the oscillation amplitude over the last chunk"),
@@ -147,22 +150,64 @@ def _time_unit(spec: SweepSpec) -> str:
     return "s" if isinstance(spec.base, Parameters) else "tau"
 
 
-def _acquire(path: Path):
+class _Lock:
+    """The open lock file; :meth:`close` removes it if it is still the file this process
+    created (a lock file that was already there, or was replaced, is left alone)."""
+
+    def __init__(self, f, path: Path, created: bool):
+        self.f, self.path, self.created = f, path, created
+
+    def close(self) -> None:
+        if self.f.closed:
+            return
+        try:
+            # unlink while still holding the lock: a process that opened the old file meanwhile
+            # finds it unlinked after it gets the lock and retries on a new one (_acquire)
+            if self.created and _same_file(self.f, self.path):
+                self.path.unlink()
+        except OSError:
+            pass
+        finally:
+            self.f.close()
+
+
+def _same_file(f, path: Path) -> bool:
+    try:
+        a, b = os.fstat(f.fileno()), os.stat(path)
+    except OSError:
+        return False
+    return (a.st_dev, a.st_ino) == (b.st_dev, b.st_ino)
+
+
+def _acquire(path: Path) -> _Lock:
     """Exclusive advisory lock next to the store: one writer at a time (close-on-exec)."""
     import fcntl
 
     lock_path = path.parent / f".{path.name}.lock"
     path.parent.mkdir(parents=True, exist_ok=True)
-    f = open(lock_path, "a+")  # Python opens files non-inheritable (O_CLOEXEC)
-    try:
-        fcntl.flock(f.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError:
-        f.close()
-        raise SweepLockedError(
-            f"the store {str(path)!r} is being written by another sweep process (lock {str(lock_path)!r} "
-            "is held); wait for it to finish or stop it, then rerun the same command to resume"
-        ) from None
-    return f
+    for _ in range(100):
+        created = True
+        try:
+            f = open(lock_path, "x")  # Python opens files non-inheritable (O_CLOEXEC)
+        except FileExistsError:
+            created = False
+            try:
+                f = open(lock_path, "a+")
+            except FileNotFoundError:  # removed by its owner just now
+                continue
+        try:
+            fcntl.flock(f.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            f.close()
+            raise SweepLockedError(
+                f"the store {str(path)!r} is being written by another sweep process (lock {str(lock_path)!r} "
+                "is held); wait for it to finish or stop it, then rerun the same command to resume"
+            ) from None
+        if _same_file(f, lock_path):
+            return _Lock(f, lock_path, created)
+        f.close()  # the file was removed by the process that held it: lock the current one
+    raise SweepLockedError(f"the lock {str(lock_path)!r} of the store {str(path)!r} keeps being replaced; "
+                           "another process is creating and removing it")
 
 
 class SweepStore:
