@@ -325,7 +325,9 @@ class _StillPixels:
 
     def add(self, img: Any) -> None:
         a = np.asarray(img)[::2, ::2]
-        if a.ndim != 2 or (a.dtype.kind == "f" and not np.all(np.mod(a[::2, ::2], 1) == 0)):
+        with np.errstate(invalid="ignore"):  # a NaN or inf pixel: not integer-valued
+            fractional = a.dtype.kind == "f" and not np.all(np.mod(a[::2, ::2], 1) == 0)
+        if a.ndim != 2 or fractional:
             self.prev = None
             return
         p, self.prev = self.prev, a
