@@ -227,3 +227,28 @@ def test_identical_trials_are_named_with_their_voltage_and_rows(tmp_path, monkey
     err = capsys.readouterr().err
     assert "same.csv" in err and "3 V" in err and "rows 3, 4, 5" in err and "identical" in err
     assert not out.exists()
+
+
+def test_trials_with_a_bad_descriptor_name_the_row_and_column(tmp_path):
+    from flutterswim.fitting.data import read_trials
+
+    csv = tmp_path / "t.csv"
+    csv.write_text(HEADER + "3,a,0.5,0.3,1.0\n3,b,nan,0.3,1.1\n")
+    with pytest.raises(ParameterError, match=r"t\.csv.*row 3.*period_s='nan'"):
+        read_trials(csv)
+    csv.write_text(HEADER + "3,a,0.5,-0.3,1.0\n")
+    with pytest.raises(ParameterError, match=r"row 2.*advance_mm='-0.3'"):
+        read_trials(csv)
+
+
+def test_periods_in_milliseconds_are_questioned(tmp_path):
+    from flutterswim.fitting.data import read_trials
+
+    csv = tmp_path / "t.csv"
+    csv.write_text(HEADER + "3,a,377,0.3,1.0\n3,b,380,0.31,1.1\n")
+    with pytest.warns(UserWarning, match="not ms"):
+        read_trials(csv)
+    csv.write_text(HEADER + "3,a,0.377,0.3,1.0\n3,b,0.380,0.31,1.1\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        read_trials(csv)

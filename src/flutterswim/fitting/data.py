@@ -48,6 +48,11 @@ class Summary:
         return self.mean[i[0]], self.sem[i[0]]
 
 
+# a stroke slower than this is not a flutter of the paper's kind (0.3-0.5 s): most likely a
+# period column in ms; said, not refused
+_MAX_PLAUSIBLE_PERIOD_S = 60.0
+
+
 def read_trials(path: str | Path) -> Trials:
     """Read the trials CSV; a clear error names a missing column or a bad value."""
     p = Path(path)
@@ -76,10 +81,16 @@ def read_trials(path: str | Path) -> Trials:
         if not math.isfinite(volt[i]):
             raise ParameterError(f"trials={str(p)!r}, row {i + 2}: voltage_V={r['voltage_V']!r} is not finite; "
                                  "a finite voltage is required")
-    if not (np.all(np.isfinite(vals)) and np.all(vals[:, 0] > 0) and np.all(vals[:, 1:] >= 0)):
-        raise ParameterError(f"trials={str(p)!r}: periods must be > 0 and advances and lateral "
-                             "excursions >= 0, all finite")
+        for k, c in enumerate(DESCRIPTORS):
+            if not (math.isfinite(vals[i, k]) and (vals[i, k] > 0 if k == 0 else vals[i, k] >= 0)):
+                raise ParameterError(f"trials={str(p)!r}, row {i + 2}: {c}={r[c]!r} is not allowed; periods must "
+                                     "be finite and > 0, advances and lateral excursions finite and >= 0")
     _warn_repeated(p, rows)
+    if vals[:, 0].max() > _MAX_PLAUSIBLE_PERIOD_S:
+        import warnings
+
+        warnings.warn(f"trials={str(p)!r}: periods up to {vals[:, 0].max():g} s (the paper's strokes beat in "
+                      f"0.3-0.5 s): is period_s in seconds (not ms)?", UserWarning, stacklevel=2)
     return Trials(volt, np.array([r["sample"] for r in rows]), vals, str(p))
 
 
