@@ -128,6 +128,19 @@ def test_batch_bad_global_option_exits_2_before_tracking(movie, tmp_path, monkey
     assert not (tmp_path / "o.csv").exists()
 
 
+@pytest.mark.parametrize("kw, match", [({"length_tol": float("nan")}, "length_tol"),
+                                       ({"min_contrast": -1.0}, "min_contrast"),
+                                       ({"lenght_tol": 0.1}, "no option 'lenght_tol'")])
+def test_batch_bad_track_option_is_refused_before_any_trial(movie, tmp_path, monkeypatch, kw, match):
+    """From Python, a bad or misspelt option of track() failed every trial (rc 1) instead of
+    being refused once, before the first trial."""
+    monkeypatch.setattr(trk, "track", lambda *a, **k: pytest.fail("a trial was tracked"))
+    folder = _trials(tmp_path / "t", movie)
+    with pytest.raises(fs.ParameterError, match=match):
+        track_batch(folder, tmp_path / "o.csv", px_per_mm=70.0, fps=FPS, **kw)
+    assert not (tmp_path / "o.csv").exists()
+
+
 def test_batch_foreign_failures_file_is_refused_before_computing(movie, tmp_path, monkeypatch):
     monkeypatch.setattr(trk, "track", lambda *a, **k: pytest.fail("a trial was tracked"))
     folder = _trials(tmp_path / "t", movie)

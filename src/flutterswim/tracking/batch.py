@@ -164,7 +164,7 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
     from .. import __version__
     from .._paths import atomic_write_text, check_output_file, is_ours
     from ..analysis.descriptors import describe
-    from .track import START_ENDS, track
+    from .track import check_options, track
 
     # every input checked before the first trial is tracked
     out_p = check_output_file(out, (".csv",), what="out")
@@ -174,10 +174,7 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
     px_per_mm = None if px_per_mm is None else positive("px_per_mm", px_per_mm)
     fps = None if fps is None else positive("fps", fps)
     n_last = positive_int("n_last", n_last)
-    if "field_angle" in track_kwargs:
-        track_kwargs["field_angle"] = finite("field_angle", track_kwargs["field_angle"])
-    if track_kwargs.get("start_end", "left") not in START_ENDS:
-        raise ParameterError(f"start_end={track_kwargs['start_end']!r} is not allowed; choose one of {', '.join(START_ENDS)}")
+    track_kwargs = check_options(**track_kwargs)
     trials = find_trials(folder, pattern)
     for tr_ in trials:
         if tr_.options.get("px_per_mm", px_per_mm) is None:

@@ -343,6 +343,56 @@ class _StillPixels:
         return float(np.median(self.shares)) if self.shares else math.nan
 
 
+def _smooth_frames(v: Any) -> Any:
+    if v != 0 and not (isinstance(v, (int, np.integer)) and v >= 7):
+        raise ParameterError(f"smooth_frames={v!r} is not allowed; give 0 (off) or a whole number "
+                             "of frames >= 7 (the window of a quartic in time)")
+    return v
+
+
+def _dark_line(v: Any) -> Any:
+    if not isinstance(v, (bool, np.bool_)):
+        raise ParameterError(f"dark_line={v!r} is not allowed; give True (a line darker than its background) "
+                             "or False (brighter)")
+    return v
+
+
+def _start_end(v: Any) -> Any:
+    if v not in START_ENDS:
+        raise ParameterError(f"start_end={v!r} is not allowed; choose one of {', '.join(START_ENDS)}")
+    return v
+
+
+# the checks of track()'s options (NaN would switch the checks off: min_contrast, the tolerances)
+_OPTION_CHECKS = {
+    "n_points": lambda v: positive_int("n_points", v, 5), "tip_k": lambda v: positive("tip_k", v),
+    "tip_floor_px": lambda v: positive("tip_floor_px", v),
+    "sigma": lambda v: None if v is None else positive("sigma", v),
+    "field_angle": lambda v: finite("field_angle", v), "t0": lambda v: finite("t0", v),
+    "min_contrast": lambda v: non_negative("min_contrast", v), "length_tol": lambda v: positive("length_tol", v),
+    "jump_tol": lambda v: positive("jump_tol", v), "gap_fraction": lambda v: non_negative("gap_fraction", v),
+    "window_px": lambda v: non_negative("window_px", v), "smooth_frames": _smooth_frames,
+    "dark_line": _dark_line, "start_end": _start_end,
+}
+# options of track() passed through unchecked (booleans of its own)
+_PLAIN_OPTIONS = ("roi", "refine", "fixed_length", "tip_check", "periodic", "progress", "fps")
+
+
+def check_options(**options: Any) -> dict[str, Any]:
+    """:func:`track`'s options checked (each named in its error), e.g. the ``track_kwargs`` of
+    a batch before its first trial; an unknown name is refused."""
+    out = {}
+    for k, v in options.items():
+        if k in _OPTION_CHECKS:
+            out[k] = _OPTION_CHECKS[k](v)
+        elif k in _PLAIN_OPTIONS:
+            out[k] = v
+        else:
+            raise ParameterError(f"{k}={v!r}: track() has no option {k!r}; its options are "
+                                 f"{', '.join(sorted((*_OPTION_CHECKS, *_PLAIN_OPTIONS)))}")
+    return out
+
+
 def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any = None,
           n_points: int = 49, start_end: str = "left", field_angle: float = 0.0, sigma: float | None = None,
           min_contrast: float = 4.0, length_tol: float = 0.03, jump_tol: float = 0.25,
@@ -375,25 +425,16 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     ``track.meta["frames"]``; see the module docstring for the checks.
     """
     px_per_mm = positive("px_per_mm", px_per_mm)
-    n_points = positive_int("n_points", n_points, 5)
-    tip_k = positive("tip_k", tip_k)
-    tip_floor_px = positive("tip_floor_px", tip_floor_px)
-    sig = 1.2 if sigma is None else positive("sigma", sigma)  # checked before any frame is read
-    field_angle = finite("field_angle", field_angle)
-    t0 = finite("t0", t0)
-    min_contrast = non_negative("min_contrast", min_contrast)  # NaN would switch the checks off
-    length_tol = positive("length_tol", length_tol)
-    jump_tol = positive("jump_tol", jump_tol)
-    gap_fraction = non_negative("gap_fraction", gap_fraction)
-    window_px = non_negative("window_px", window_px)
-    if smooth_frames != 0 and not (isinstance(smooth_frames, (int, np.integer)) and smooth_frames >= 7):
-        raise ParameterError(f"smooth_frames={smooth_frames!r} is not allowed; give 0 (off) or a whole number "
-                             "of frames >= 7 (the window of a quartic in time)")
-    if not isinstance(dark_line, (bool, np.bool_)):
-        raise ParameterError(f"dark_line={dark_line!r} is not allowed; give True (a line darker than its background) "
-                             "or False (brighter)")
-    if start_end not in START_ENDS:
-        raise ParameterError(f"start_end={start_end!r} is not allowed; choose one of {', '.join(START_ENDS)}")
+    # checked before any frame is read
+    o = check_options(n_points=n_points, tip_k=tip_k, tip_floor_px=tip_floor_px, sigma=sigma,
+                      field_angle=field_angle, t0=t0, min_contrast=min_contrast, length_tol=length_tol,
+                      jump_tol=jump_tol, gap_fraction=gap_fraction, window_px=window_px,
+                      smooth_frames=smooth_frames, dark_line=dark_line, start_end=start_end)
+    n_points, tip_k, tip_floor_px, field_angle, t0 = (o[k] for k in ("n_points", "tip_k", "tip_floor_px",
+                                                                        "field_angle", "t0"))
+    min_contrast, length_tol, jump_tol, gap_fraction, window_px = (
+        o[k] for k in ("min_contrast", "length_tol", "jump_tol", "gap_fraction", "window_px"))
+    sig = 1.2 if sigma is None else o["sigma"]
     frames = open_frames(source, roi)
     if fps is None:
         fps = frames.fps
