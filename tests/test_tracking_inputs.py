@@ -258,3 +258,19 @@ def test_render_bad_inputs_are_parameter_errors(change, kw, match):
 def test_render_accepts_numpy_numbers():
     mv = render(_line(), snr=np.float32(5.0), seed=np.int64(3), margin_px=np.int64(8), gradient=-1.5)
     assert mv.frames.shape[0] == 3 and mv.fps == pytest.approx(FPS)
+
+
+def test_a_grey_stack_saved_as_planar_rgb_says_how_it_was_read(tmp_path):
+    """tifffile.imwrite of a (3, H, W) uint16 array without photometric tagged it as one planar
+    RGB image: read as the tags say (one colour frame), and the error says so and how to save
+    a grey stack."""
+    tifffile = pytest.importorskip("tifffile")
+    a = np.random.default_rng(0).integers(0, 1000, (3, 40, 50)).astype(np.uint16)
+    # what tifffile's default did (a future version stores grey pages): explicit here
+    tifffile.imwrite(tmp_path / "s.tif", a, photometric="rgb", planarconfig="separate")
+    with pytest.raises(fs.ParameterError, match="holds 1 frame.*planar colour.*minisblack"):
+        track(tmp_path / "s.tif", px_per_mm=70.0, fps=FPS)
+    tifffile.imwrite(tmp_path / "g.tif", a, photometric="minisblack")
+    from flutterswim.tracking.io import open_frames
+
+    assert len(open_frames(tmp_path / "g.tif")) == 3

@@ -51,6 +51,7 @@ class Frames:
     _get: Callable[[int], np.ndarray]
     _iter: Callable[[], Iterator[np.ndarray]]
     roi: tuple[int, int, int, int] | None = None
+    note: str = ""  # how the file was read, when it could be read another way
 
     def __len__(self) -> int:
         return self.n_frames
@@ -139,8 +140,12 @@ def _tiff_stack(p: Path) -> Frames:
     if said:  # read, but damaged (e.g. truncated: the pages after the damage are missing)
         warnings.warn(f"input={str(p)!r}: tifffile: {said[0]}", stacklevel=3)
     arr = np.asarray(arr) if not isinstance(arr, np.memmap) else arr
+    note = ""
     if len(axes) == arr.ndim and "S" in axes[:-1] and arr.shape[axes.index("S")] in (3, 4):
         arr, axes = np.moveaxis(arr, axes.index("S"), -1), axes.replace("S", "") + "S"  # planar colour
+        if arr.ndim == 3:
+            note = (f" (its tags say {shape} is one planar colour image, {shape[0]} samples per pixel; a grey stack "
+                    "of that many frames must be saved as one, e.g. tifffile.imwrite(..., photometric='minisblack'))")
     colour = axes.endswith("S") and arr.shape[-1] in (3, 4)
     if arr.ndim == 2 + colour:
         arr = arr[None]  # one frame
@@ -149,7 +154,9 @@ def _tiff_stack(p: Path) -> Frames:
             f"input={str(p)!r} is a TIFF stack of shape {shape} (axes {axes!r}); a (T, H, W) stack, a colour "
             "(T, H, W, 3|4) stack or one (H, W) frame is required: for a (T, Z, H, W) or (T, C, H, W) stack, "
             "pass one Z plane or channel")
-    return _from_array(arr, str(p))
+    fr = _from_array(arr, str(p))
+    fr.note = note
+    return fr
 
 
 def _read_image(p: Path) -> np.ndarray:
@@ -278,7 +285,7 @@ def open_frames(source: Any, roi: Any = None) -> Frames:
             raise ParameterError(f"input={str(p)!r} has the suffix {p.suffix!r}; a TIFF stack (.tif), a folder "
                                  f"of PNG/TIFF frames or a movie ({', '.join(MOVIE_SUFFIXES)}) is required")
     if fr.n_frames < 2:
-        raise ParameterError(f"input={fr.source!r} holds {fr.n_frames} frame(s); at least 2 are required")
+        raise ParameterError(f"input={fr.source!r} holds {fr.n_frames} frame(s); at least 2 are required{fr.note}")
     fr.roi = parse_roi(roi, fr.shape)
     if fr.roi is not None:
         x0, y0, x1, y1 = fr.roi
