@@ -252,3 +252,13 @@ def test_periods_in_milliseconds_are_questioned(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         read_trials(csv)
+
+
+def test_a_run_shorter_than_its_frame_interval_saves_its_end():
+    """frame_dt longer than the run saved only the initial state (the run's end was lost)."""
+    import flutterswim as fs
+
+    short = fs.simulate(fs.preset("paper"), 0.5, n_segments=8, frame_dt=5.0)
+    fine = fs.simulate(fs.preset("paper"), 0.5, n_segments=8, frame_dt=0.1)
+    assert short.t.size == 2 and short.t[-1] == pytest.approx(fine.t[-1])
+    np.testing.assert_allclose(short.x[-1], fine.x[-1], rtol=0, atol=1e-12)

@@ -201,6 +201,8 @@ def test_path_min_radius_matches_the_analytic_curvature():
     k = np.abs(a * np.cos(u) * -2 * a * np.sin(2 * u) + a * np.cos(2 * u) * a * np.sin(u)) / (
         (a * np.cos(u)) ** 2 + (a * np.cos(2 * u)) ** 2) ** 1.5
     assert min_radius(figure8(8 * L), L) == pytest.approx(1 / k.max(), rel=2e-3)
+    # a circle far smaller than the radius of interest (it read as straight: inf)
+    assert min_radius(circle(1e-3 * L), L) == pytest.approx(1e-3 * L, rel=2e-2)
 
 
 @pytest.fixture()
@@ -248,7 +250,8 @@ def test_steer_cli_rerun_replaces_its_own_metrics(tmp_path, fast_steer):
 
 
 @pytest.mark.parametrize("option, value", [("--noise-px", "nan"), ("--noise-px", "-1"), ("--noise-px", "inf"),
-                                           ("--um-per-px", "0"), ("--um-per-px", "-14"), ("--um-per-px", "nan")])
+                                           ("--um-per-px", "0"), ("--um-per-px", "-14"), ("--um-per-px", "nan"),
+                                           ("--segments", "4")])
 def test_steer_cli_refuses_bad_camera_settings_before_computing(tmp_path, fast_steer, option, value, capsys):
     from flutterswim.cli import main
 
@@ -284,6 +287,10 @@ def test_steer_refuses_bad_noise_and_laps():
                {"delay_frames": -1}):
         with pytest.raises(fs.ParameterError, match=next(iter(kw))):
             steer(P, make, model, **kw)
+    # a path of 1e9 m (a stray waypoint) ran until it was out of memory: refused before any run
+    far = lambda p, h: circle(1e9, p, h)  # noqa: E731
+    with pytest.raises(fs.ParameterError, match="at most 3600 s"):
+        steer(P, far, model)
 
 
 def test_waypoints_repeated_points_keep_the_corner(tmp_path):

@@ -130,7 +130,9 @@ def _frames(t0: float, t1: float, n_frames: int | None, dt: float | None) -> np.
     if n_frames is not None and dt is not None:
         raise ParameterError("give n_frames or frame_dt, not both")
     if dt is not None:
-        return np.arange(t0, t1 + 0.5 * dt, dt)[: int(np.floor((t1 - t0) / dt + 1e-9)) + 1]
+        t = np.arange(t0, t1 + 0.5 * dt, dt)[: int(np.floor((t1 - t0) / dt + 1e-9)) + 1]
+        # a run shorter than one frame interval still saves its end (it saved only its start)
+        return t if t.size >= 2 else np.array([t0, t1])
     if n_frames is None:
         n_frames = int(np.ceil(defaults.FRAMES_PER_TAU * (t1 - t0))) + 1
     n_frames = positive_int("n_frames", n_frames, minimum=2)

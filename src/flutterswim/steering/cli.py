@@ -65,7 +65,7 @@ def _cmd_steer(args) -> int:
 
     from .. import __version__
     from .._paths import atomic_write_text, check_output_file
-    from .._validate import ParameterError, non_negative, positive
+    from .._validate import ParameterError, non_negative, positive, positive_int
     from ..params import preset
     from . import path as paths
     from .reduced import identify
@@ -79,6 +79,9 @@ def _cmd_steer(args) -> int:
         check_output_file(args.animate, (".mp4", ".gif"), what="--animate")
     non_negative("--noise-px", args.noise_px)
     positive("--um-per-px", args.um_per_px)
+    # the reduced model is identified from the paper's stroke as a periodic orbit: at 4 segments
+    # Newton shooting does not find it (a failure after ~20 s); 5 and more do
+    positive_int("--segments", args.segments, minimum=5)
     params = preset(args.preset)
     L = params.l
     if args.path == "square":

@@ -183,8 +183,9 @@ def fillet(path: RefPath, radius: float, step: float = 1e-5) -> RefPath:
 def min_radius(path: RefPath, scale: float) -> float:
     """Smallest radius of curvature of ``path`` [m]: circumradius of consecutive points resampled
     every ``scale`` / 20 along it (``scale``: the radius of interest, e.g. the swimmer's
-    smallest turning radius); inf for a straight path."""
-    step = positive("scale", scale) / 20.0
+    smallest turning radius), or every 1/20 of the path if it is shorter (a circle 1000 times
+    smaller than the swimmer's turn read as straight); inf for a straight path."""
+    step = min(positive("scale", scale), float(path.s[-1])) / 20.0
     q = np.arange(0.0, path.s[-1], step)
     if q.size < 3:
         return math.inf

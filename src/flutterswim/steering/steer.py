@@ -37,6 +37,12 @@ def _centroid(run) -> tuple[np.ndarray, np.ndarray]:
     return run.x.mean(axis=1), run.y.mean(axis=1)
 
 
+# the longest path the closed loop follows in one run: an hour of swimming (3.6 m at the paper's
+# ~1 mm/s, ~1000 body lengths; 50 fps frames of N = 24: ~150 MB); a waypoint 1e9 m away ran out
+# of memory
+_MAX_DURATION_S = 3600.0
+
+
 def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loop: bool = True,
           noise_px: float = 0.2, um_per_px: float = 14.0, fps: float = 50.0, delay_frames: int = 1,
           n_segments: int = 24, onset: float = 10.0, laps: float = 1.0, seed: int = 0,
@@ -57,6 +63,11 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     dt = 1.0 / fps
     rng = np.random.default_rng(seed)
     sigma = noise_px * um_per_px * 1e-6
+    # the path's length does not depend on where it starts: too long a path is refused first
+    est = 1.1 * laps * path_factory((0.0, 0.0), 0.0).length / reduced.U + 3 * reduced.period
+    if not est <= _MAX_DURATION_S:
+        raise ParameterError(f"path: {laps:g} lap(s) at the swimmer's {reduced.U * 1e3:.3g} mm/s take {est:.3g} s; at "
+                             f"most {_MAX_DURATION_S:g} s is simulated (a shorter path, or fewer laps)")
     # onset along the initial field direction (0), then control
     first = simulate(params, onset, n_segments=n_segments, frame_dt=dt)
     cx, cy = _centroid(first)
