@@ -209,3 +209,16 @@ def test_quick_run_end_to_end(tmp_path):
         frames = imageio_ffmpeg.count_frames_and_secs(str(out / v))[0]
         assert frames > 50
     print(f"--quick end to end: {wall:.1f} s")
+
+
+def test_report_keeps_targets_of_earlier_runs(tmp_path):
+    """``--only a`` then ``--only b``: the report showed b alone, though a's files and manifest
+    entry stayed in the folder; now it shows both, a marked as built by an earlier run."""
+    from flutterswim.reproduce import reproduce
+
+    reproduce(tmp_path / "r", targets=["table1"])
+    res = reproduce(tmp_path / "r", targets=["b_readings"])
+    html = res.report.read_text()
+    assert 'id="table1"' in html and 'id="b_readings"' in html
+    assert html.count("built by an earlier run") == 1
+    assert list(res.records) == ["b_readings"]  # this run's own records (its exit status)

@@ -78,5 +78,8 @@ def reproduce(out: str | os.PathLike, *, mode: str = "quick", trials: str | os.P
 
     with single_blas_thread():
         records = build_targets(todo, folder, settings, log=log, force=force)
-    report = write_report(folder, records, mode)
+    from .catalog import TARGETS
+    from .targets import with_earlier
+
+    report = write_report(folder, with_earlier(list(TARGETS), folder, records), mode)
     return ReproduceResult(folder, report, records, time.perf_counter() - t0)

@@ -154,6 +154,25 @@ def _outcome_from_summary(t: Target, out: Path) -> Outcome:
     return Outcome(d.get("status", "ok"), comps, tuple(d.get("notes", [])), d.get("values", {}))
 
 
+def with_earlier(all_targets: list[Target], out: Path, records: dict[str, TargetRecord]) -> dict[str, TargetRecord]:
+    """``records``, and (in the order of ``all_targets``) every target an earlier run built into
+    ``out`` that this run did not select (``--only``): from its manifest entry and summary
+    file, with a note saying so. The report shows the whole folder, not only this run."""
+    man = Manifest.load(out)
+    merged: dict[str, TargetRecord] = {}
+    for t in all_targets:
+        if t.name in records:
+            merged[t.name] = records[t.name]
+        elif t.name in man.targets and (out / t.summary_file).is_file():
+            e = man.targets[t.name]
+            oc = _outcome_from_summary(t, out)
+            oc = Outcome(oc.status, oc.comparisons, oc.notes + ("built by an earlier run (not selected by this "
+                                                               "run's --only)",), oc.values)
+            merged[t.name] = TargetRecord(t, e.get("status", oc.status), False, float(e.get("wall_time_s", 0.0)), oc,
+                                          e.get("error", ""), dict(e.get("outputs", {})))
+    return merged
+
+
 def build_targets(targets: list[Target], out: Path, settings: Settings, *, log: Callable[[str], None] | None = None,
                   force: bool = False) -> dict[str, TargetRecord]:
     """Build ``targets`` in order into ``out`` (checked by the caller), skipping up-to-date ones.
