@@ -78,14 +78,15 @@ def _csv_ours(p: Path) -> bool:
         if "tracked_by" not in head:
             return False
         k = head.index("tracked_by")
-        if any(len(r) > k and r[k].startswith("flutterswim ") for r in rows):
-            return True
+        header_only = True
+        for r in rows:
+            header_only = False
+            if len(r) > k and r[k].startswith("flutterswim "):
+                return True
     # no signed row: ours only if it is exactly the header of a batch whose trials all failed
     from .tracking.batch import CSV_COLUMNS, FAILED_COLUMNS
 
-    with open(p, newline="", encoding="utf-8") as f:
-        lines = list(csv.reader(f))
-    return len(lines) == 1 and tuple(lines[0]) in (CSV_COLUMNS, FAILED_COLUMNS)
+    return header_only and tuple(head) in (CSV_COLUMNS, FAILED_COLUMNS)
 
 
 def _png_ours(p: Path) -> bool:
