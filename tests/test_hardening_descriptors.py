@@ -73,3 +73,39 @@ def test_run_without_limit_cycle_is_flagged():
     assert j["limit_cycle"] is False
     assert "no limit cycle" in j["note"]
     assert j["limit_cycle_time_s"] is None and j["onset_time_s"] is None and j["transient_duration_s"] is None
+
+
+def _still(decay_periods: float | None, jitter: float = 1e-13, period: float = 0.4, amp: float = 0.1):
+    """A wobble in place (no advance; the centroid jitters by round-off), decaying by e every
+    ``decay_periods`` periods (None: steady)."""
+    tr = _track(0.0, period=period, amp=amp)
+    y = tr.y
+    if decay_periods is not None:
+        y = y * np.exp(-tr.t / (decay_periods * period))[:, None]
+    rng = np.random.default_rng(1)
+    x = tr.x + jitter * rng.standard_normal((tr.t.size, 1))
+    return Track(t=tr.t, x=x, y=y + jitter * rng.standard_normal((tr.t.size, 1)), s=tr.s, length=1.0, units="m")
+
+
+def test_wobble_in_place_is_measured_across_the_body():
+    """A filament that beats without advancing has no swimming direction: its cycles'
+    displacements are round-off with random directions. Its ends' excursions are those
+    across the body axis (the true ranges), and describe says it does not swim."""
+    d = describe(_still(None), n_last=10)
+    rng = _true_range()
+    ends = sorted([d.leading_lateral_p2p_mm, d.trailing_lateral_p2p_mm])
+    assert ends[0] == pytest.approx(1e3 * 0.1 * 0.4 * rng, rel=2e-3)
+    assert ends[1] == pytest.approx(1e3 * 0.1 * 1.0 * rng, rel=2e-3)
+    assert "no net swimming" in d.note and "decays" not in d.note
+
+
+def test_decaying_wobble_says_there_is_no_stroke():
+    """Below the flutter threshold a perturbation dies away: describe says the oscillation
+    decays (not 'simulate longer'), and its excursions stay those of the decaying wobble
+    (below the first cycle's)."""
+    d = describe(_still(3.0), n_last=10)
+    assert "the oscillation decays" in d.note and "simulate longer" not in d.note
+    assert d.trailing_lateral_p2p_mm < 1e3 * 0.1 * _true_range()
+    # a steady swimmer is neither
+    s = describe(_track(0.05), n_last=10)
+    assert "decays" not in s.note and "no net swimming" not in s.note

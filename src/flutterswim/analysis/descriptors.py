@@ -15,6 +15,7 @@ from .cycles import (
     GAP_MARGIN,
     Cycles,
     _fourier_columns,
+    body_axis_angle,
     detect_cycles,
     fourier_fit,
     sample_cycle,
@@ -107,6 +108,12 @@ def _lateral_series(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray) -> l
 # the trailing end for 0.01 %, 4 for 0.4 %); a cycle sampled too coarsely for them borrows the
 # missing ones from all the cycles together (with 4, the paper's 50 fps left its trailing end
 # 0.36 % short: 19 frames per stroke hold 4 of their own)
+# a track whose centroid moves less than this per cycle does not swim: 1e-6 body lengths (a
+# simulation's round-off and solver tolerance; the paper's swimmer advances 0.1), or for a tracked
+# movie 0.05 px (its centroid's noise over the body's hundreds of pixels is about 0.01 px)
+_STILL_BL = 1e-6
+_STILL_PX = 0.05
+
 _POOLED_HARMONICS = 5
 _POOLED_MIN_F = 10.0
 # against a tracked movie's template noise: at SNR 3 the trailing end's 5th harmonic (0.4 % of
@@ -508,13 +515,26 @@ def describe(
     sx, sy = CubicSpline(tr.t, xc)([t0, t1]), CubicSpline(tr.t, yc)([t0, t1])
     swim = math.atan2(float(sy[1] - sy[0]), float(sx[1] - sx[0]))
     w = tr.window(t0, t1)
+    movie = "px_per_mm" in tr.meta
+    # a track that does not advance (a decaying wobble below the flutter threshold, a filament
+    # held in place) has no swimming direction: its cycles' displacements are round-off or
+    # noise and their directions scatter, and a measuring frame turning with them read the
+    # body's own length as lateral motion (2.3 mm for a 30 nm wobble). Its lateral excursions
+    # are measured across the mean body axis.
+    drift = math.hypot(float(sx[1] - sx[0]), float(sy[1] - sy[0])) / (sub.starts.size - 1)
+    floor = _STILL_BL * tr.length
+    if movie:
+        floor = max(floor, _STILL_PX * 1e-3 / (float(tr.meta["px_per_mm"]) * tr.scale_m))
+    still = not drift >= floor
+    if still:
+        swim = body_axis_angle(w)
     inter = self_intersections(w) > 0
     pc = per_cycle(tr, sub, tip=tip, harmonics=harmonics, swim_angle=swim, crossing=inter)
     pc_angle = np.asarray(swim, float)
     # a turning swimmer (cycle directions spread by more than a degree): measure the tip's
     # lateral excursion across each cycle's own displacement
     chord = np.arctan2(pc["dy"], pc["dx"])
-    if use.sum() > 1 and np.max(np.abs(np.angle(np.exp(1j * (chord[use] - swim))))) > math.radians(1.0):
+    if not still and use.sum() > 1 and np.max(np.abs(np.angle(np.exp(1j * (chord[use] - swim))))) > math.radians(1.0):
         pc = per_cycle(tr, sub, tip=tip, harmonics=harmonics, swim_angle=chord, crossing=inter)
         pc_angle = chord
     pc = {k: v[use] for k, v in pc.items()}
@@ -545,7 +565,6 @@ def describe(
         p2p_end[e_name] = float(np.nanmean(pe)) if np.any(np.isfinite(pe)) else math.nan
     lead, trail = ("start", "end") if ahead > 0 else ("end", "start")
     settled = bool(cyc.limit_cycle)
-    movie = "px_per_mm" in tr.meta
     note = "" if settled else (
         "no limit cycle: the stroke is still changing from cycle to cycle (onset or transient), so the "
         "averages describe unsettled cycles and the limit-cycle time, transient duration and onset time "
@@ -555,6 +574,19 @@ def describe(
         note = (f"no limit cycle found: the noise hides changes from cycle to cycle of up to "
                 f"{100.0 * np.nanmax(last):.3g} % in period or amplitude, over {100 * _MAX_RESOLVABLE:g} %, so "
                 "whether the stroke has settled is not known")
+    amp = cyc.amplitudes[k0 : k1 + 1]
+    fall = cyc.d_amplitude[k0 + 1 : k1 + 1]
+    if (not settled and amp.size >= 3 and np.all(np.diff(amp) < 0)
+            and np.all(fall > np.nan_to_num(cyc.tol_used[k0 + 1 : k1 + 1, 1], nan=0.0))):
+        rate = (amp[-1] / amp[0]) ** (1.0 / (amp.size - 1))
+        note = (f"the oscillation decays: its amplitude fell every cycle, by {100 * (1 - rate):.2g} % per cycle "
+                f"over the last {amp.size}: no sustained stroke (below the flutter threshold the straight state "
+                "is stable); the figures describe a dying transient")
+    if still:
+        note = (note + "; " if note else "") + (
+            f"no net swimming: the centroid moves {drift / tr.length:.2g} body lengths per cycle, under "
+            f"{floor / tr.length:.2g} (round-off or noise), so the swimming direction, the leading end and the "
+            "advance mean nothing; the lateral excursions are measured across the mean body axis")
     if settled:
         # the trailing run of converged cycles, judged within what the frames resolve where
         # that exceeds tol (a tracked movie's noise, a stroke's harmonics beyond a coarse frame
