@@ -21,6 +21,9 @@ def register(subparsers) -> None:
     p.add_argument("input", help="TIFF stack, folder of PNG/TIFF frames, or MP4/AVI movie")
     p.add_argument("--px-per-mm", type=float, required=True, help="image scale [pixels per mm]")
     p.add_argument("--fps", type=float, default=None, help="frame rate [1/s] (default: the movie's own)")
+    p.add_argument("--times", default=None,
+                   help="text/CSV file of the frames' times, one per frame (a camera's timestamps: dropped or "
+                        "uneven frames); a header may name the column t, time or timestamp (_s or _ms)")
     p.add_argument("--out", default="track.nc", help="NetCDF file (.nc)")
     p.add_argument("--roi", default=None, help="region of interest x0,y0,x1,y1 [pixels]")
     p.add_argument("--points", type=int, default=49, help="arc-length samples along the body (default 49)")
@@ -72,9 +75,14 @@ def _cmd_track(args) -> int:
     out = check_output_file(args.out, (".nc",), what="--out")
     if args.kymograph:
         check_output_file(args.kymograph, (".png", ".pdf", ".svg"), what="--kymograph")
+    times = None
+    if args.times is not None:
+        from .io import read_times
+
+        times = read_times(args.times)
     tr = track(args.input, px_per_mm=args.px_per_mm, fps=args.fps, roi=args.roi, n_points=args.points,
                start_end=args.start_end, field_angle=math.radians(args.field_angle_deg), dark_line=args.dark_line,
-               sigma=args.sigma,
+               sigma=args.sigma, times=times,
                progress=not args.quiet)
     save_track(tr, out)
     m = tr.meta

@@ -19,7 +19,7 @@ import numpy as np
 
 from .._validate import ParameterError
 
-__all__ = ["Frames", "open_frames", "parse_roi", "FRAME_SUFFIXES", "MOVIE_SUFFIXES", "STACK_SUFFIXES"]
+__all__ = ["Frames", "open_frames", "parse_roi", "read_times", "FRAME_SUFFIXES", "MOVIE_SUFFIXES", "STACK_SUFFIXES"]
 
 STACK_SUFFIXES = (".tif", ".tiff")
 FRAME_SUFFIXES = (".png", ".tif", ".tiff")
@@ -291,3 +291,51 @@ def open_frames(source: Any, roi: Any = None) -> Frames:
         x0, y0, x1, y1 = fr.roi
         fr.shape = (y1 - y0, x1 - x0)
     return fr
+
+
+# column names of a timestamps file, and the factor to seconds
+_TIME_COLUMNS = {"t": 1.0, "time": 1.0, "t_s": 1.0, "time_s": 1.0, "timestamp": 1.0, "timestamp_s": 1.0,
+                 "t_ms": 1e-3, "time_ms": 1e-3, "timestamp_ms": 1e-3}
+
+
+def read_times(path: str | os.PathLike) -> np.ndarray:
+    """The frames' times [s] from a text or CSV file (a camera's timestamps): one row per frame,
+    fields separated by commas, semicolons or white space; blank lines and lines starting with
+    ``#`` are skipped. A first row with a field that is not a number is a header naming the time
+    column (t, time, timestamp, optionally with _s or _ms); without one, the first column holds
+    seconds. Whether the times are one per frame and increasing is checked by
+    :func:`~flutterswim.tracking.track.track`."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ParameterError(f"times={str(p)!r} cannot be read ({exc.strerror if isinstance(exc, OSError) else exc})") from None
+    rows = [(n, re.split(r"[,;\s]+", line.strip())) for n, line in enumerate(text.splitlines(), 1)
+            if line.strip() and not line.lstrip().startswith("#")]
+    if not rows:
+        raise ParameterError(f"times={str(p)!r} holds no times")
+
+    def number(v: str) -> float | None:
+        try:
+            return float(v)
+        except ValueError:
+            return None
+
+    col, factor = 0, 1.0
+    n0, first = rows[0]
+    if any(number(v) is None for v in first):
+        names = [v.strip().strip('"').lower() for v in first]
+        hit = [k for k, v in enumerate(names) if v in _TIME_COLUMNS]
+        if not hit:
+            raise ParameterError(f"times={str(p)!r}: its header (row {n0}) names no time column; name one "
+                                 f"{', '.join(sorted(_TIME_COLUMNS))} or give one time [s] per row without a header")
+        col, factor = hit[0], _TIME_COLUMNS[names[hit[0]]]
+        rows = rows[1:]
+    out = []
+    for n, fields in rows:
+        v = number(fields[col]) if col < len(fields) else None
+        if v is None:
+            raise ParameterError(f"times={str(p)!r}, row {n}: {fields[col] if col < len(fields) else ''!r} is not a time "
+                                 "(a number of seconds)")
+        out.append(v * factor)
+    return np.asarray(out, float)

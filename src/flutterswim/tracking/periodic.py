@@ -176,7 +176,7 @@ def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: 
                    max_f: float = 3.0, floor_px: float = 0.02, symmetric: bool = True,
                    max_drift_f: float = 5.0,
                    max_residual_px: float = 1.0, max_frame_ratio: float = 8.0, min_stroke_f: float = 10.0,
-                   ) -> tuple[np.ndarray, np.ndarray, dict]:
+                   positions: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, dict]:
     """The periodic template of a settled stroke placed in every good frame (module docstring).
 
     X, Y (T, P) [px], equal arc-length samples, NaN on frames not ``ok``; period_frames: the
@@ -188,7 +188,8 @@ def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: 
     that median and max_residual_px (a stroke changed by a turn of the field: the drift test's
     F statistic, relative to the residual, can miss it); min_stroke_f: the template is refused
     unless it fits significantly better than one static shape (F of the nested fit; a body at
-    rest). Returns (X, Y, info): info["done"]
+    rest); positions: (T,) each frame's time in frame intervals (a camera's timestamps: a dropped
+    frame leaves a step of 2), default its index. Returns (X, Y, info): info["done"]
     (bool), info["reason"] (why not, or a summary), and when tested "period_frames",
     "harmonics", "drift_harmonics", "drift_f", "drift_px" (the systematic part of the drift
     model's improvement, RMS over samples), "residual_px", "frame_residual_px" (median over
@@ -196,12 +197,13 @@ def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: 
     s = l]), "template_frames", "stroke_f", "symmetric", "symmetry_f" and "symmetry_px"."""
     ok = np.asarray(ok, bool)
     idx = np.nonzero(ok)[0]
+    pos = np.arange(ok.size, dtype=float) if positions is None else np.asarray(positions, float)
     info: dict = {"done": False, "reason": ""}
     H = int(harmonics)
     if not (math.isfinite(period_frames) and period_frames > 0):
         info["reason"] = "not done: no stroke period found"
         return X, Y, info
-    span = (idx[-1] - idx[0]) / period_frames if idx.size else 0.0
+    span = (pos[idx[-1]] - pos[idx[0]]) / period_frames if idx.size else 0.0
     if span < min_cycles:
         info["reason"] = f"not done: the good frames span {span:.1f} strokes (needs >= {min_cycles:g})"
         return X, Y, info
@@ -215,7 +217,7 @@ def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: 
         return X, Y, info
     pts = np.stack([X[idx], Y[idx]], -1)  # (n, P, 2)
     n, P, _ = pts.shape
-    frame = (idx - idx[0]).astype(float)
+    frame = pos[idx] - pos[idx[0]]
     c, R = _initial_frames(pts)
     U = _to_body(pts, c, R)
     period = _refine_period(U, frame, float(period_frames), H)

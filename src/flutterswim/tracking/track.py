@@ -375,7 +375,25 @@ _OPTION_CHECKS = {
     "dark_line": _dark_line, "start_end": _start_end,
 }
 # options of track() passed through unchecked (booleans of its own)
-_PLAIN_OPTIONS = ("roi", "refine", "fixed_length", "tip_check", "periodic", "progress", "fps")
+_PLAIN_OPTIONS = ("roi", "refine", "fixed_length", "tip_check", "periodic", "progress", "fps", "times")
+
+
+def _frame_times(times: Any, n_frames: int) -> np.ndarray:
+    """The frames' times [s] checked: finite, strictly increasing, one per frame."""
+    try:
+        t = np.asarray(times, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"times={times!r} must be numbers, one time [s] per frame") from None
+    if t.ndim != 1 or t.size != n_frames:
+        raise ParameterError(f"times holds {t.size if t.ndim == 1 else t.shape} values; give one time [s] per frame "
+                             f"({n_frames} frames)")
+    if not np.all(np.isfinite(t)):
+        k = int(np.nonzero(~np.isfinite(t))[0][0])
+        raise ParameterError(f"times[{k}]={t[k]!r} must be finite (seconds)")
+    if t.size > 1 and not np.all(np.diff(t) > 0):
+        k = int(np.nonzero(~(np.diff(t) > 0))[0][0])
+        raise ParameterError(f"times must increase strictly; times[{k + 1}]={t[k + 1]!r} follows times[{k}]={t[k]!r}")
+    return t
 
 
 def check_options(**options: Any) -> dict[str, Any]:
@@ -399,7 +417,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
           gap_fraction: float = 0.2, refine: bool = True, window_px: float = 40.0,
           fixed_length: bool = True, tip_check: bool = True, tip_k: float = 6.0, tip_floor_px: float = 2.0,
           smooth_frames: int = 7, periodic: bool = True, dark_line: bool = False, t0: float = 0.0,
-          progress: bool = False) -> Track:
+          times: Any = None, progress: bool = False) -> Track:
     """Track the filament in a movie and return its :class:`Track` (good frames only, mm, s).
 
     source: TIFF stack, folder of PNG/TIFF frames, MP4/AVI movie (path), an array (T, H, W)
@@ -421,7 +439,10 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     frame's own rigid motion (:func:`flutterswim.tracking.periodic.periodic_shape`; the raw
     per-frame lengths stay in the record; ``meta["temporal"]["periodic"]`` says whether and
     why (not)); dark_line: the filament is darker than its background (bright field, a
-    shadow): every frame is tracked negated. Per-frame results (all frames, failed ones NaN, with their reasons) are in
+    shadow): every frame is tracked negated; times: each frame's time [s] (a camera's timestamps,
+    for a movie with dropped or unevenly spaced frames; default t0 + i / fps). A frame identical to
+    the one before (a duplicated frame: its content is not of its time) is flagged "repeated",
+    unless most are (a noiseless movie of a body at rest). Per-frame results (all frames, failed ones NaN, with their reasons) are in
     ``track.meta["frames"]``; see the module docstring for the checks.
     """
     px_per_mm = positive("px_per_mm", px_per_mm)
@@ -436,13 +457,17 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         o[k] for k in ("min_contrast", "length_tol", "jump_tol", "gap_fraction", "window_px"))
     sig = 1.2 if sigma is None else o["sigma"]
     frames = open_frames(source, roi)
-    if fps is None:
+    T = len(frames)
+    if times is not None:
+        times = _frame_times(times, T)
+        if fps is None:
+            fps = 1.0 / float(np.median(np.diff(times)))
+    elif fps is None:
         fps = frames.fps
         if fps is None:
             raise ParameterError(f"fps was not given and input={frames.source!r} does not record a frame rate; "
-                                 "give fps (frames per second)")
+                                 "give fps (frames per second) or the frames' times")
     fps = positive("fps", fps)
-    T = len(frames)
     X = np.full((T, n_points), np.nan)
     Y = np.full((T, n_points), np.nan)
     length = np.full(T, np.nan)
@@ -460,9 +485,13 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     blur_known = sigma is not None
     n_clipped = 0
     still = _StillPixels()
+    repeated = np.zeros(T, bool)
+    prev = None
     try:
         for i, img in enumerate(frames):
             still.add(img)
+            repeated[i] = prev is not None and np.array_equal(img, prev)
+            prev = img
             if dark_line:  # in floats: an unsigned frame's negative wraps (0 stays 0)
                 img = -np.asarray(img, np.float32) if np.asarray(img).dtype.kind in "iu" else np.negative(img)
             r = track_image(img, ref, window_px, n_points=n_points, sigma=sig, min_contrast=min_contrast,
@@ -515,6 +544,13 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         if bar is not None:
             bar.close()
     wall = time.perf_counter() - tic
+    if 0 < np.count_nonzero(repeated) <= (T - 1) // 2:
+        # a camera's noise never repeats a frame: a codec or a grabber duplicated it (in place of
+        # one it dropped), so its content is of an earlier time. All frames repeating is a
+        # noiseless movie of a body at rest.
+        for i in np.nonzero(repeated)[0]:
+            ok[i] = False
+            reason[i] = f"repeated: identical to frame {i - 1} (a duplicated frame: its content is not of its time)"
     if np.count_nonzero(ok) >= 1:
         med = float(np.median(length[ok]))
         dev = np.abs(length - med) / med
@@ -577,9 +613,13 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         from .periodic import periodic_shape_flagging
 
         try:
-            X, Y, pinfo = periodic_shape_flagging(X, Y, ok, reason, per_stroke)
+            pos = None if times is None else (times - times[0]) * fps
+            X, Y, pinfo = periodic_shape_flagging(X, Y, ok, reason, per_stroke, positions=pos)
         except (np.linalg.LinAlgError, ValueError) as exc:  # a degenerate movie: the frames stay as they are
             pinfo = {"done": False, "reason": f"not done: the template fit failed ({exc})"}
+        if times is None and pinfo["reason"].startswith("not done: the stroke is not periodic"):
+            pinfo["reason"] += ("; if the camera dropped frames, give the frames' times (times, --times): a dropped "
+                                "frame shifts every later one by a frame interval")
         temporal["periodic"] = pinfo["reason"]
         temporal["periodic_info"] = {k: v for k, v in pinfo.items() if k != "reason"}
     n_ok = int(np.count_nonzero(ok))
@@ -601,7 +641,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
                              f"(failures: {why or 'none'}){hint}")
     Lgood = length[ok]
     L_px = float(np.median(Lgood))
-    t_all = t0 + np.arange(T) / fps
+    t_all = t0 + np.arange(T) / fps if times is None else times
     scale = 1.0 / px_per_mm
     frames_info = {
         "t": t_all, "x_px": X, "y_px": Y, "length_px": length, "contrast": contrast, "ok": ok,

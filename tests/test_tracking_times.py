@@ -1,0 +1,122 @@
+"""Frames' times: a movie with dropped frames, tracked with the camera's timestamps, keeps its
+period and its periodic template; duplicated frames are flagged; the timestamps file reader."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+pytest.importorskip("skimage")
+
+import flutterswim as fs  # noqa: E402
+from flutterswim._validate import ParameterError  # noqa: E402
+from flutterswim.analysis.descriptors import describe  # noqa: E402
+from flutterswim.tracking import failures, render, track  # noqa: E402
+from flutterswim.tracking.evaluate import truth_track  # noqa: E402
+from flutterswim.tracking.io import read_times  # noqa: E402
+
+FPS = 50.0
+DROP = [20, 47, 73]
+
+
+@pytest.fixture(scope="module")
+def movie():
+    """The paper's settled stroke, 101 frames at 50 fps, SNR 5, and its described truth."""
+    r = fs.simulate(fs.PAPER, 10.0, n_segments=24, frame_dt=1.0 / FPS)
+    sl = slice(r.t.size - 101, r.t.size)
+    mv = render(SimpleNamespace(t=r.t[sl], x=r.x[sl], y=r.y[sl]), um_per_px=14.0, snr=5.0, seed=0)
+    return mv, describe(truth_track(mv, 3.7), n_last=100)
+
+
+def _rel(a: float, b: float) -> float:
+    return abs(a / b - 1.0)
+
+
+def test_dropped_frames_with_their_times(movie):
+    """Three frames dropped: with the frames' times the period, both ends and the advance stay
+    those of the full movie's truth and the periodic template is used; counted at the nominal
+    frame rate instead, every frame after a drop is a frame interval late (the period comes out
+    3 % short) and the template is refused with a hint to give the times."""
+    mv, truth = movie
+    keep = np.setdiff1d(np.arange(mv.t.size), DROP)
+    tr = track(mv.frames[keep], px_per_mm=mv.px_per_mm, times=mv.t[keep])
+    assert not failures(tr)
+    assert tr.meta["temporal"]["periodic"].startswith("done")
+    np.testing.assert_allclose(tr.t, mv.t[keep])
+    d = describe(tr, n_last=100)
+    assert _rel(d.period_s, truth.period_s) < 1e-3
+    assert _rel(d.trailing_lateral_p2p_mm, truth.trailing_lateral_p2p_mm) < 5e-3
+    assert _rel(d.advance_per_cycle_mm, truth.advance_per_cycle_mm) < 5e-3
+    naive = track(mv.frames[keep], px_per_mm=mv.px_per_mm, fps=FPS, t0=float(mv.t[0]))
+    assert _rel(describe(naive, n_last=100).period_s, truth.period_s) > 0.01
+    assert "give the frames' times" in naive.meta["temporal"]["periodic"]
+
+
+def test_duplicated_frames_are_flagged(movie):
+    """A frame replaced by a copy of the one before (a grabber's duplicate) is flagged
+    'repeated' and left out; the others are kept and the period is the truth's."""
+    mv, truth = movie
+    fr = mv.frames.copy()
+    for i in DROP:
+        fr[i] = fr[i - 1]
+    tr = track(fr, px_per_mm=mv.px_per_mm, fps=FPS, t0=float(mv.t[0]))
+    f = failures(tr)
+    assert [i for i, _, _ in f] == DROP
+    assert all(why.startswith("repeated: identical to frame") for _, _, why in f)
+    assert _rel(describe(tr, n_last=100).period_s, truth.period_s) < 1e-3
+
+
+def test_a_noiseless_body_at_rest_is_not_flagged_repeated():
+    """Every frame identical (a noiseless movie of a still body) is not a run of duplicates."""
+    s = np.linspace(0.0, 3.7e-3, 25)
+    t = np.arange(12) / FPS
+    rest = SimpleNamespace(t=t, x=np.tile(s, (t.size, 1)), y=np.tile(2e-4 * np.sin(3 * s / 3.7e-3), (t.size, 1)))
+    mv = render(rest, um_per_px=14.0, snr=math.inf)
+    tr = track(mv, px_per_mm=mv.px_per_mm, fps=FPS)
+    assert not [why for _, _, why in failures(tr) if why.startswith("repeated")]
+    assert tr.t.size == t.size
+
+
+def test_times_are_checked(movie):
+    mv, _ = movie
+    fr = mv.frames[:12]
+    for bad, word in ((mv.t[:11], "one time"), (mv.t[:12][::-1], "increase strictly"),
+                      (np.r_[mv.t[:11], np.nan], "finite"), (["a"] * 12, "numbers")):
+        with pytest.raises(ParameterError, match=word):
+            track(fr, px_per_mm=mv.px_per_mm, times=bad)
+
+
+def test_read_times(tmp_path):
+    p = tmp_path / "t.csv"
+    p.write_text("frame,time_ms\n0,0\n\n1,20.5\n2,40\n")
+    np.testing.assert_allclose(read_times(p), [0.0, 0.0205, 0.04])
+    p.write_text("# camera clock\n0.0\n0.02\n0.041\n")
+    np.testing.assert_allclose(read_times(p), [0.0, 0.02, 0.041])
+    p.write_text("frame;stamp\n0;0\n")
+    with pytest.raises(ParameterError, match="names no time column"):
+        read_times(p)
+    p.write_text("0.0\n0.02\nabc\n")
+    with pytest.raises(ParameterError, match="row 3: 'abc'"):
+        read_times(p)
+
+
+def test_cli_times_of_the_wrong_count(tmp_path, movie):
+    """`track --times` with fewer times than frames: one line, exit 2, nothing written."""
+    import tifffile
+
+    mv, _ = movie
+    stack = tmp_path / "m.tif"
+    tifffile.imwrite(stack, mv.frames[:10])
+    times = tmp_path / "t.txt"
+    times.write_text("\n".join(str(v) for v in mv.t[:9]))
+    out = tmp_path / "tr.nc"
+    r = subprocess.run([sys.executable, "-m", "flutterswim", "track", str(stack), "--px-per-mm", str(mv.px_per_mm),
+                        "--times", str(times), "--out", str(out), "--quiet"], capture_output=True, text=True)
+    assert r.returncode == 2, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and "one time [s] per frame" in r.stderr
+    assert not out.exists()
