@@ -184,6 +184,24 @@ def clean_frame(img: np.ndarray) -> np.ndarray:
     return clean_hot_pixels(a)
 
 
+# a component lying at least this much on static objects is one (debris, a fibre, a bead)
+_STATIC_SHARE = 0.8
+
+
+def _moving_best(lab: np.ndarray, n: int, sums: np.ndarray, static: np.ndarray | None) -> int:
+    """Label (1..n) of the component with the most light ``sums`` (n + 1,), among those not lying
+    on ``static`` objects (share >= _STATIC_SHARE) when any is not."""
+    best = int(np.argmax(sums[1:])) + 1
+    if static is None or n < 2:
+        return best
+    on = np.bincount(lab.ravel(), weights=static.ravel(), minlength=n + 1)[1:]
+    size = np.bincount(lab.ravel(), minlength=n + 1)[1:]
+    moving = on < _STATIC_SHARE * np.maximum(size, 1)
+    if not moving.any() or moving[best - 1]:
+        return best
+    return int(np.nonzero(moving)[0][np.argmax(sums[1:][moving])]) + 1
+
+
 def robust_noise(f: np.ndarray) -> tuple[float, float]:
     """(median, 1.4826 * median absolute deviation) of an array (subsampled if large)."""
     v = f.ravel()
@@ -194,9 +212,10 @@ def robust_noise(f: np.ndarray) -> tuple[float, float]:
 
 
 def segment(img: np.ndarray, *, sigma: float = 1.2, k_low: float = 2.0, k_high: float = 5.0,
-            min_pixels: int = 20, plane: np.ndarray | None = None) -> Segmentation:
+            min_pixels: int = 20, plane: np.ndarray | None = None, static: np.ndarray | None = None) -> Segmentation:
     """Matched filter, hysteresis threshold (skimage.filters.apply_hysteresis_threshold) at
-    median + k sd, and the component with the largest summed filtered intensity; ``plane``:
+    median + k sd, and the component with the largest summed filtered intensity (among those not
+    lying on ``static`` objects, (H, W) bool, when any is not: debris that stays put); ``plane``:
     the frame's background plane, when already known (:func:`background_plane`)."""
     from skimage.filters import apply_hysteresis_threshold
 
@@ -209,8 +228,7 @@ def segment(img: np.ndarray, *, sigma: float = 1.2, k_low: float = 2.0, k_high: 
     if n == 0:
         return Segmentation(f, None, med, sd, 0, False, "no component above the threshold")
     sums = np.bincount(lab.ravel(), weights=(f - med).ravel(), minlength=n + 1)
-    best = int(np.argmax(sums[1:])) + 1
-    mask = lab == best
+    mask = lab == _moving_best(lab, n, sums, static)
     if int(mask.sum()) < min_pixels:
         return Segmentation(f, None, med, sd, n, False, "no component above the threshold")
     return Segmentation(f, mask, med, sd, n, True, "")

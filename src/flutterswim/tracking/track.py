@@ -49,21 +49,22 @@ from .._validate import ParameterError, finite, non_negative, positive, positive
 from ..analysis.track import Track
 from .centreline import fit_centreline
 from .io import open_frames
-from .segment import BACKGROUND_SIGMA, background_plane, clean_frame, segment
+from .segment import _STATIC_SHARE, BACKGROUND_SIGMA, _moving_best, background_plane, clean_frame, segment
 from .tips import refine_tips
 
-__all__ = ["track", "track_frame", "track_image", "coarse_box", "orient", "failures", "START_ENDS"]
+__all__ = ["track", "track_frame", "track_image", "coarse_box", "static_objects", "orient", "failures", "START_ENDS"]
 
 START_ENDS = ("left", "right", "top", "bottom")
 
 
 def _component_light(filtered: np.ndarray, median: float, noise: float, k_high: float,
-                     mask: np.ndarray, x: np.ndarray, y: np.ndarray) -> float:
+                     mask: np.ndarray, x: np.ndarray, y: np.ndarray, static: np.ndarray | None = None) -> float:
     """Light of the brightest piece other than ``mask`` that could be the body's own over that
     of ``mask`` (0: none). A piece of the body broken off lies beyond one of the ends of the
     centreline (x, y) (P,) [px]: within 0.75 of that centreline's length of an end (the piece
     tracked may be the smaller part) and within 60 degrees of its outward tangent; a piece
-    elsewhere (dust or debris beside the body, static or not) is not the body's."""
+    elsewhere (dust or debris beside the body, static or not) is not the body's, nor one lying on
+    ``static`` objects (:func:`static_objects`)."""
     lab, n = ndi.label(filtered > median + k_high * noise, structure=np.ones((3, 3), bool))
     if n < 2:
         return 0.0
@@ -81,6 +82,10 @@ def _component_light(filtered: np.ndarray, median: float, noise: float, k_high: 
         dist = np.hypot(dx, dy)
         ahead = (dx * tx + dy * ty) >= 0.5 * dist * nt  # within 60 degrees of the outward tangent
         near[np.unique(ids[(dist <= reach) & ahead])] = True
+    if static is not None:
+        size = np.bincount(lab.ravel(), minlength=n + 1)
+        on = np.bincount(lab.ravel(), weights=static.ravel(), minlength=n + 1)
+        near &= on < _STATIC_SHARE * np.maximum(size, 1)
     cand = np.array([k for k in range(1, n + 1) if near[k] and k not in set(own.tolist())], int)
     others = sums[cand - 1] if cand.size else np.empty(0)
     return float(others.max()) / main if others.size and main > 0 else 0.0
@@ -129,16 +134,18 @@ def saturation_level(img: np.ndarray, min_plateau: int = 10) -> float | None:
 
 def track_frame(img: np.ndarray, *, n_points: int = 49, sigma: float = 1.2, k_low: float = 2.0,
                 k_high: float = 5.0, min_contrast: float = 4.0, gap_fraction: float = 0.2,
-                max_branch: float = 0.15, refine: bool = True) -> dict[str, Any]:
+                max_branch: float = 0.15, refine: bool = True, static: np.ndarray | None = None) -> dict[str, Any]:
     """Centreline of one frame (H, W): dict with x, y (n_points,) [px] (NaN on failure),
-    length [px], contrast (ridge over filtered-noise sd), ok, reason."""
+    length [px], contrast (ridge over filtered-noise sd), ok, reason. ``static``: (H, W) bool,
+    static objects (:func:`static_objects`): the body is the brightest component not on them
+    (when one is not), and a piece on them is not a piece of the body."""
     nan = np.full(n_points, np.nan)
     sat = saturation_level(img)
     out: dict[str, Any] = {"x": nan, "y": nan, "length": math.nan, "contrast": math.nan, "ok": False,
                            "reason": "", "saturated": sat is not None}
     img = clean_frame(img)
     plane = background_plane(img)
-    seg = segment(img, sigma=max(sigma, _MIN_FILTER_SIGMA), k_low=k_low, k_high=k_high, plane=plane)
+    seg = segment(img, sigma=max(sigma, _MIN_FILTER_SIGMA), k_low=k_low, k_high=k_high, plane=plane, static=static)
     if not seg.ok:
         out["reason"] = f"lost contrast: {seg.reason}"
         return out
@@ -159,7 +166,7 @@ def track_frame(img: np.ndarray, *, n_points: int = 49, sigma: float = 1.2, k_lo
                "lost ridge": "lost contrast: the ridge is lost"}.get(c.reason, c.reason)
         out["reason"] = why
         return out
-    light = _component_light(seg.filtered, seg.median, seg.noise, k_high, m, c.x, c.y)
+    light = _component_light(seg.filtered, seg.median, seg.noise, k_high, m, c.x, c.y, static)
     if light > gap_fraction:
         out["reason"] = f"gap: a second piece holds {100 * light:.0f}% of the body's light"
         return out
@@ -250,9 +257,10 @@ def estimate_blur(img: np.ndarray, x: np.ndarray, y: np.ndarray, sigma_filter: f
     return math.sqrt(max(w * w - sigma_filter**2, 0.25))
 
 
-def coarse_box(img: np.ndarray, k: int = 4) -> tuple[np.ndarray, np.ndarray] | None:
-    """Corners ([x0, x1], [y0, y1]) [px] of the brightest line-like object, found on the frame
-    reduced k x k (block means raise a thin line's SNR about k-fold), or None."""
+def _coarse_objects(img: np.ndarray, k: int = 4) -> tuple[np.ndarray, np.ndarray] | None:
+    """(objects (Hc, Wc) bool, excess light (Hc, Wc)) on the frame reduced k x k (block means
+    raise a thin line's SNR about k-fold): blocks 4 robust SD above a 9-block local mean; None
+    for a frame under 16 k px a side or without noise."""
     H, W = img.shape
     Hc, Wc = H // k, W // k
     if Hc < 16 or Wc < 16:
@@ -263,21 +271,58 @@ def coarse_box(img: np.ndarray, k: int = 4) -> tuple[np.ndarray, np.ndarray] | N
     sd = 1.4826 * float(np.median(np.abs(f - med)))
     if not sd > 0:
         return None
-    lab, n = ndi.label(f > med + 4 * sd, structure=np.ones((3, 3), bool))
+    return f > med + 4 * sd, f - med
+
+
+def static_objects(frames: Any, k: int = 4, n_samples: int = 8, negate: bool = False) -> np.ndarray | None:
+    """(H, W) bool: the bright objects that stay put, found in every one of ``n_samples``
+    frames spread over the movie on the k x k reduced grid (:func:`_coarse_objects`; a block's
+    neighbours included): debris, a fibre, a bead, never a swimmer that strokes or advances
+    (one at rest is, and is then tracked as before). None for fewer frames or frames too
+    small. ``negate``: the frames of a dark line."""
+    T = len(frames)
+    if T < n_samples:
+        return None
+    on, img = None, None
+    for i in np.unique(np.linspace(0, T - 1, n_samples).round().astype(int)):
+        img = clean_frame(frames[i])
+        obj = _coarse_objects(-np.asarray(img, np.float32) if negate else img, k)
+        if obj is None:
+            return None
+        on = obj[0] if on is None else on & obj[0]
+    if on is None or not on.any():
+        return None
+    on = ndi.binary_dilation(on, np.ones((3, 3), bool))
+    H, W = np.shape(img)
+    out = np.zeros((H, W), bool)
+    out[: on.shape[0] * k, : on.shape[1] * k] = np.repeat(np.repeat(on, k, 0), k, 1)
+    return out
+
+
+def coarse_box(img: np.ndarray, k: int = 4, static: np.ndarray | None = None
+               ) -> tuple[np.ndarray, np.ndarray] | None:
+    """Corners ([x0, x1], [y0, y1]) [px] of the brightest line-like object (not on ``static``,
+    :func:`static_objects`, when another is), found on the frame reduced k x k, or None."""
+    obj = _coarse_objects(img, k)
+    if obj is None:
+        return None
+    lab, n = ndi.label(obj[0], structure=np.ones((3, 3), bool))
     if n == 0:
         return None
-    sums = np.bincount(lab.ravel(), weights=(f - med).ravel(), minlength=n + 1)
-    rows, cols = np.nonzero(lab == int(np.argmax(sums[1:])) + 1)
+    sums = np.bincount(lab.ravel(), weights=obj[1].ravel(), minlength=n + 1)
+    st = None if static is None else static[: lab.shape[0] * k: k, : lab.shape[1] * k: k]
+    rows, cols = np.nonzero(lab == _moving_best(lab, n, sums, st))
     return (np.array([cols.min(), cols.max() + 1]) * k, np.array([rows.min(), rows.max() + 1]) * k)
 
 
 def track_image(img: np.ndarray, ref: tuple[np.ndarray, np.ndarray] | None, window_px: float,
-                **opts: Any) -> dict[str, Any]:
+                static: np.ndarray | None = None, **opts: Any) -> dict[str, Any]:
     """:func:`track_frame` inside a search window around ``ref`` (the last good centreline,
     or without one the box of :func:`coarse_box`) plus ``window_px``; on the whole frame if
-    anything fails in the window, so no verdict depends on it."""
+    anything fails in the window, so no verdict depends on it. ``static``: the movie's static
+    objects (:func:`static_objects`), passed over for a moving one."""
     if window_px > 0:
-        box = (ref[0], ref[1]) if ref is not None else coarse_box(clean_frame(img))
+        box = (ref[0], ref[1]) if ref is not None else coarse_box(clean_frame(img), static=static)
         if box is not None:
             Hf, Wf = img.shape
             c0 = int(max(np.floor(np.min(box[0])) - window_px, 0))
@@ -285,11 +330,11 @@ def track_image(img: np.ndarray, ref: tuple[np.ndarray, np.ndarray] | None, wind
             r0 = int(max(np.floor(np.min(box[1])) - window_px, 0))
             r1 = int(min(np.ceil(np.max(box[1])) + window_px + 1, Hf))
             if (r1 - r0) * (c1 - c0) < 0.8 * Hf * Wf:
-                r = track_frame(img[r0:r1, c0:c1], **opts)
+                r = track_frame(img[r0:r1, c0:c1], static=None if static is None else static[r0:r1, c0:c1], **opts)
                 if r["ok"]:
                     r["x"], r["y"] = r["x"] + c0, r["y"] + r0
                     return r
-    return track_frame(img, **opts)
+    return track_frame(img, static=static, **opts)
 
 
 def _start_score(x: np.ndarray, y: np.ndarray, start_end: str) -> float:
@@ -484,6 +529,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     ref: tuple[np.ndarray, np.ndarray] | None = None
     blur_known = sigma is not None
     n_clipped = 0
+    static = static_objects(frames, negate=dark_line) if window_px > 0 or T > 1 else None
     still = _StillPixels()
     repeated = np.zeros(T, bool)
     prev = None
@@ -494,7 +540,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
             prev = img
             if dark_line:  # in floats: an unsigned frame's negative wraps (0 stays 0)
                 img = -np.asarray(img, np.float32) if np.asarray(img).dtype.kind in "iu" else np.negative(img)
-            r = track_image(img, ref, window_px, n_points=n_points, sigma=sig, min_contrast=min_contrast,
+            r = track_image(img, ref, window_px, static, n_points=n_points, sigma=sig, min_contrast=min_contrast,
                             gap_fraction=gap_fraction, refine=refine)
             if sigma is None and not blur_known and r["ok"]:
                 # the blur of this movie, from its first good frame; that frame again if it is
@@ -503,8 +549,8 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
                 blur_known = True
                 if math.isfinite(est) and abs(est - sig) > 0.15 * sig:
                     sig = float(np.clip(est, 0.6, 6.0))
-                    r = track_image(img, None, window_px, n_points=n_points, sigma=sig, min_contrast=min_contrast,
-                                    gap_fraction=gap_fraction, refine=refine)
+                    r = track_image(img, None, window_px, static, n_points=n_points, sigma=sig,
+                                    min_contrast=min_contrast, gap_fraction=gap_fraction, refine=refine)
             contrast[i] = r["contrast"]
             n_clipped += bool(r.get("saturated", False))
             if r["ok"]:

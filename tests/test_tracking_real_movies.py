@@ -1,5 +1,6 @@
-"""Frames' times: a movie with dropped frames, tracked with the camera's timestamps, keeps its
-period and its periodic template; duplicated frames are flagged; the timestamps file reader."""
+"""What real microscope movies have. Frames' times: a movie with dropped frames, tracked with
+the camera's timestamps, keeps its period and its periodic template; duplicated frames are
+flagged; the timestamps file reader. Static debris brighter than the swimmer is passed over."""
 
 from __future__ import annotations
 
@@ -17,8 +18,10 @@ import flutterswim as fs  # noqa: E402
 from flutterswim._validate import ParameterError  # noqa: E402
 from flutterswim.analysis.descriptors import describe  # noqa: E402
 from flutterswim.tracking import failures, render, track  # noqa: E402
-from flutterswim.tracking.evaluate import truth_track  # noqa: E402
+from flutterswim.tracking.evaluate import pixel_errors, truth_track  # noqa: E402
 from flutterswim.tracking.io import read_times  # noqa: E402
+from flutterswim.tracking.render import line_image  # noqa: E402
+from flutterswim.tracking.track import static_objects, track_frame  # noqa: E402
 
 FPS = 50.0
 DROP = [20, 47, 73]
@@ -120,3 +123,50 @@ def test_cli_times_of_the_wrong_count(tmp_path, movie):
     assert r.returncode == 2, r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and "one time [s] per frame" in r.stderr
     assert not out.exists()
+
+
+def _with_fibre(mv, height: float = 2.5):
+    """The movie with a static straight fibre (a dust fibre) below the swimmer's path, whose
+    line holds more light than the body (``height`` times the line's height, 0.6 of its
+    length), with its own shot noise."""
+    T, H, W = mv.frames.shape
+    y0 = float(np.max(mv.y_px)) + 12.0
+    xs = np.linspace(0.2 * W, 0.2 * W + 0.6 * (W - 48), 50)
+    fibre = line_image(xs, np.full(xs.size, y0), (H + 20, W), mv.meta["psf_sigma"])
+    big = np.concatenate([mv.frames, np.full((T, 20, W), np.median(mv.frames), np.float32)], axis=1)
+    rng = np.random.default_rng(5)
+    extra = height * mv.meta["amplitude"] * fibre
+    return (big + rng.poisson(np.broadcast_to(extra, big.shape)).astype(np.float32)), fibre > 0.5
+
+
+def test_static_debris_brighter_than_the_body_is_passed_over(movie):
+    """A static fibre holding more light than the swimmer: one frame alone cannot tell them
+    apart (track_frame takes the fibre; the swimmer is then a 'gap'), the movie can: the fibre stays put in every frame
+    (static_objects covers it, not the swimmer), and the swimmer is tracked in every frame
+    to the accuracy of the clean movie."""
+    mv, _ = movie
+    frames, fibre = _with_fibre(mv)
+    lone = track_frame(frames[0])  # the fibre, or a failure for the body seen as its piece
+    assert not (lone["ok"] and np.max(np.abs(np.sort(lone["y"]) - np.sort(mv.y_px[0]))) < 2.0)
+    st = static_objects(frames)
+    assert st is not None and np.all(st[fibre])
+    rows = np.clip(np.rint(mv.y_px).astype(int), 0, st.shape[0] - 1)
+    cols = np.clip(np.rint(mv.x_px).astype(int), 0, st.shape[1] - 1)
+    assert not st[rows, cols].any()
+    tr = track(frames, px_per_mm=mv.px_per_mm, fps=FPS, t0=float(mv.t[0]))
+    assert not failures(tr)
+    D, E, idx = pixel_errors(tr, mv)
+    assert idx.size == mv.t.size
+    assert math.sqrt(np.mean(D**2)) <= 0.25 and math.sqrt(np.mean(E**2)) <= 0.5
+
+
+def test_a_noisy_body_at_rest_is_still_tracked():
+    """A filament at rest (below the flutter threshold) is a static object itself: with nothing
+    else moving it is tracked as before, in every frame."""
+    s = np.linspace(0.0, 3.7e-3, 25)
+    t = np.arange(12) / FPS
+    rest = SimpleNamespace(t=t, x=np.tile(s, (t.size, 1)), y=np.tile(2e-4 * np.sin(3 * s / 3.7e-3), (t.size, 1)))
+    mv = render(rest, um_per_px=14.0, snr=5.0, seed=2)
+    assert static_objects(mv.frames) is not None
+    tr = track(mv, px_per_mm=mv.px_per_mm, fps=FPS)
+    assert not failures(tr) and tr.t.size == t.size
