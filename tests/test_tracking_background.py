@@ -121,3 +121,24 @@ def test_a_pair_of_hot_pixels_is_removed_and_a_line_is_never_touched(step):
         out = clean_hot_pixels(dirty)
         assert np.abs(out - img).max() < 50.0, (h1, h2)  # back within the noise of the neighbourhood
         assert np.abs(out[:, :340] - dirty[:, :340]).max() < 1e-3  # nothing else moved (float32)
+
+
+def test_hot_clusters_of_three_and_four_pixels_are_removed():
+    """A sensor's hot cluster (3 or 4 touching pixels within 2 x 2) beside a line is replaced by
+    its neighbourhood, in every arrangement; the line and the noise elsewhere do not move (a
+    cluster near an end was taken for the body's tip: 'tip not found')."""
+    from flutterswim.tracking.segment import clean_hot_pixels
+
+    rng = np.random.default_rng(4)
+    x, y = _arc()
+    img = 100.0 + 50.0 * line_image(x, y, SHAPE, SIGMA) + rng.normal(0.0, 10.0, SHAPE)
+    shapes = [((0, 0), (0, 1), (1, 0), (1, 1)), ((0, 0), (0, 1), (1, 1)), ((0, 1), (1, 0), (1, 1)),
+              ((0, 0), (1, 0), (1, 1))]
+    for cells in shapes:
+        for height in (300.0, 2000.0):
+            dirty = img.copy()
+            for dr, dc in cells:
+                dirty[60 + dr, 360 + dc] += height * (1.0 + 0.2 * dr)
+            out = clean_hot_pixels(dirty)
+            assert np.abs(out - img).max() < 50.0, (cells, height)
+            assert np.abs(out[:, :340] - dirty[:, :340]).max() < 1e-3

@@ -124,7 +124,8 @@ def clean_hot_pixels(img: np.ndarray, k: float = 8.0) -> np.ndarray:
     pixels) and by more than half its height over the frame's median, and replaced by the
     brightest neighbour; two touching pixels, each the other's brightest neighbour, are a hot
     pair when both exceed all the pair's other neighbours by as much (both then take the
-    brightest of those). A line blurred by the optics has neighbours as bright as itself along it and
+    brightest of those); likewise 3 or 4 touching pixels within a 2 x 2 box (:func:`_hot_clusters`).
+    A line blurred by the optics has neighbours as bright as itself along it and
     across it (at 1 px, 0.7 of its height for a blur of 1.2 px), so it is never touched.
     Returns ``img`` itself when nothing is hot."""
     a = np.asarray(img, dtype=np.float32)
@@ -164,11 +165,42 @@ def clean_hot_pixels(img: np.ndarray, k: float = 8.0) -> np.ndarray:
     other = np.maximum(nb2, nb2[qq])  # the brightest neighbour of the pair
     pair &= (low - other > k * sd) & (low - other > 0.5 * (low - med))
     hot = spike(nb1) & ~pair
-    if not (hot.any() or pair.any()):
+    clusters = _hot_clusters(a, r, c, k * sd, med)
+    if not (hot.any() or pair.any() or clusters):
         return img
     out = a.copy()
     out[r[hot], c[hot]] = nb1[hot]
     out[r[pair], c[pair]] = other[pair]
+    for rows, cols, v in clusters:
+        out[rows, cols] = v
+    return out
+
+
+def _hot_clusters(a: np.ndarray, r: np.ndarray, c: np.ndarray, step: float, med: float) -> list:
+    """Clusters of 3 or 4 bright pixels within a 2 x 2 box (a sensor's hot cluster) among the
+    candidates (r, c): each of them over every pixel around the box by more than ``step`` and by
+    half its own height over ``med``. Returns (rows, cols, value) per cluster, the value the
+    brightest pixel around it. A line is never one: it goes on beyond any 2 x 2 box."""
+    H, W = a.shape
+    m = np.zeros(a.shape, bool)
+    m[r, c] = True
+    lab, n = ndi.label(m, structure=np.ones((3, 3), bool))
+    out = []
+    for j, sl in enumerate(ndi.find_objects(lab), 1):
+        if sl is None or sl[0].stop - sl[0].start > 2 or sl[1].stop - sl[1].start > 2:
+            continue
+        own = lab[sl] == j
+        if np.count_nonzero(own) < 3:  # single pixels and pairs: clean_hot_pixels
+            continue
+        r0, r1 = max(sl[0].start - 1, 0), min(sl[0].stop + 1, H)
+        c0, c1 = max(sl[1].start - 1, 0), min(sl[1].stop + 1, W)
+        inner = np.zeros((r1 - r0, c1 - c0), bool)
+        inner[sl[0].start - r0: sl[0].stop - r0, sl[1].start - c0: sl[1].stop - c0] = own
+        box = a[r0:r1, c0:c1]
+        low, ring = float(box[inner].min()), float(box[~inner].max())
+        if low - ring > step and low - ring > 0.5 * (low - med):
+            rows, cols = np.nonzero(inner)
+            out.append((rows + r0, cols + c0, ring))
     return out
 
 
