@@ -67,3 +67,15 @@ def test_api_messages_keep_their_parameter_names(tmp_path, capsys):
     assert f"animate: out='{tmp_path / 'v.txt'}'" in line
     line = _error(["steer", "--out", tmp_path / "v.txt", "--metrics", tmp_path / "s.json"], capsys)
     assert f"steer: --out='{tmp_path / 'v.txt'}'" in line
+
+
+# ---------------------------------------------------------------------- reproduce --out on a file
+def test_reproduce_out_on_a_file_says_the_folder_is_a_file(tmp_path, capsys):
+    f = tmp_path / "notes.txt"
+    f.write_text("mine")
+    line = _error(["reproduce", "--out", f, "--only", "table1"], capsys)
+    assert "is an existing file, not an output folder" in line and "store" not in line, line
+    assert f.read_text() == "mine"
+    # the sweep's own message is unchanged
+    line = _error(["sweep", "chi=60", "--out", f], capsys)
+    assert "is an existing file, not a sweep store" in line and f.read_text() == "mine"
