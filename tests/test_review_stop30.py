@@ -5,6 +5,7 @@ given as strings to simulate(), and an output folder that cannot be created."""
 import importlib
 import os
 
+import numpy as np
 import pytest
 
 import flutterswim as fs
@@ -79,3 +80,38 @@ def test_reproduce_out_on_a_file_says_the_folder_is_a_file(tmp_path, capsys):
     # the sweep's own message is unchanged
     line = _error(["sweep", "chi=60", "--out", f], capsys)
     assert "is an existing file, not a sweep store" in line and f.read_text() == "mine"
+
+
+# ------------------------------------------------------------------------- waypoints CSV
+def _waypoints(tmp_path, text):
+    from flutterswim.steering.path import waypoints_csv
+
+    (tmp_path / "w.csv").write_text(text)
+    return waypoints_csv(tmp_path / "w.csv", L)
+
+
+@pytest.mark.parametrize("text", ["0,0\n5,0\n5,5\n\n", "0,0\n\n5,0\n5,5\n", "\n0,0\n5,0\n \n5,5\n\n\n",
+                                  "x,y\n\n0,0\n5,0\n5,5\n", "x_mm,y_mm\n0,0\n5,0\n\n5,5\n"])
+def test_waypoints_skip_blank_lines_and_a_header(tmp_path, text):
+    p = _waypoints(tmp_path, text)
+    # the waypoints (0,0), (5,0), (5,5) body lengths: one corner at (5,0), 10 body lengths long
+    assert p.length == pytest.approx(10 * L)
+    assert np.allclose(p.points[p.corners], [[5 * L, 0.0]])
+    assert np.allclose(p.points[[0, -1]], [[0.0, 0.0], [5 * L, 5 * L]])
+
+
+@pytest.mark.parametrize("text, line, value", [("1,abc\n0,0\n5,0\n", "line 1", "'abc'"),
+                                               ("0,zz\n5,0\n5,5\n", "line 1", "'zz'"),
+                                               ("0,0\n\n5,abc\n5,5\n", "line 3", "'abc'"),
+                                               ("x,y\n0,0\n7\n5,5\n", "line 3", "'7'")])
+def test_waypoints_first_row_with_a_number_is_data(tmp_path, text, line, value):
+    with pytest.raises(ParameterError, match=f"{line}: {value}"):
+        _waypoints(tmp_path, text)
+
+
+def test_steer_refuses_a_bad_first_waypoint_row(tmp_path, capsys, no_computing):
+    (tmp_path / "w.csv").write_text("1,abc\n0,0\n5,0\n")
+    line = _error(["steer", "--path", "waypoints", "--waypoints", tmp_path / "w.csv", "--out", tmp_path / "s.nc",
+                   "--metrics", tmp_path / "s.json", "--quiet"], capsys)
+    assert "--waypoints=" in line and "line 1" in line and "'abc'" in line
+    assert not (tmp_path / "s.nc").exists() and not (tmp_path / "s.json").exists()
