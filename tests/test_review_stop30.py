@@ -115,3 +115,25 @@ def test_steer_refuses_a_bad_first_waypoint_row(tmp_path, capsys, no_computing):
                    "--metrics", tmp_path / "s.json", "--quiet"], capsys)
     assert "--waypoints=" in line and "line 1" in line and "'abc'" in line
     assert not (tmp_path / "s.nc").exists() and not (tmp_path / "s.json").exists()
+
+
+# ------------------------------------------------------------- simulate(): numbers as numbers
+@pytest.mark.parametrize("name, kw", [
+    ("t_end", {"t_end": "0.01"}), ("t_end", {"t_end": True}), ("t_end", {"t_end": np.bool_(True)}),
+    ("t_start", {"t_start": "0"}), ("rtol", {"rtol": "1e-3"}), ("atol", {"atol": True}),
+    ("frame_dt", {"frame_dt": "0.001"}), ("max_step", {"max_step": "0.01"}), ("field", {"field": "0.5"}),
+    ("field", {"field": False}),
+])
+def test_simulate_refuses_numbers_given_as_strings_or_bools(name, kw):
+    kw = {"t_end": 0.01, **kw}
+    with pytest.raises(ParameterError, match=rf"^{name}=.* not a number"):
+        fs.simulate(fs.PAPER, kw.pop("t_end"), n_segments=6, **kw)
+
+
+def test_simulate_takes_a_number_not_its_text():
+    """t_end "0.01" is refused; the same number as numpy scalars (of every argument) is taken."""
+    with pytest.raises(ParameterError, match="t_end='0.01'"):
+        fs.simulate(fs.PAPER, "0.01", n_segments=6)
+    run = fs.simulate(fs.PAPER, np.float64(0.01), n_segments=np.int64(6), rtol=np.float32(1e-4),
+                      field=np.float64(0.1), frame_dt=0.005, max_step=1)
+    assert run.ok and run.t[-1] == pytest.approx(0.01)
