@@ -137,3 +137,14 @@ def test_simulate_takes_a_number_not_its_text():
     run = fs.simulate(fs.PAPER, np.float64(0.01), n_segments=np.int64(6), rtol=np.float32(1e-4),
                       field=np.float64(0.1), frame_dt=0.005, max_step=1)
     assert run.ok and run.t[-1] == pytest.approx(0.01)
+
+
+# ------------------------------------------------------------------ an output folder that cannot be made
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="needs /proc")
+@pytest.mark.parametrize("out, words", [
+    ("/proc/x.nc", "the folder '/proc' is not writable; no file can be created in it"),
+    ("/proc/new/x.nc", "the folder '/proc/new' does not exist and cannot be created: '/proc' is not writable"),
+])
+def test_an_output_folder_that_cannot_be_written_is_named(capsys, no_computing, out, words):
+    line = _error(["simulate", "--t-end", "1", "--out", out, "--quiet"], capsys)
+    assert words in line and "No such file" not in line, line

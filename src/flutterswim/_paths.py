@@ -12,6 +12,7 @@
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import os
 import re
@@ -193,8 +194,13 @@ def _writable_dir(folder: Path, what: str, path: Path) -> None:
     try:
         fd, tmp = tempfile.mkstemp(prefix=".flutterswim-probe-", dir=probe)
     except OSError as exc:
-        raise ParameterError(f"{what}={str(path)!r}: the folder {str(probe)!r} is not writable "
-                             f"({exc.strerror or exc})") from None
+        # a virtual file system (/proc) says "No such file or directory" of the file to create
+        why = "" if exc.errno == errno.ENOENT else f" ({exc.strerror or exc})"
+        if probe != folder:
+            raise ParameterError(f"{what}={str(path)!r}: the folder {str(folder)!r} does not exist and cannot be "
+                                 f"created: {str(probe)!r} is not writable{why}") from None
+        raise ParameterError(f"{what}={str(path)!r}: the folder {str(folder)!r} is not writable{why}; no file "
+                             "can be created in it") from None
     os.close(fd)
     with contextlib.suppress(OSError):
         os.unlink(tmp)
