@@ -66,4 +66,4 @@ def test_cli_json_matches_python_api(short_run):
 def test_cli_reports_bad_input_by_name(tmp_path):
     out = subprocess.run([sys.executable, "-m", "flutterswim.cli", "simulate", "--segments", "2", "--t-end", "1",
                           "--out", str(tmp_path / "x.nc"), "--quiet"], capture_output=True, text=True)
-    assert out.returncode == 2 and "n_segments=2" in out.stderr
+    assert out.returncode == 2 and "--segments=2" in out.stderr

@@ -232,7 +232,7 @@ def test_bad_axis_value_is_refused_before_any_point(tmp_path):
 def test_bad_sweep_settings_are_refused_before_any_point(tmp_path):
     r = subprocess.run([sys.executable, "-m", "flutterswim", "sweep", "chi=60,70", "--out", str(tmp_path / "b.zarr"),
                         "--n-segments", "2", "--no-progress"], capture_output=True, text=True, timeout=60)
-    assert r.returncode == 2 and "n_segments=2" in r.stderr and not (tmp_path / "b.zarr").exists()
+    assert r.returncode == 2 and "--n-segments=2" in r.stderr and not (tmp_path / "b.zarr").exists()
     r = subprocess.run([sys.executable, "-m", "flutterswim", "sweep", "kappa_E_ratio=0:2:2000000000", "--out",
                         str(tmp_path / "g.zarr")], capture_output=True, text=True, timeout=60)
     assert r.returncode == 2 and "at most" in r.stderr

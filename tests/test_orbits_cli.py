@@ -40,8 +40,8 @@ def test_branch_cli_rejects_bad_input_with_one_line(tmp_path, capsys):
 
 @pytest.mark.parametrize("argv, words", [
     (["kappa_E_ratio=nan:2"], "nan"), (["kappa_E_ratio=0.6:-inf"], "-inf"),
-    (["kappa_E_ratio=0.6:0.9", "--segments", "2"], "n_segments=2"),
-    (["kappa_E_ratio=0.6:0.9", "--segments", "-1"], "n_segments=-1")])
+    (["kappa_E_ratio=0.6:0.9", "--segments", "2"], "--segments=2"),
+    (["kappa_E_ratio=0.6:0.9", "--segments", "-1"], "--segments=-1")])
 def test_branch_cli_refuses_non_finite_ranges_and_too_few_segments(tmp_path, capsys, argv, words):
     """A NaN end ran a whole branch (and stored range_start = NaN); N = 2 said "no Hopf point
     found", N = -1 failed with an IndexError (exit 1). Each is bad input: one line, exit 2,

@@ -223,7 +223,7 @@ def test_cli_describe_names_missing_frames_and_takes_max_gap(movie, tmp_path, ca
     period = describe(truth(movie)).period_s
     assert json.loads(capsys.readouterr().out)["period_s"] == pytest.approx(period, rel=1e-2)
     assert main(["describe", str(out), "--max-gap", "-1"]) == 2
-    assert "max_gap=-1" in capsys.readouterr().err
+    assert "--max-gap=-1" in capsys.readouterr().err
 
 
 # --------------------------------------------------------------------------- damaged or odd inputs

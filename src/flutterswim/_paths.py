@@ -12,6 +12,7 @@
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import os
 import re
@@ -193,8 +194,13 @@ def _writable_dir(folder: Path, what: str, path: Path) -> None:
     try:
         fd, tmp = tempfile.mkstemp(prefix=".flutterswim-probe-", dir=probe)
     except OSError as exc:
-        raise ParameterError(f"{what}={str(path)!r}: the folder {str(probe)!r} is not writable "
-                             f"({exc.strerror or exc})") from None
+        # a virtual file system (/proc) says "No such file or directory" of the file to create
+        why = "" if exc.errno == errno.ENOENT else f" ({exc.strerror or exc})"
+        if probe != folder:
+            raise ParameterError(f"{what}={str(path)!r}: the folder {str(folder)!r} does not exist and cannot be "
+                                 f"created: {str(probe)!r} is not writable{why}") from None
+        raise ParameterError(f"{what}={str(path)!r}: the folder {str(folder)!r} is not writable{why}; no file "
+                             "can be created in it") from None
     os.close(fd)
     with contextlib.suppress(OSError):
         os.unlink(tmp)
@@ -306,15 +312,15 @@ def check_store_path(path: str | os.PathLike, *, overwrite: bool, what: str = "o
     without our marker (user files, or a Zarr store of another tool), and, given ``kind``, one
     of our folders whose marker names another kind."""
     p = Path(os.fspath(path))
+    store = kind in (None, "sweep")  # a reproduce folder is an output folder, not a store
+    new_name = "a new store name such as sweep.zarr" if store else f"the name of a new {kind} folder"
     if str(p) in ("", "."):
-        raise ParameterError(f"{what}={str(path)!r} is the current directory; give a new store name "
-                             "such as sweep.zarr")
+        raise ParameterError(f"{what}={str(path)!r} is the current directory; give {new_name}")
     if _is_cwd_or_parent(p):
-        raise ParameterError(f"{what}={str(p)!r} is the current directory or one of its parents; "
-                             "give a new store name such as sweep.zarr")
+        raise ParameterError(f"{what}={str(p)!r} is the current directory or one of its parents; give {new_name}")
     if p.exists() and not p.is_dir():
-        raise ParameterError(f"{what}={str(p)!r} is an existing file, not a sweep store; nothing was "
-                             "changed. Give a new store name such as sweep.zarr")
+        raise ParameterError(f"{what}={str(p)!r} is an existing file, not "
+                             f"{'a sweep store' if store else 'an output folder'}; nothing was changed. Give {new_name}")
     if p.is_dir() and not has_marker(p) and any(p.iterdir()):
         zarrish = any((p / f).exists() for f in ("zarr.json", ".zgroup", ".zattrs", ".zarray"))
         why = "a Zarr store written by another tool" if zarrish else "a directory holding other files"

@@ -12,8 +12,12 @@ class ParameterError(ValueError):
     """A parameter value is outside what the model or the solver allows."""
 
 
-def finite(name: str, value: Any) -> float:
-    """Return ``value`` as float, or raise if it is not a finite real number."""
+def finite(name: str, value: Any, *, strict: bool = False) -> float:
+    """Return ``value`` as float, or raise if it is not a finite real number; ``strict``: also
+    if it is a string or a bool (``"1"``, ``True``), which ``float`` would read as a number."""
+    if strict and isinstance(value, (str, bytes, bool, np.bool_)):
+        raise ParameterError(f"{name}={value!r} is a {type(value).__name__}, not a number; a finite float "
+                             "is required")
     try:
         v = float(value)
     except (TypeError, ValueError):
@@ -23,9 +27,9 @@ def finite(name: str, value: Any) -> float:
     return v
 
 
-def positive(name: str, value: Any) -> float:
-    """Return ``value`` as float, or raise if it is not finite and > 0."""
-    v = finite(name, value)
+def positive(name: str, value: Any, *, strict: bool = False) -> float:
+    """Return ``value`` as float, or raise if it is not finite and > 0 (``strict``: as :func:`finite`)."""
+    v = finite(name, value, strict=strict)
     if v <= 0.0:
         raise ParameterError(f"{name}={value!r} must be > 0")
     return v

@@ -31,6 +31,10 @@ class _Parser(argparse.ArgumentParser):
     def error(self, message: str):  # noqa: D401 - argparse API
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
+    def add_subparsers(self, **kw):
+        self.commands = super().add_subparsers(**kw)  # kept: an error names the options of its command
+        return self.commands
+
 
 def _simulate(args: argparse.Namespace) -> int:
     from ._paths import check_output_file
@@ -105,7 +109,9 @@ def _describe(args: argparse.Namespace) -> int:
 
     try:
         desc = describe(obj, n_last=n_last, max_gap=args.max_gap, **kw)
-    except ParameterError as exc:  # name the file (e.g. a track of too few frames)
+    except ParameterError as exc:  # name the file (e.g. a track of too few frames), not for a bad option
+        if re.match(r"(n_last|max_gap|period)=", str(exc)):
+            raise
         raise ParameterError(f"run={args.run!r}: {exc}") from None
     d = desc.to_dict()
     if args.json:
@@ -262,12 +268,32 @@ _EXTRA_OF = {"xarray": "io", "h5netcdf": "io", "h5py": "io", "zarr": "io", "matp
              "tifffile": "track"}
 
 
-def _describe_error(exc: BaseException) -> tuple[int, str]:
-    """(exit status, one-line message) of an exception escaping a subcommand."""
+#: Python API parameters whose option is not spelt --name-with-dashes
+_OPTION_OF = {"n_segments": "--segments", "n_cycles": "--cycles", "n_last": "--last", "n_points": "--points",
+              "targets": "--only"}
+
+
+def _as_typed(message: str, parser: argparse.ArgumentParser | None) -> str:
+    """The message with its leading ``name=`` (a Python API parameter) spelt as the option of
+    ``parser`` the user typed: ``px_per_mm=-3.0 must be > 0`` -> ``--px-per-mm=-3.0 must be > 0``;
+    unchanged where the command has no such option."""
+    m = re.match(r"([A-Za-z_]\w*)=", message)
+    if m is None or parser is None:
+        return message
+    name = m.group(1)
+    for option in ("--" + name.replace("_", "-"), _OPTION_OF.get(name)):
+        if option in parser._option_string_actions:
+            return option + message[len(name):]
+    return message
+
+
+def _describe_error(exc: BaseException, parser: argparse.ArgumentParser | None = None) -> tuple[int, str]:
+    """(exit status, one-line message) of an exception escaping a subcommand; ``parser``: the
+    subcommand's, whose option spellings a bad parameter is named by."""
     from ._validate import ParameterError
 
     if isinstance(exc, ParameterError):
-        return 2, _one_line(exc)
+        return 2, _as_typed(_one_line(exc), parser)
     if isinstance(exc, ModuleNotFoundError) and exc.name and not exc.name.startswith("flutterswim"):
         top = exc.name.split(".")[0]
         extra = _EXTRA_OF.get(top, "all")
@@ -316,8 +342,9 @@ def main(argv: list[str] | None = None) -> int:
     debug = "--debug" in argv
     if debug:
         argv = [a for a in argv if a != "--debug"]
+    ap = build_parser()
     try:
-        args = build_parser().parse_args(argv)
+        args = ap.parse_args(argv)
     except KeyboardInterrupt:
         print("flutterswim: interrupted", file=sys.stderr)
         return 130
@@ -343,7 +370,7 @@ def main(argv: list[str] | None = None) -> int:
             import traceback
 
             traceback.print_exc()
-        status, msg = _describe_error(exc)
+        status, msg = _describe_error(exc, ap.commands.choices.get(args.command))
         hint = "" if status == 2 or debug else " (rerun with --debug for the traceback)"
         print(f"flutterswim {args.command}: {msg}{hint}", file=sys.stderr)
         return status

@@ -58,18 +58,20 @@ def simulate(
     if not isinstance(groups, Groups):
         raise ParameterError(f"params={params!r} must be flutterswim.Parameters or flutterswim.Groups")
     tau = params.tau if isinstance(params, Parameters) else 1.0
-    t_start = finite("t_start", t_start)
-    t_end = finite("t_end", t_end)
+    t_start = finite("t_start", t_start, strict=True)  # "1" or True is no time
+    t_end = finite("t_end", t_end, strict=True)
     if not t_end > t_start:
         raise ParameterError(f"t_end={t_end!r} must be greater than t_start={t_start!r}")
     n_segments = positive_int("n_segments", n_segments, minimum=4)
-    rtol, atol = positive("rtol", rtol), positive("atol", atol)
+    rtol, atol = positive("rtol", rtol, strict=True), positive("atol", atol, strict=True)
+    frame_dt = None if frame_dt is None else positive("frame_dt", frame_dt, strict=True)
+    max_step = None if max_step is None else positive("max_step", max_step, strict=True)
     if method not in METHODS:
         raise ParameterError(f"method={method!r} is unknown; choose one of {sorted(METHODS)}")
     if field is None:
         field = Field()
     elif not isinstance(field, Field):
-        field = Field(direction=field)
+        field = Field(direction=field if callable(field) else finite("field", field, strict=True))
     initial = InitialState.straight() if initial is None else initial
     if not isinstance(initial, InitialState):
         raise ParameterError(f"initial={initial!r} must be a flutterswim.InitialState")
@@ -79,7 +81,7 @@ def simulate(
     fld = field.scaled(tau)
     fil = Filament(n_segments, groups.eta_par, groups.eta_perp, groups.chi)
     y0 = initial.state(n_segments)
-    t_eval = _frames(t0, t1, n_frames, None if frame_dt is None else positive("frame_dt", frame_dt) / tau)
+    t_eval = _frames(t0, t1, n_frames, None if frame_dt is None else frame_dt / tau)
     direction, strength = fld.direction, fld.strength
 
     def fun(t: float, y: np.ndarray) -> np.ndarray:
@@ -104,7 +106,7 @@ def simulate(
         with single_blas_thread():  # the matrices are small: BLAS threads only add overhead
             cap = np.r_[1.0, 1.0, np.full(n, np.pi), np.full(n + 1, np.inf)]
             chk = _check if (stop_on_self_intersection or check is not None) else None
-            mstep = np.inf if max_step is None else positive("max_step", max_step) / tau
+            mstep = np.inf if max_step is None else max_step / tau
             if isinstance(METHODS[method], (CompiledRosW, CompiledNDF)) and fld.steady_between_breakpoints:
                 edges = [t0] + sorted(b for b in fld.breakpoints if t0 < b < t1) + [t1]
                 pieces = [(a, direction(0.5 * (a + b)), strength(0.5 * (a + b))) for a, b in zip(edges[:-1], edges[1:])]

@@ -110,22 +110,42 @@ def figure8(size: float, start=(0.0, 0.0), heading: float = 0.0, n: int = 6000) 
     return RefPath(pts, s, np.array([], int), True, f"figure8({size:.4g} m)")
 
 
+def _number(text: str) -> float | None:
+    try:
+        return float(text)
+    except ValueError:
+        return None
+
+
 def waypoints_csv(path: str | Path, scale: float, start=(0.0, 0.0)) -> RefPath:
-    """Waypoints ``x, y`` from a CSV (in units of ``scale`` metres), relative to the first."""
+    """Waypoints ``x, y`` from a CSV (in units of ``scale`` metres), relative to the first.
+    Blank lines are skipped; a first row none of whose fields is a number (``x,y``) is a header."""
     p = Path(path)
     if not p.is_file():
         raise ParameterError(f"waypoints={str(p)!r} is not a file")
     rows = []
     with open(p, newline="") as f:
-        for i, row in enumerate(csv.reader(f)):
-            try:
-                xy = [float(row[0]), float(row[1])]
-            except (ValueError, IndexError):
-                if i == 0:
-                    continue
-                raise ParameterError(f"waypoints={str(p)!r}, line {i + 1}: two numbers x, y are required") from None
+        reader = csv.reader(f)
+        first = True
+        for row in reader:
+            if not any(field.strip() for field in row):
+                continue
+            if first and all(_number(field) is None for field in row):
+                first = False
+                continue
+            where = f"waypoints={str(p)!r}, line {reader.line_num}"
+            header = " (a header row holds no number, e.g. x,y)" if first else ""
+            first = False
+            if len(row) < 2:
+                raise ParameterError(f"{where}: {','.join(row)!r} has one field; two numbers x, y are "
+                                     f"required{header}")
+            xy = [_number(row[0]), _number(row[1])]
+            if None in xy:
+                bad = row[0] if xy[0] is None else row[1]
+                raise ParameterError(f"{where}: {bad.strip()!r} is not a number; two numbers x, y are "
+                                     f"required{header}")
             if not all(map(math.isfinite, xy)):
-                raise ParameterError(f"waypoints={str(p)!r}, line {i + 1}: x, y = {row[0].strip()}, {row[1].strip()} "
+                raise ParameterError(f"{where}: x, y = {row[0].strip()}, {row[1].strip()} "
                                      "are not finite; two finite numbers are required")
             if not rows or xy != rows[-1]:  # a waypoint repeated in a row is one waypoint
                 rows.append(xy)
