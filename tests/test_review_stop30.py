@@ -148,3 +148,20 @@ def test_simulate_takes_a_number_not_its_text():
 def test_an_output_folder_that_cannot_be_written_is_named(capsys, no_computing, out, words):
     line = _error(["simulate", "--t-end", "1", "--out", out, "--quiet"], capsys)
     assert words in line and "No such file" not in line, line
+
+
+def test_waypoints_header_units(tmp_path):
+    """A header naming a unit (x_mm,y_mm; x [um]) gives the numbers in that unit; without one
+    they are in ``scale`` (body lengths); two different units are refused; a name merely ending
+    in m (item, xm) is not a unit."""
+    from flutterswim.steering.path import waypoints_csv
+
+    p = tmp_path / "w.csv"
+    L = 3.7e-3
+    for header, metres in (("x,y", L), ("x_mm,y_mm", 1e-3), ("x [um],y [um]", 1e-6), ("x (mm),y (mm)", 1e-3),
+                           ("X_m,Y_m", 1.0), ("item,xm", L)):
+        p.write_text(f"{header}\n0,0\n3,4\n")
+        assert waypoints_csv(p, L).length == pytest.approx(5 * metres, rel=1e-6), header
+    p.write_text("x_mm,y_um\n0,0\n3,4\n")
+    with pytest.raises(ParameterError, match="different units"):
+        waypoints_csv(p, L)

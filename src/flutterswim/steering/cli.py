@@ -18,7 +18,7 @@ def register(subparsers) -> None:
     p.add_argument("--side", default="10", help="square side: body lengths, or with a unit (37mm, 3.7cm, 2bl); default 10")
     p.add_argument("--radius", default="2", help="circle radius: body lengths or with a unit (default 2)")
     p.add_argument("--size", default="10", help="figure-eight length: body lengths or with a unit (default 10)")
-    p.add_argument("--waypoints", default=None, help="CSV of x, y [body lengths] for --path waypoints")
+    p.add_argument("--waypoints", default=None, help="CSV of x, y [body lengths, or the unit a header names: x_mm,y_mm] for --path waypoints")
     p.add_argument("--open-loop", action="store_true", help="pre-planned field schedule instead of feedback")
     p.add_argument("--noise-px", type=float, default=0.2)
     p.add_argument("--um-per-px", type=float, default=14.0)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -117,9 +118,29 @@ def _number(text: str) -> float | None:
         return None
 
 
+# units a waypoints header may give its columns (x_mm, y [um], ...), in metres
+_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6}
+
+
+def _header_scale(row: list[str], where: str) -> float | None:
+    """Metres per unit named by a header's first two columns (x_mm, y_mm; "x [um]"), or None
+    when they name none (body lengths); columns naming two units are an error."""
+    units = []
+    for field in row[:2]:
+        m = re.fullmatch(r"\s*[A-Za-z]\w*?(?:(?:_|\s*[\[(]|\s+)\s*(mm|um|µm|μm|m)\s*[\])]?)?\s*", field)
+        units.append(m.group(1) if m and m.group(1) else None)
+    named = {u for u in units if u is not None}
+    if len(named) > 1:
+        raise ParameterError(f"{where}: the header gives x and y different units ({', '.join(sorted(named))}); "
+                             "give both in one unit")
+    return _UNITS[named.pop()] if named else None
+
+
 def waypoints_csv(path: str | Path, scale: float, start=(0.0, 0.0)) -> RefPath:
-    """Waypoints ``x, y`` from a CSV (in units of ``scale`` metres), relative to the first.
-    Blank lines are skipped; a first row none of whose fields is a number (``x,y``) is a header."""
+    """Waypoints ``x, y`` from a CSV (in units of ``scale`` metres, e.g. body lengths),
+    relative to the first. Blank lines are skipped; a first row none of whose fields is a
+    number (``x,y``) is a header, whose columns may name their unit (``x_mm,y_mm``, ``x [um]``,
+    m, mm, um): the numbers are then in that unit."""
     p = Path(path)
     if not p.is_file():
         raise ParameterError(f"waypoints={str(p)!r} is not a file")
@@ -132,6 +153,9 @@ def waypoints_csv(path: str | Path, scale: float, start=(0.0, 0.0)) -> RefPath:
                 continue
             if first and all(_number(field) is None for field in row):
                 first = False
+                unit = _header_scale(row, f"waypoints={str(p)!r}, line {reader.line_num}")
+                if unit is not None:
+                    scale = unit
                 continue
             where = f"waypoints={str(p)!r}, line {reader.line_num}"
             header = " (a header row holds no number, e.g. x,y)" if first else ""
