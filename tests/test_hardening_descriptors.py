@@ -109,3 +109,25 @@ def test_decaying_wobble_says_there_is_no_stroke():
     # a steady swimmer is neither
     s = describe(_track(0.05), n_last=10)
     assert "decays" not in s.note and "no net swimming" not in s.note
+
+
+def test_a_settled_record_is_described_over_its_settled_cycles():
+    """A record of the onset then the stroke (amplitude growing to its limit, advance growing
+    with its square), with more cycles asked for than have settled: the averages are the
+    settled stroke's (the onset's cycles took the advance low) and the note says why fewer
+    cycles were used."""
+    period, fpp, amp, v = 0.4, 25.0, 0.1, 0.05
+    dt = period / fpp
+    t = np.arange(int(30 * fpp)) * dt
+    s = np.linspace(0.0, 1.0, 41)
+    k, w = 2 * math.pi / 0.8, 2 * math.pi / period
+    grow = np.tanh(t / (1.5 * period))  # within 1e-4 of 1 after 7 periods
+    # x of the body advances at v * grow^2 (advance quadratic in the amplitude)
+    xs = np.concatenate([[0.0], np.cumsum(0.5 * (grow[1:] ** 2 + grow[:-1] ** 2) * v * dt)])
+    T, S = np.meshgrid(t, s, indexing="ij")
+    y = amp * grow[:, None] * (0.4 + 0.6 * S) * _g(k * S - w * T)
+    tr = Track(t=t, x=S + xs[:, None], y=y, s=s, length=1.0, units="m")
+    d = describe(tr, n_last=29)  # every cycle of the record
+    assert d.limit_cycle
+    assert d.advance_per_cycle_mm == pytest.approx(1e3 * v * period, rel=2e-3)
+    assert "settles" in d.note and d.n_cycles_used < 29

@@ -500,8 +500,14 @@ def describe(
             f"(the shortest such gap {np.min(gaps):.2f} periods), for example frames that failed tracking; "
             "descriptors need cycles without such gaps (max_gap, describe --max-gap)")
     k1 = int(np.nonzero(good)[0][-1])
+    # a settled record is described over its settled cycles only: the onset's growing strokes
+    # before the limit cycle are another stroke (they took the advance 1.7 % low). The cycle
+    # just before the first converged one is within tol of it (that is what converged says),
+    # so it counts: a record settled from its start keeps its first cycle.
+    k_first = max(int(np.searchsorted(cyc.starts, cyc.limit_cycle_time)) - 1, 0) if cyc.limit_cycle else 0
+    k_first = min(k_first, k1)
     k0, n_good = k1, 1
-    while k0 > 0 and not ends[k0 - 1] and n_good < n_last:
+    while k0 > k_first and not ends[k0 - 1] and n_good < n_last:
         k0 -= 1
         n_good += int(good[k0])
     while not good[k0]:
@@ -605,7 +611,11 @@ def describe(
         if K < n_last:
             why.append(f"the track holds {K} complete cycle{'s' if K != 1 else ''} between section crossings (a "
                        "record of n strokes from an arbitrary phase holds n - 1)")
-        if idx.size < min(K, n_last):
+        if k0 == k_first > 0 and idx.size < min(K, n_last):
+            why.append(f"the stroke settles at t = {cyc.limit_cycle_time:.4g} s (limit_cycle_time_s): the {k_first} "
+                       f"cycle{'s' if k_first != 1 else ''} before {'are' if k_first != 1 else 'is'} the onset, "
+                       "not the stroke")
+        elif idx.size < min(K, n_last):
             why.append(f"{K - idx.size} of its {K} cycles are left out for missing frames (max_gap, --max-gap) or "
                        "cut off at skipped strokes")
         note = (note + "; " if note else "") + (
