@@ -118,10 +118,18 @@ def test_descriptors_and_symmetry(paper_orbit):
 def test_to_result_is_described_like_a_simulation(paper_orbit):
     from flutterswim.analysis import describe
 
+    from flutterswim.analysis.track import Track
+
     res = paper_orbit.to_result(n_cycles=6)
-    d = describe(res, n_last=4)
-    assert d.period_s == pytest.approx(paper_orbit.period, rel=1e-6)
-    assert d.advance_per_cycle_mm == pytest.approx(paper_orbit.advance * 1e3, rel=1e-6)
+    # the orbit of the groups is dimensionless (l, tau): describe, in mm and s, refuses it
+    # rather than label body lengths as metres
+    with pytest.raises(fs.ParameterError, match="dimensionless"):
+        describe(res, n_last=4)
+    l, tau = fs.PAPER.l, fs.PAPER.tau
+    tr = Track(t=res.t * tau, x=res.x * l, y=res.y * l, length=l, units="m")
+    d = describe(tr, n_last=4)
+    assert d.period_s == pytest.approx(paper_orbit.period * tau, rel=1e-6)
+    assert d.advance_per_cycle_mm == pytest.approx(paper_orbit.advance * l * 1e3, rel=1e-6)
 
 
 def test_below_threshold_there_is_no_orbit():
@@ -146,11 +154,14 @@ def test_describe_reads_both_ends_within_0p2_percent_at_25_frames_per_cycle(pape
     against the orbit's spectrally interpolated lateral excursions of both ends."""
     from flutterswim.analysis import describe
 
+    from flutterswim.analysis.track import Track
+
     res = paper_orbit.to_result(n_cycles=8, frames_per_cycle=25)
-    d = describe(res, n_last=6)
-    assert d.leading_lateral_p2p_mm == pytest.approx(paper_orbit.lateral_leading * 1e3, rel=2e-3)
-    assert d.trailing_lateral_p2p_mm == pytest.approx(paper_orbit.lateral_trailing * 1e3, rel=2e-3)
-    assert d.period_s == pytest.approx(paper_orbit.period, rel=1e-6)
+    l, tau = fs.PAPER.l, fs.PAPER.tau  # the orbit of the groups is in l and tau
+    d = describe(Track(t=res.t * tau, x=res.x * l, y=res.y * l, length=l, units="m"), n_last=6)
+    assert d.leading_lateral_p2p_mm == pytest.approx(paper_orbit.lateral_leading * l * 1e3, rel=2e-3)
+    assert d.trailing_lateral_p2p_mm == pytest.approx(paper_orbit.lateral_trailing * l * 1e3, rel=2e-3)
+    assert d.period_s == pytest.approx(paper_orbit.period * tau, rel=1e-6)
 
 
 def test_resampling_is_spectrally_exact_for_the_stroke(paper_orbit):

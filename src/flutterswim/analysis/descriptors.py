@@ -451,6 +451,11 @@ def describe(
     is reported reciprocal. self_intersecting: some frame in the window crosses itself.
     """
     tr: Track = as_track(obj)
+    if tr.meta.get("dimensionless"):
+        raise ParameterError(
+            "the run is dimensionless (simulated with fs.Groups: lengths in body lengths l, times in tau), and "
+            "the descriptors are in mm and s; simulate with physical parameters (fs.Parameters, e.g. fs.PAPER; "
+            "the groups alone fix the stroke in l and tau)")
     if isinstance(n_last, bool) or not isinstance(n_last, (int, np.integer)) or n_last < 1:
         raise ParameterError(f"n_last={n_last!r} must be an integer >= 1")
     cyc = detect_cycles(tr, tip=tip, **cycle_kwargs) if cycles is None else cycles

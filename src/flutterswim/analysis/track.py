@@ -166,6 +166,9 @@ class Track:
         meta = {}
         if params is not None:
             meta["params"] = params
+        if getattr(result, "units", "SI") == "dimensionless":
+            # lengths in body lengths l, times in tau (a run of fs.Groups): no metres to give
+            meta["dimensionless"] = True
         return cls(
             t=np.asarray(result.t),
             x=np.asarray(result.x),
