@@ -186,7 +186,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--segments", type=int, default=defaults.N_SEGMENTS, help=f"N (default {defaults.N_SEGMENTS})")
     p.add_argument("--rtol", type=float, default=defaults.RTOL, help=f"(default {defaults.RTOL:g})")
     p.add_argument("--atol", type=float, default=defaults.ATOL, help=f"(default {defaults.ATOL:g})")
-    p.add_argument("--out", default="run.nc", help="NetCDF file (.nc)")
+    p.add_argument("--out", default="run.nc", help="NetCDF file (.nc; default run.nc; a file an earlier flutterswim run wrote is replaced, any other refused)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     from .steering.schedules import add_field_options
 
