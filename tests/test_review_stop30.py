@@ -165,3 +165,12 @@ def test_waypoints_header_units(tmp_path):
     p.write_text("x_mm,y_um\n0,0\n3,4\n")
     with pytest.raises(ParameterError, match="different units"):
         waypoints_csv(p, L)
+
+
+def test_hopf_point_repr_is_short():
+    """A notebook printing a HopfPoint shows its numbers, not its Jacobian (97 x 97 at N = 48)."""
+    from flutterswim.orbits import hopf_point
+
+    h = hopf_point(fs.PAPER, n_segments=12)
+    r = repr(h)
+    assert "value=" in r and "omega=" in r and "array(" not in r and len(r) < 1000

@@ -11,7 +11,7 @@ characteristic equation (:mod:`flutterswim.stability`), which stays an independe
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import brentq
@@ -61,9 +61,9 @@ class HopfPoint:
     value: float
     omega: float
     growth_slope: float
-    q: np.ndarray
-    p: np.ndarray
-    jacobian: np.ndarray
+    q: np.ndarray = field(repr=False)  # the arrays are left out of the repr (a notebook printed 97 x 97)
+    p: np.ndarray = field(repr=False)
+    jacobian: np.ndarray = field(repr=False)
     n_segments: int
 
     @property
