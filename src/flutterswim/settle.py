@@ -101,14 +101,18 @@ class _Watch:
         self.up_t: list[float] = []
         self.up_i: list[tuple[int, int, float]] = []  # (chunk, frame, fraction)
         self.amps: list[float] = []
-        self._prev: tuple[float, float, float] | None = None  # last two (t, q) of the previous chunk
+        self._prev: tuple[np.ndarray, np.ndarray] | None = None  # last two frames (t, q) seen so far
 
     def add(self, k: int, t: np.ndarray, q: np.ndarray) -> float:
-        """Add chunk k (frames t, q); return the half-range of q over its second half."""
+        """Add chunk k (frames t, q); return the half-range of q over its second half.
+
+        The last two frames seen are carried into the next chunk: an extremum on the last
+        frame of a chunk needs the frame after it, and a crossing between chunks the frame
+        before."""
         if self._prev is not None:
+            off = self._prev[0].size
             t = np.r_[self._prev[0], t]
             q = np.r_[self._prev[1], q]
-            off = 1
         else:
             off = 0
         if q.size >= 3:
@@ -122,11 +126,12 @@ class _Watch:
         half = q[q.size // 2:]
         mid = 0.5 * (half.max() + half.min())
         c = np.nonzero((q[:-1] < mid) & (q[1:] >= mid))[0]
+        c = c[c >= off - 1]  # the pair of carried frames was looked at with the previous chunk
         for j in c:
             f = (mid - q[j]) / (q[j + 1] - q[j])
             self.up_t.append(float(t[j] + f * (t[j + 1] - t[j])))
             self.up_i.append((k, j - off, float(f)))
-        self._prev = (float(t[-1]), float(q[-1]), 0.0)
+        self._prev = (t[-2:].copy(), q[-2:].copy())
         amp = float(0.5 * (half.max() - half.min()))
         self.amps.append(amp)
         return amp
@@ -146,8 +151,9 @@ class _Watch:
 
     def growth_rate(self) -> float:
         """Exponential rate of the envelope of q over the early, small-amplitude part
-        (half-range below 10 % of the largest, past the first two cycles), from consecutive
-        extrema; NaN if too few."""
+        (past the first two cycles, until the half-range first reaches 10 % of the largest:
+        nothing of the saturated part, whatever its shape), from consecutive extrema; NaN if
+        too few."""
         et, ev = np.array(self.ext_t), np.array(self.ext_v)
         if ev.size < 6:
             return math.nan
@@ -158,7 +164,7 @@ class _Watch:
         if h[-1] < 0.5 * top:  # decaying: the whole envelope above rounding
             use = (h > 1e-14) & (idx >= 2)
         else:
-            use = (h < 0.1 * top) & (h > 1e-14) & (idx >= 4)
+            use = (idx < np.argmax(h >= 0.1 * top)) & (h > 1e-14) & (idx >= 4)
         if np.count_nonzero(use) < 3:
             return math.nan
         return float(np.polyfit(th[use], np.log(h[use]), 1)[0])
