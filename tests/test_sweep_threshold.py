@@ -30,15 +30,16 @@ def test_straight_below_and_stroke_above_the_threshold(rc):
         p = ds.sel(kappa_E_ratio=r)
         assert bool(p["reached_limit_cycle"]) and bool(p["stable"]) and float(p["advance_per_cycle_bl"]) > 0.01
     # the growth rate measured from the run has the sign of the linear one, and its size where
-    # the leading mode dominates the end angle (near and above the threshold); just below the
-    # threshold the oscillation stays below 2e-4 rad, where the sweep's atol (1e-6) limits the
-    # measured rate to about 50 %
+    # the leading mode dominates the end angle (near and above the threshold: within 5 %, the
+    # onset being fitted up to 10 % of the stroke's amplitude, where the nonlinearity lowers the
+    # rate by about 1 %); just below the threshold the oscillation stays below 2e-4 rad, where
+    # the sweep's atol (1e-6) limits the measured rate to about 50 %
     for r in ratios:
         p = ds.sel(kappa_E_ratio=r)
         lin, got = float(p["growth_rate_linear_per_s"]), float(p["growth_rate_measured_per_s"])
         assert np.sign(got) == np.sign(lin)
         if r > 0.5:
-            assert abs(got - lin) < (0.5 if r < 1.0 else 0.25) * abs(lin)
+            assert abs(got - lin) < (0.5 if r < 1.0 else 0.05) * abs(lin)
 
 
 def test_near_onset_points_lie_on_the_square_root_branch(rc):
