@@ -91,7 +91,7 @@ def _waypoints(tmp_path, text):
 
 
 @pytest.mark.parametrize("text", ["0,0\n5,0\n5,5\n\n", "0,0\n\n5,0\n5,5\n", "\n0,0\n5,0\n \n5,5\n\n\n",
-                                  "x,y\n\n0,0\n5,0\n5,5\n", "x_mm,y_mm\n0,0\n5,0\n\n5,5\n"])
+                                  "x,y\n\n0,0\n5,0\n5,5\n", "X,Y\n0,0\n5,0\n\n5,5\n"])
 def test_waypoints_skip_blank_lines_and_a_header(tmp_path, text):
     p = _waypoints(tmp_path, text)
     # the waypoints (0,0), (5,0), (5,5) body lengths: one corner at (5,0), 10 body lengths long
