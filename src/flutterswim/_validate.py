@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 from typing import Any
 
 import numpy as np
@@ -58,3 +59,16 @@ def finite_array(name: str, value: Any, shape: tuple[int, ...] | None = None) ->
         bad = int(np.count_nonzero(~np.isfinite(arr)))
         raise ParameterError(f"{name} has {bad} non-finite entries; all entries must be finite")
     return arr
+
+
+def angle(name: str, value: Any, *, stacklevel: int = 1) -> float:
+    """Return ``value`` (an angle in radians) as float, or raise if it is not finite; warn
+    (UserWarning naming ``name``) if its magnitude exceeds 2 pi, likely degrees given where
+    radians are taken (``step(90, 8)`` is 90 rad, over 14 turns, not a quarter turn). The
+    warning points ``stacklevel`` frames above the function that calls this one (1: its caller)."""
+    v = finite(name, value)
+    if abs(v) > 2 * math.pi:
+        warnings.warn(f"{name}={value!r} is in radians, and its magnitude exceeds 2 pi (more than a full turn): "
+                      f"degrees given as radians? (for {value!r} degrees pass math.radians({value!r}) = "
+                      f"{math.radians(v):.6g})", UserWarning, stacklevel=2 + stacklevel)
+    return v

@@ -13,7 +13,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ._validate import ParameterError, finite, finite_array
+from ._validate import ParameterError, angle as _angle, finite, finite_array
 
 __all__ = ["Constant", "Piecewise", "FromCallable", "Field", "as_schedule"]
 
@@ -151,12 +151,16 @@ def as_schedule(value: "float | Schedule | Callable[[float], float]", name: str)
 @dataclass(frozen=True)
 class Field:
     """Field direction ``direction`` (radians from e1, anticlockwise) and ``strength``
-    (a multiplier of kappa_E; 0 switches the field off)."""
+    (a multiplier of kappa_E; 0 switches the field off). A constant ``direction`` of
+    magnitude above 2 pi warns (likely degrees: pass ``math.radians(90)``, not 90)."""
 
     direction: "float | Schedule | Callable[[float], float]" = 0.0
     strength: "float | Schedule | Callable[[float], float]" = 1.0
 
     def __post_init__(self) -> None:
+        if not isinstance(self.direction, Schedule) and not callable(self.direction):
+            # a number: an angle in radians (the caller's frame is two above: __init__, then it)
+            object.__setattr__(self, "direction", _angle("direction", self.direction, stacklevel=2))
         object.__setattr__(self, "direction", as_schedule(self.direction, "direction"))
         object.__setattr__(self, "strength", as_schedule(self.strength, "strength"))
 

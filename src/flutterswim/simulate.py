@@ -12,8 +12,8 @@ from typing import Callable
 import numpy as np
 
 from . import defaults
-from ._validate import ParameterError, finite, positive, positive_int
-from .field import Field
+from ._validate import ParameterError, angle as _angle, finite, positive, positive_int
+from .field import Constant, Field
 from .filament import Filament, centreline
 from .initial import InitialState
 from .integrators import DEFAULT_METHOD, METHODS, CompiledNDF, CompiledRosW, integrate, integrate_filament
@@ -71,7 +71,8 @@ def simulate(
     if field is None:
         field = Field()
     elif not isinstance(field, Field):
-        field = Field(direction=field if callable(field) else finite("field", field, strict=True))
+        # a number is a direction in radians: Constant, so that it is checked (and warned about) once, here
+        field = Field(direction=field if callable(field) else Constant(_angle("field", finite("field", field, strict=True))))
     initial = InitialState.straight() if initial is None else initial
     if not isinstance(initial, InitialState):
         raise ParameterError(f"initial={initial!r} must be a flutterswim.InitialState")

@@ -77,9 +77,18 @@ def _cmd_fit(args) -> int:
     if not args.paper_cost and not np.all(np.isfinite(sem)):
         raise ParameterError(f"voltage {v:g} V has {int(summary.n[np.isclose(summary.voltage_V, v)][0])} trial(s): "
                              "the SEM needs at least two (or use --paper-cost)")
-    res = fit(mean, sem if np.all(np.isfinite(sem)) else None, base=base, cost="paper" if args.paper_cost else "sem",
-              tip=args.tip, profiles=args.profiles, bootstrap=args.bootstrap, n_segments=args.segments,
-              extrapolate=not args.no_extrapolate, backend=args.backend, workers=args.workers)
+    from .model import OutsideModel
+
+    try:
+        res = fit(mean, sem if np.all(np.isfinite(sem)) else None, base=base,
+                  cost="paper" if args.paper_cost else "sem", tip=args.tip, profiles=args.profiles,
+                  bootstrap=args.bootstrap, n_segments=args.segments, extrapolate=not args.no_extrapolate,
+                  backend=args.backend, workers=args.workers)
+    except OutsideModel as exc:  # a failure of the fit, not bad input: one line, exit 1
+        import sys
+
+        print(f"flutterswim fit: failed: {' '.join(str(exc).split())}", file=sys.stderr)
+        return 1
     res.save(out)
     n = int(summary.n[np.isclose(summary.voltage_V, v)][0])
     if not args.paper_cost and n < FEW_TRIALS:

@@ -22,7 +22,7 @@ import numpy as np
 
 from .._validate import ParameterError, positive, positive_int
 from ..params import Parameters, preset
-from .model import DescriptorModel, NotSwimming, Unresolved, to_identifiable, to_physical
+from .model import DescriptorModel, NotSwimming, OutsideModel, Unresolved, to_identifiable, to_physical
 from .uncertainty import NAMES, covariance, identifiability_card
 
 __all__ = ["FitResult", "fit", "PAPER_GUESS", "paper_cost"]
@@ -30,6 +30,9 @@ __all__ = ["FitResult", "fit", "PAPER_GUESS", "paper_cost"]
 #: The paper's initial guess (SI): B0 = 2e-8 N mm^2, tau0 = 0.3 s, kappa_E0 = 18 1/mm.
 PAPER_GUESS = (2.0e-14, 0.3, 18.0e3)
 PENALTY = 1e3  # weighted residual when there is no stable stroke
+#: trial points in a row without a stable stroke after which a fit stops (each costs orbit
+#: solves that fail slowly; the optimiser only shrinks its step towards the last good point)
+MAX_FAILED_IN_A_ROW = 6
 
 
 def paper_cost(measured: np.ndarray, model: np.ndarray) -> float:
@@ -123,6 +126,50 @@ def _weighted(model, x, mean, sem):
     except NotSwimming:
         return np.full(3, PENALTY), None
     return (y - mean) / sem, y
+
+
+class _Stuck(Exception):
+    """MAX_FAILED_IN_A_ROW trial points without a stroke: stop at the best point so far."""
+
+    def __init__(self, x, message):
+        super().__init__(message)
+        self.x = x
+
+
+class _FailureStreak:
+    """Counts trial points in a row without a stable stroke; raises :class:`_Stuck` (with the
+    best point that had one) at MAX_FAILED_IN_A_ROW."""
+
+    def __init__(self):
+        self.in_a_row, self.best_x, self.best = 0, None, math.inf
+
+    def record(self, x, r, y) -> None:
+        if y is not None:
+            self.in_a_row = 0
+            if float(np.sum(r ** 2)) < self.best:
+                self.best_x, self.best = np.array(x, float), float(np.sum(r ** 2))
+            return
+        self.in_a_row += 1
+        if self.in_a_row >= MAX_FAILED_IN_A_ROW and self.best_x is not None:
+            raise _Stuck(self.best_x, f"stopped: the last {self.in_a_row} points the fit tried have no stable stroke "
+                         "(the model fails there); the data are outside what the model can reproduce near the best "
+                         "point found")
+
+
+def _start(model, x0, mean) -> None:
+    """Raise :class:`OutsideModel` if the model has no stroke at the start ``x0`` (nothing to fit
+    from); a stroke not resolved there (Unresolved) propagates, for a finer model."""
+    try:
+        model(x0)
+    except Unresolved:
+        raise
+    except NotSwimming as exc:
+        raise OutsideModel(_outside(mean, f"no stable stroke at the fit's start ({exc})")) from None
+
+
+def _outside(mean, why: str) -> str:
+    return (f"the data (period {mean[0]:.4g} s, advance {mean[1]:.4g} mm, lateral {mean[2]:.4g} mm) are outside "
+            f"what the model can reproduce: {why}")
 
 
 def fit(measured, sem=None, *, base: Parameters | None = None, guess=PAPER_GUESS, cost: str = "sem",
@@ -249,16 +296,24 @@ def _fit_once(measured, sem=None, *, base, guess, cost, tip, model, profiles, bo
     x0 = to_identifiable(base, B0, tau0, k0)
     from scipy.optimize import least_squares, minimize
 
+    _start(model, x0, mean)
     if cost == "sem":
+        track = _FailureStreak()
+
         def fun(x):
-            return _weighted(model, x, mean, sem_arr)[0]
+            r, y = _weighted(model, x, mean, sem_arr)
+            track.record(x, r, y)
+            return r
 
         def jac(x):
             y = model(x)
             return model_jacobian(model, x, y) / sem_arr[:, None]
 
-        res = least_squares(fun, x0, jac=jac, method="trf", xtol=1e-13, ftol=1e-15, gtol=1e-15, max_nfev=60)
-        x, ok, msg = res.x, bool(res.success), str(res.message)
+        try:
+            res = least_squares(fun, x0, jac=jac, method="trf", xtol=1e-13, ftol=1e-15, gtol=1e-15, max_nfev=60)
+            x, ok, msg = res.x, bool(res.success), str(res.message)
+        except _Stuck as stuck:
+            x, ok, msg = stuck.x, False, str(stuck)
         at_bound = ()
     else:
         lo = np.log(np.array([0.5, 0.5, 0.5]))
@@ -283,7 +338,12 @@ def _fit_once(measured, sem=None, *, base, guess, cost, tip, model, profiles, bo
         # (alpha, beta, gamma) = (kappa_E, B, tau); a bound is active within 1e-6 in log
         at_bound = tuple(n for n, f in zip(("kappa_E", "B", "tau"), r.x)
                          if f - lo[0] < 1e-6 or hi - f < 1e-6)
-    y = model(x)
+    try:
+        y = model(x)
+    except Unresolved:
+        raise
+    except NotSwimming as exc:  # the optimiser ended where the model fails
+        raise OutsideModel(_outside(mean, f"the fit ended at a point without a stable stroke ({exc})")) from None
     B, tau, kE = to_physical(base, x)
     jw = model_jacobian(model, x, y)
     sens = jw / y[:, None]

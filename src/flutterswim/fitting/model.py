@@ -25,7 +25,8 @@ import numpy as np
 from .._validate import ParameterError
 from ..params import Groups, Parameters
 
-__all__ = ["DescriptorModel", "to_physical", "to_identifiable", "LOG_MAP", "NotSwimming", "Unresolved"]
+__all__ = ["DescriptorModel", "to_physical", "to_identifiable", "LOG_MAP", "NotSwimming", "Unresolved",
+           "OutsideModel"]
 
 #: d(log B, log tau, log kappa_E) / d(log eta_perp, log chi, log tau)
 LOG_MAP = np.array([[-1.0, 0.0, -1.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]])
@@ -42,6 +43,11 @@ MAX_COARSE_SEGMENTS = 48
 
 class NotSwimming(RuntimeError):
     """No stable stroke at these parameters (the straight state is stable, or Newton failed)."""
+
+
+class OutsideModel(NotSwimming):
+    """The fit cannot proceed: the data are outside what the model can reproduce (no stable
+    stroke at the start, or at every point the fit tries around its last one)."""
 
 
 class Unresolved(NotSwimming):
@@ -84,6 +90,9 @@ class DescriptorModel:
     executor: object = field(default=None, repr=False, compare=False)  # for parallel differences
     _cache: list = field(default_factory=list, repr=False)
     _memo: dict = field(default_factory=dict, repr=False)
+    #: points without a stable stroke, with the reason (an optimiser that tries one again is
+    #: told at once instead of waiting for the same failure)
+    _failed: dict = field(default_factory=dict, repr=False)
     _fine: "DescriptorModel | None" = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -136,9 +145,12 @@ class DescriptorModel:
         for k, o in self._cache:  # an exact repeat (the orbit depends on (eta_perp, chi) only)
             if np.array_equal(k, key):
                 return o
+        if (float(eta_perp), float(chi)) in self._failed:
+            raise NotSwimming(self._failed[(float(eta_perp), float(chi))])
         self.n_evaluations += 1
         out = solve_point((self.groups(eta_perp, chi), self._nearest(key), self.n_segments, self.steps))
         if isinstance(out, str):
+            self._failed[(float(eta_perp), float(chi))] = out
             raise NotSwimming(out)
         self._remember(key, out)
         return out

@@ -380,16 +380,20 @@ def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = 
     system = ShapeSystem.of(params, n_segments, phi)
     warm = None
     if guess is None:
-        from .linear import leading_pair
-
         g = params.groups if isinstance(params, Parameters) else params
-        lam = leading_pair(g, n_segments)
+        lam = _leading_pair(g, n_segments)
         if 0 < lam.real < NEAR_ONSET * lam.imag:
             # near the Hopf point the onset is too slow to simulate: continue from the Hopf
             # eigenvector (normal-form amplitude) along chi to this point
             from .continuation import continue_orbits
 
-            br = continue_orbits(g, "chi", g.chi, n_points=8, n_segments=n_segments, steps=steps, tol=tol)
+            try:
+                br = continue_orbits(g, "chi", g.chi, n_points=8, n_segments=n_segments, steps=steps, tol=tol)
+            except ParameterError as exc:
+                # its inputs are checked above: this point is outside the branch it continues
+                # (past the Hopf point on the side without strokes, or no Hopf point near it)
+                raise OrbitNotFound(f"no stroke at chi={g.chi:.6g}, eta_perp={g.eta_perp:.6g}: the continuation "
+                                    f"from the Hopf point does not reach it ({exc})") from None
             u0, T = br.orbits[-1].u0, br.orbits[-1].period_dimensionless
         else:
             u0, T = seed_from_simulation(system)
@@ -413,14 +417,24 @@ def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = 
                    warm_start=replace(fl, matrices=fl.matrices.without_jacobians()))
 
 
+def _leading_pair(groups: Groups, n_segments: int) -> complex:
+    """The straight state's leading complex eigenvalue, or OrbitNotFound if it has none (no
+    oscillatory mode, e.g. at chi = 0: nothing to flutter; not a bad input)."""
+    from .linear import leading_pair
+
+    try:
+        return leading_pair(groups, n_segments)
+    except ParameterError as exc:
+        raise OrbitNotFound(f"no stroke at chi={groups.chi:.6g}, eta_perp={groups.eta_perp:.6g}: {exc}") from None
+
+
 def seed_from_simulation(system: ShapeSystem, *, t_max: float = 80.0) -> tuple[np.ndarray, float]:
     """A point near the stroke and its period, from a simulation of the onset (tau units):
     the last upward crossing of the trailing segment's angle through its mean."""
     from ..integrators import integrate
-    from .linear import leading_pair
 
     fil = system.filament
-    lam = leading_pair(Groups(fil.eta_par, fil.eta_perp, fil.chi), fil.n)
+    lam = _leading_pair(Groups(fil.eta_par, fil.eta_perp, fil.chi), fil.n)
     if lam.real <= 0:
         raise OrbitNotFound(f"the straight state is linearly stable here (leading eigenvalue "
                             f"{lam.real:.4g}{lam.imag:+.4g}i per tau): no stroke grows from it; "

@@ -82,6 +82,7 @@ def _cmd_steer(args) -> int:
     # the reduced model is identified from the paper's stroke as a periodic orbit: at 4 segments
     # Newton shooting does not find it (a failure after ~20 s); 5 and more do
     positive_int("--segments", args.segments, minimum=5)
+    positive_int("--seed", args.seed, minimum=0)  # numpy's generator takes seeds >= 0
     params = preset(args.preset)
     L = params.l
     if args.path == "square":

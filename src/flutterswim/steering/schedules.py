@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validate import ParameterError, finite, positive
-from ..field import Field, Piecewise, Schedule
+from .._validate import ParameterError, angle as _angle, finite, positive
+from ..field import Constant, Field, Piecewise, Schedule
 
 __all__ = ["Rotation", "rotation", "step", "ramp", "from_csv", "add_field_options", "field_from_args"]
 
@@ -47,7 +47,9 @@ class Rotation(Schedule):
 
 
 def rotation(seconds_per_turn: float, start: float = 0.0, phi0: float = 0.0) -> Field:
-    """A field turning once every ``seconds_per_turn`` (negative: clockwise) from ``start``."""
+    """A field turning once every ``seconds_per_turn`` (negative: clockwise) from ``start``,
+    from the direction ``phi0`` [rad; a magnitude above 2 pi warns: likely degrees]."""
+    phi0 = _angle("phi0", phi0)
     spt = finite("seconds_per_turn", seconds_per_turn)
     if spt == 0:
         raise ParameterError("seconds_per_turn=0 is not allowed: a turn takes a non-zero time")
@@ -55,16 +57,29 @@ def rotation(seconds_per_turn: float, start: float = 0.0, phi0: float = 0.0) -> 
 
 
 def step(angle: float, at: float, phi0: float = 0.0) -> Field:
-    """The field jumps from ``phi0`` to ``angle`` [rad] at time ``at``."""
+    """The field jumps from ``phi0`` to ``angle`` at time ``at``. Angles in radians (the CLI's
+    ``--field-step`` and the field CSV take degrees: pass ``math.radians(90)``, not 90); a
+    magnitude above 2 pi warns (likely degrees)."""
+    return _step(_angle("angle", angle), at, _angle("phi0", phi0))
+
+
+def _step(angle: float, at: float, phi0: float) -> Field:
     at = finite("at", at)
     # (a hold schedule keeps its first value before its first time)
     return Field(direction=Piecewise([at - 1.0, at], [finite("phi0", phi0), finite("angle", angle)]))
 
 
 def ramp(angle: float, start: float, duration: float, phi0: float = 0.0) -> Field:
-    """The field turns linearly from ``phi0`` to ``angle`` over [start, start + duration]."""
+    """The field turns linearly from ``phi0`` to ``angle`` over [start, start + duration].
+    Angles in radians (the CLI's ``--field-ramp`` and the field CSV take degrees: pass
+    ``math.radians(90)``, not 90); a magnitude above 2 pi warns (likely degrees)."""
+    return _ramp(_angle("angle", angle), start, duration, _angle("phi0", phi0))
+
+
+def _ramp(angle: float, start: float, duration: float, phi0: float) -> Field:
     duration = positive("duration", duration)
-    return Field(direction=Piecewise([finite("start", start), start + duration], [phi0, finite("angle", angle)],
+    start = finite("start", start)
+    return Field(direction=Piecewise([start, start + duration], [finite("phi0", phi0), finite("angle", angle)],
                                      kind="linear"))
 
 
@@ -121,11 +136,12 @@ def field_from_args(args) -> Field | None:
     start = finite("--field-start", args.field_start)
     k = chosen[0]
     if k == "field_angle":
-        return Field(direction=math.radians(finite("--field-angle", args.field_angle)))
+        # (degrees here: Constant, so that Field does not warn about a large angle in radians)
+        return Field(direction=Constant(math.radians(finite("--field-angle", args.field_angle))))
     if k == "field_rotate":
         return rotation(args.field_rotate, start)
     if k == "field_step":
-        return step(math.radians(finite("--field-step", args.field_step)), start)
+        return _step(math.radians(finite("--field-step", args.field_step)), start, 0.0)
     if k == "field_ramp":
-        return ramp(math.radians(finite("--field-ramp angle", args.field_ramp[0])), start, args.field_ramp[1])
+        return _ramp(math.radians(finite("--field-ramp angle", args.field_ramp[0])), start, args.field_ramp[1], 0.0)
     return from_csv(args.field_csv)

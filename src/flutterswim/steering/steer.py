@@ -12,7 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import ParameterError, non_negative, positive
+from .._validate import ParameterError, non_negative, positive, positive_int
+from ..field import Constant, Field
 from ..params import Parameters
 from .control import Controller, wrap
 from .path import RefPath
@@ -60,6 +61,7 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     laps = positive("laps", laps)
     if not isinstance(delay_frames, (int, np.integer)) or delay_frames < 0:
         raise ParameterError(f"delay_frames={delay_frames!r} must be an integer >= 0")
+    seed = positive_int("seed", seed, minimum=0)  # numpy's generator takes seeds >= 0
     dt = 1.0 / fps
     rng = np.random.default_rng(seed)
     sigma = noise_px * um_per_px * 1e-6
@@ -103,7 +105,9 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     trapped_at = math.nan
     for k in range(n):
         cmd = pending.popleft()
-        part = simulate(params, t + dt, t_start=t, initial=state, field=cmd, n_segments=n_segments, n_frames=2)
+        # (Constant: the commanded angle is unwrapped, more than a turn is no unit mix-up)
+        part = simulate(params, t + dt, t_start=t, initial=state, field=Field(direction=Constant(cmd)),
+                        n_segments=n_segments, n_frames=2)
         if not part.ok:
             raise RuntimeError(f"the simulation failed at t={t:.4g} s: {part.message}")
         parts.append(part)

@@ -59,7 +59,7 @@ def turn_basin(params: Parameters, angles_deg, rates_deg_s, *, onset: float = 10
     invariant under rotating filament and field together) and settled from there."""
     from ..initial import InitialState
     from ..simulate import simulate
-    from .schedules import ramp
+    from .schedules import _ramp
 
     n = n_segments
     state = simulate(params, onset, n_segments=n, frame_dt=0.02).final_state()
@@ -68,7 +68,7 @@ def turn_basin(params: Parameters, angles_deg, rates_deg_s, *, onset: float = 10
         for j, r in enumerate(rates_deg_s):
             dur = abs(a) / r
             run = simulate(params, onset + dur, t_start=onset, initial=state,
-                           field=ramp(math.radians(a), onset, dur), n_segments=n, frame_dt=0.02)
+                           field=_ramp(math.radians(a), onset, dur, 0.0), n_segments=n, frame_dt=0.02)
             y = np.asarray(run.state_final, float)
             back = InitialState(theta=y[2:n + 2] - math.radians(a), kappa=y[n + 2:].copy())
             out[i, j] = _outcome(params, back, n)
