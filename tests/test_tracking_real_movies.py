@@ -170,3 +170,31 @@ def test_a_noisy_body_at_rest_is_still_tracked():
     assert static_objects(mv.frames) is not None
     tr = track(mv, px_per_mm=mv.px_per_mm, fps=FPS)
     assert not failures(tr) and tr.t.size == t.size
+
+
+def test_a_movies_sample_frames_are_read_in_one_pass(tmp_path):
+    """The frames static_objects samples from a movie are read in one pass that keeps only them
+    (indexing a movie decodes all of it into memory: 2.6 GB for 10 000 frames of 512 x 512),
+    and they are the frames iteration gives."""
+    import dataclasses
+
+    import imageio_ffmpeg
+
+    from flutterswim.tracking.io import open_frames
+
+    p = tmp_path / "m.mp4"
+    w = imageio_ffmpeg.write_frames(str(p), (64, 48), pix_fmt_in="gray", pix_fmt_out="yuv420p", quality=10)
+    w.send(None)
+    for i in range(20):
+        w.send(np.full((48, 64), 10 * i, np.uint8).tobytes())
+    w.close()
+    f = open_frames(p)
+
+    def boom(i):
+        raise AssertionError("the whole movie decoded into memory")
+
+    g = dataclasses.replace(f, _get=boom)
+    every = list(f)
+    for got, i in zip(g.take([0, 7, 19]), (0, 7, 19)):
+        np.testing.assert_array_equal(got, every[i])
+    assert static_objects(g) is None  # a flat movie has no objects; read without indexing

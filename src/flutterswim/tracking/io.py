@@ -52,6 +52,7 @@ class Frames:
     _iter: Callable[[], Iterator[np.ndarray]]
     roi: tuple[int, int, int, int] | None = None
     note: str = ""  # how the file was read, when it could be read another way
+    sequential: bool = False  # a movie: indexing decodes every frame into memory once
 
     def __len__(self) -> int:
         return self.n_frames
@@ -68,6 +69,20 @@ class Frames:
     def __iter__(self) -> Iterator[np.ndarray]:
         for a in self._iter():
             yield self._crop(_gray(a))
+
+    def take(self, indices: Any) -> list[np.ndarray]:
+        """Frames ``indices`` (increasing): by index, or for a movie (no random access without
+        decoding it all into memory) in one pass that keeps only those."""
+        idx = [int(i) for i in indices]
+        if not self.sequential:
+            return [self[i] for i in idx]
+        want, out = set(idx), {}
+        for i, a in enumerate(self):
+            if i in want:
+                out[i] = a
+                if len(out) == len(want):
+                    break
+        return [out[i] for i in idx]
 
 
 def parse_roi(roi: Any, shape: tuple[int, int] | None) -> tuple[int, int, int, int] | None:
@@ -256,7 +271,7 @@ def _movie(p: Path) -> Frames:
                 cache[k] = a
         return cache[i]
 
-    return Frames(str(p), int(n), (H, W), fps, get, it)
+    return Frames(str(p), int(n), (H, W), fps, get, it, sequential=True)
 
 
 def open_frames(source: Any, roi: Any = None) -> Frames:

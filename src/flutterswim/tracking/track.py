@@ -284,8 +284,9 @@ def static_objects(frames: Any, k: int = 4, n_samples: int = 8, negate: bool = F
     if T < n_samples:
         return None
     on, img = None, None
-    for i in np.unique(np.linspace(0, T - 1, n_samples).round().astype(int)):
-        img = clean_frame(frames[i])
+    idx = np.unique(np.linspace(0, T - 1, n_samples).round().astype(int))
+    for raw in (frames.take(idx) if hasattr(frames, "take") else [frames[i] for i in idx]):
+        img = clean_frame(raw)
         obj = _coarse_objects(-np.asarray(img, np.float32) if negate else img, k)
         if obj is None:
             return None
@@ -529,7 +530,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     ref: tuple[np.ndarray, np.ndarray] | None = None
     blur_known = sigma is not None
     n_clipped = 0
-    static = static_objects(frames, negate=dark_line) if window_px > 0 or T > 1 else None
+    static = static_objects(frames, negate=dark_line)
     still = _StillPixels()
     repeated = np.zeros(T, bool)
     prev = None
