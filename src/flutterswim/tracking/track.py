@@ -48,7 +48,7 @@ from scipy import ndimage as ndi
 from .._validate import ParameterError, finite, non_negative, positive, positive_int
 from ..analysis.track import Track
 from .centreline import fit_centreline
-from .io import open_frames
+from .io import Frames, open_frames
 from .segment import _STATIC_SHARE, BACKGROUND_SIGMA, _moving_best, background_plane, clean_frame, segment
 from .tips import refine_tips
 
@@ -285,7 +285,7 @@ def static_objects(frames: Any, k: int = 4, n_samples: int = 8, negate: bool = F
         return None
     on, img = None, None
     idx = np.unique(np.linspace(0, T - 1, n_samples).round().astype(int))
-    for raw in (frames.take(idx) if hasattr(frames, "take") else [frames[i] for i in idx]):
+    for raw in (frames.take(idx) if isinstance(frames, Frames) else [frames[i] for i in idx]):
         img = clean_frame(raw)
         obj = _coarse_objects(-np.asarray(img, np.float32) if negate else img, k)
         if obj is None:
