@@ -198,3 +198,20 @@ def test_a_movies_sample_frames_are_read_in_one_pass(tmp_path):
     for got, i in zip(g.take([0, 7, 19]), (0, 7, 19)):
         np.testing.assert_array_equal(got, every[i])
     assert static_objects(g) is None  # a flat movie has no objects; read without indexing
+
+
+def test_the_tip_check_follows_the_frames_times():
+    """The check of each end against the path of its neighbouring frames fits a polynomial in
+    time: by frame index, a dropped frame makes the frames beside it look 80 times farther off
+    the path than any other; by the frames' times they are on it."""
+    from flutterswim.tracking.temporal import _leave_one_out
+
+    t = np.setdiff1d(np.arange(60.0), [30.0])  # frame 30 dropped
+    v = 10.0 * np.sin(2 * np.pi * t / 19.0)  # an end's smooth path
+    ok = np.ones(t.size, bool)
+    near = [28, 29, 30, 31]  # the frames beside the drop (their indices after it)
+    far = np.setdiff1d(np.arange(2, t.size - 2), near)
+    by_index = _leave_one_out(v, ok, 2, 2)
+    by_time = _leave_one_out(v, ok, 2, 2, t)
+    assert np.abs(by_index[near]).max() > 20 * np.abs(by_index[far]).max()
+    assert np.nanmax(np.abs(by_time)) <= 1.5 * np.abs(by_index[far]).max()

@@ -65,25 +65,32 @@ def end_offsets_across(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, anchor: flo
     return out
 
 
-def _leave_one_out(v: np.ndarray, ok: np.ndarray, half: int, degree: int) -> np.ndarray:
-    """Residual of each good v[i] from the polynomial of ``degree`` in frame index fitted to
-    the good frames within ``half`` frames of i, i left out (NaN with too few of them)."""
+def _leave_one_out(v: np.ndarray, ok: np.ndarray, half: int, degree: int,
+                   positions: np.ndarray | None = None) -> np.ndarray:
+    """Residual of each good v[i] from the polynomial of ``degree`` in time fitted to the good
+    frames within ``half`` frame intervals of i, i left out (NaN with too few of them); time in
+    frame intervals: ``positions`` (a camera's timestamps: a dropped frame leaves a step of 2),
+    default the frame index."""
     idx = np.nonzero(ok)[0]
+    pos = np.arange(v.shape[0], dtype=float) if positions is None else np.asarray(positions, float)
     r = np.full(v.shape, np.nan)
     for i in idx:
-        nb = idx[(np.abs(idx - i) <= half) & (idx != i)]
+        d = pos[idx] - pos[i]
+        nb = idx[(np.abs(d) <= half + 1e-9) & (idx != i)]
         if nb.size < degree + 2:
             continue
-        c = np.polyfit((nb - i).astype(float), v[nb], degree)
+        c = np.polyfit(pos[nb] - pos[i], v[nb], degree)
         r[i] = v[i] - c[-1]
     return r
 
 
 def tip_outliers(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, *, k: float = 6.0, floor_px: float = 2.0,
-                 half: int = 2, degree: int = 2) -> list[tuple[int, int, float, float]]:
+                 half: int = 2, degree: int = 2, positions: np.ndarray | None = None
+                 ) -> list[tuple[int, int, float, float]]:
     """Ends that leave the path of their neighbouring frames: a list of (frame, end (0: s = 0,
     1: s = l), residual [px], residual in robust standard deviations), in the order found
-    (the largest first, then again without it); see the module docstring. X, Y (T, P) [px]; ok (T,) the good frames."""
+    (the largest first, then again without it); see the module docstring. X, Y (T, P) [px]; ok (T,) the good frames;
+    positions: (T,) the frames' times in frame intervals (default their indices)."""
     ok = np.array(ok, bool)
     if np.count_nonzero(ok) < 2 * half + 3:
         return []
@@ -97,7 +104,7 @@ def tip_outliers(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, *, k: float = 6.0
         for e in (0, 1):
             if np.count_nonzero(use[e]) < 2 * half + 3:
                 continue
-            r = _leave_one_out(off[:, e], use[e], half, degree)
+            r = _leave_one_out(off[:, e], use[e], half, degree, positions)
             good = np.isfinite(r)
             if np.count_nonzero(good) < 5:
                 continue

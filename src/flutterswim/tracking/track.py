@@ -628,7 +628,8 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         from .temporal import tip_outliers
 
         temporal["tip_check"] = f"done (k = {tip_k:g}, floor {tip_floor_px:g} px)"
-        for i, e, res, z in tip_outliers(X, Y, ok, k=tip_k, floor_px=tip_floor_px):
+        pos = None if times is None else (times - times[0]) * fps
+        for i, e, res, z in tip_outliers(X, Y, ok, k=tip_k, floor_px=tip_floor_px, positions=pos):
             if ok[i]:
                 ok[i] = False
                 reason[i] = (f"tip outlier: the {'s = l' if e else 's = 0'} end is {abs(res):.1f} px "
