@@ -514,6 +514,8 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
             raise ParameterError(f"fps was not given and input={frames.source!r} does not record a frame rate; "
                                  "give fps (frames per second) or the frames' times")
     fps = positive("fps", fps)
+    # the frames' times in frame intervals, for the checks and fits in time (None: the indices)
+    pos = None if times is None else (times - times[0]) * fps
     X = np.full((T, n_points), np.nan)
     Y = np.full((T, n_points), np.nan)
     length = np.full(T, np.nan)
@@ -628,7 +630,6 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         from .temporal import tip_outliers
 
         temporal["tip_check"] = f"done (k = {tip_k:g}, floor {tip_floor_px:g} px)"
-        pos = None if times is None else (times - times[0]) * fps
         for i, e, res, z in tip_outliers(X, Y, ok, k=tip_k, floor_px=tip_floor_px, positions=pos):
             if ok[i]:
                 ok[i] = False
@@ -661,7 +662,6 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         from .periodic import periodic_shape_flagging
 
         try:
-            pos = None if times is None else (times - times[0]) * fps
             X, Y, pinfo = periodic_shape_flagging(X, Y, ok, reason, per_stroke, positions=pos)
         except (np.linalg.LinAlgError, ValueError) as exc:  # a degenerate movie: the frames stay as they are
             pinfo = {"done": False, "reason": f"not done: the template fit failed ({exc})"}
