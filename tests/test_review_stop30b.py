@@ -185,7 +185,23 @@ def test_cli_degrees_do_not_warn():
     from flutterswim.steering.schedules import field_from_args
 
     base = dict(field_angle=None, field_rotate=None, field_step=None, field_ramp=None, field_csv=None,
-                field_start=1.0)
+                field_start=None)
     for k, v in (("field_angle", 400.0), ("field_step", 400.0), ("field_ramp", [720.0, 2.0])):
         f = _quiet(lambda k=k, v=v: field_from_args(argparse.Namespace(**{**base, k: v})))
         assert f.direction(10.0) == pytest.approx(math.radians(v if k != "field_ramp" else v[0]))
+
+
+def test_field_start_without_a_timed_schedule_is_refused():
+    """--field-start times a rotation, step or ramp; with a constant angle, a CSV or no
+    schedule at all it would be silently ignored."""
+    import argparse
+
+    from flutterswim.steering.schedules import field_from_args
+
+    base = dict(field_angle=None, field_rotate=None, field_step=None, field_ramp=None, field_csv=None)
+    for extra in ({}, {"field_angle": 30.0}, {"field_csv": "f.csv"}):
+        with pytest.raises(ParameterError, match="--field-start"):
+            field_from_args(argparse.Namespace(**{**base, **extra, "field_start": 2.0}))
+    f = field_from_args(argparse.Namespace(**{**base, "field_step": 90.0, "field_start": 2.0}))
+    assert f.direction(1.9) == pytest.approx(0.0) and f.direction(2.1) == pytest.approx(math.pi / 2)
+    assert field_from_args(argparse.Namespace(**{**base, "field_start": None})) is None

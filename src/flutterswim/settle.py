@@ -362,4 +362,6 @@ def _bar(enabled: bool, total: float):
         return None
     from tqdm.auto import tqdm
 
-    return tqdm(total=round(total, 3), unit="tau", desc="settle", leave=False)
+    from .simulate import TAU_BAR
+
+    return tqdm(total=round(total, 3), unit="tau", desc="settle", leave=False, bar_format=TAU_BAR)

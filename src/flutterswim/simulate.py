@@ -158,12 +158,16 @@ def _blas_controller():
     return ThreadpoolController()
 
 
+# progress in time (tau): its float count to one decimal (tqdm's default shows 41.88000000000001/160)
+TAU_BAR = "{desc}: {percentage:3.0f}%|{bar}| {n:.1f}/{total:.1f} tau [{elapsed}<{remaining}]"
+
+
 def _progress(enabled: bool, t0: float, t1: float):
     if not enabled:
         return None, None
     from tqdm.auto import tqdm
 
-    bar = tqdm(total=round(t1 - t0, 3), unit="tau", desc="simulate", leave=False)
+    bar = tqdm(total=round(t1 - t0, 3), unit="tau", desc="simulate", leave=False, bar_format=TAU_BAR)
     state = {"last": t0}
 
     def tick(t: float) -> None:

@@ -118,7 +118,8 @@ def add_field_options(p) -> None:
     g = p.add_argument_group("field schedule (angles in degrees, times in s)")
     g.add_argument("--field-angle", type=float, default=None, help="constant field direction [deg]")
     g.add_argument("--field-rotate", type=float, default=None, help="seconds per turn of a rotating field (negative: clockwise)")
-    g.add_argument("--field-start", type=float, default=0.0, help="time at which the rotation, step or ramp starts [s]")
+    g.add_argument("--field-start", type=float, default=None,
+                   help="time at which the rotation, step or ramp starts [s] (default 0)")
     g.add_argument("--field-step", type=float, default=None, help="jump to this direction [deg] at --field-start")
     g.add_argument("--field-ramp", type=float, nargs=2, default=None, metavar=("ANGLE_DEG", "DURATION_S"),
                    help="turn linearly to ANGLE_DEG over DURATION_S from --field-start")
@@ -131,10 +132,15 @@ def field_from_args(args) -> Field | None:
               if getattr(args, k, None) is not None]
     if len(chosen) > 1:
         raise ParameterError(f"give one field schedule, not {', '.join('--' + c.replace('_', '-') for c in chosen)}")
-    if not chosen:
+    k = chosen[0] if chosen else None
+    given_start = getattr(args, "field_start", None)
+    if given_start is not None and k not in ("field_rotate", "field_step", "field_ramp"):
+        why = {None: "and none was given", "field_angle": "not --field-angle (a constant direction)",
+               "field_csv": "not --field-csv (its times are in the file)"}[k]
+        raise ParameterError(f"--field-start={given_start!r} times --field-rotate, --field-step or --field-ramp, {why}")
+    if k is None:
         return None
-    start = finite("--field-start", args.field_start)
-    k = chosen[0]
+    start = finite("--field-start", 0.0 if given_start is None else given_start)
     if k == "field_angle":
         # (degrees here: Constant, so that Field does not warn about a large angle in radians)
         return Field(direction=Constant(math.radians(finite("--field-angle", args.field_angle))))
