@@ -32,7 +32,9 @@ def run_to_limit_cycle(
 
     The result's settings record ``outcome`` and ``outcome_reason`` (straight, bent_equilibrium,
     limit_cycle, not_periodic, capped, failed), ``limit_cycle`` (the run reached the orbit),
-    ``limit_cycle_time`` (first time every later cycle is within 1 % of the orbit), and the
+    ``limit_cycle_time`` (first time every later cycle's period and peak-to-peak are within 1 % of
+    the orbit; ``describe``'s ``limit_cycle_time_s`` is the start of the final run of cycles each
+    converged on the one before, a record-only measure, usually a cycle or two later), and the
     orbit's exact descriptors under ``orbit`` (period, advance, lateral excursions of both
     ends, Floquet stability)."""
     from .settle import settle

@@ -118,6 +118,13 @@ class Cycles:
     converged: (K,) all three changes below their tolerance: tol, plus what the measurement
     noise alone makes of the change (``tol_used``, (K, 3): period, amplitude, shape; nan for
     k=0; close to tol for a clean, finely sampled simulation).
+    limit_cycle_time: start of the record's final run of converged cycles (each within tol of
+    the one before it in period, amplitude and shape), from the record alone. Not the same
+    measure as a simulation's ``settings["limit_cycle_time"]`` (a sweep's
+    ``time_to_limit_cycle_s``): the first time from which every cycle's period and
+    peak-to-peak lie within 1 % of the exact periodic orbit, usually a cycle or two earlier
+    (the paper's run: 6.70 s against 7.38 s), as a cycle can be that close to the orbit while
+    its shape still changes from the one before by more than tol.
     """
 
     starts: np.ndarray
