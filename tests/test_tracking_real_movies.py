@@ -85,6 +85,35 @@ def test_a_noiseless_body_at_rest_is_not_flagged_repeated():
     assert tr.t.size == t.size
 
 
+def test_batch_sidecar_names_the_frames_times(movie, tmp_path):
+    """track-batch: a trial with dropped frames whose sidecar names its timestamps file keeps
+    the full movie's period; a sidecar naming a missing file stops the batch before any trial
+    is tracked or anything is written."""
+    tifffile = pytest.importorskip("tifffile")
+    import json
+
+    from flutterswim.fitting.data import read_trials
+    from flutterswim.tracking import track_batch
+
+    mv, truth = movie
+    keep = np.setdiff1d(np.arange(mv.t.size), DROP)
+    folder = tmp_path / "trials"
+    folder.mkdir()
+    tifffile.imwrite(folder / "d.tif", mv.frames[keep], photometric="minisblack")
+    (folder / "stamps").mkdir()
+    (folder / "stamps" / "d.csv").write_text("time_ms\n" + "\n".join(f"{1e3 * v:.6f}" for v in mv.t[keep]))
+    (folder / "d.json").write_text(json.dumps({"voltage_V": 80, "sample": "a", "times": "stamps/d.csv"}))
+    out = tmp_path / "trials.csv"
+    _, rows, failed = track_batch(folder, out, px_per_mm=mv.px_per_mm, fps=FPS)
+    assert not failed and len(rows) == 1
+    assert _rel(read_trials(out).values[0, 0], truth.period_s) < 1e-3
+    (folder / "d.json").write_text(json.dumps({"voltage_V": 80, "sample": "a", "times": "stamps/missing.csv"}))
+    out2 = tmp_path / "again.csv"
+    with pytest.raises(ParameterError, match="missing.csv"):
+        track_batch(folder, out2, px_per_mm=mv.px_per_mm, fps=FPS)
+    assert not out2.exists()
+
+
 def test_times_are_checked(movie):
     mv, _ = movie
     fr = mv.frames[:12]

@@ -6,7 +6,8 @@ columns), and the per-voltage mean +- SEM figure (the paper's Fig. 3e, drawn by
 A trial is a TIFF stack or a movie in the folder, or a subfolder of frames. Its voltage and
 sample come from a sidecar JSON (``<trial>.json`` next to it, or ``trial.json`` inside a
 frame folder; keys ``voltage_V``, ``sample`` and optionally ``px_per_mm``, ``fps``, ``roi``,
-``field_angle_deg``, ``start_end``, ``dark_line``) or else from the file name by a regular expression with
+``field_angle_deg``, ``start_end``, ``dark_line``, ``times``: a file of the frames' times, as
+``track --times``, its path relative to the sidecar's folder) or else from the file name by a regular expression with
 the named groups ``voltage`` and ``sample`` (default :data:`DEFAULT_PATTERN`, e.g.
 ``85V_sample3_trial2.tif``; a ``p`` may stand for the decimal point, ``72p5V``).
 
@@ -93,9 +94,23 @@ def _sidecar_options(meta: dict, cand: Path) -> dict:
             raise ParameterError(f"start_end={opts['start_end']!r} is not allowed; choose one of {', '.join(START_ENDS)}")
         if "dark_line" in opts and not isinstance(opts["dark_line"], bool):
             raise ParameterError(f"dark_line={opts['dark_line']!r} is not allowed; give true or false")
+        if meta.get("times") is not None:
+            opts["times"] = _sidecar_times(meta["times"], cand)
     except ParameterError as exc:
         raise ParameterError(f"sidecar={str(cand)!r}: {exc}") from None
     return opts
+
+
+def _sidecar_times(value: Any, cand: Path):
+    """The frames' times named by a sidecar's ``times`` (a path relative to the sidecar's
+    folder), read now: a missing or unreadable file stops the batch before its first trial."""
+    from .io import read_times
+
+    if not isinstance(value, str) or not value.strip():
+        raise ParameterError(f"times={value!r} is not allowed; give the path of a file of the frames' times "
+                             "(relative to the sidecar's folder)")
+    p = Path(value)
+    return read_times(p if p.is_absolute() else cand.parent / p)
 
 
 def find_trials(folder: str | os.PathLike, pattern: str = DEFAULT_PATTERN) -> list[Trial]:
