@@ -205,3 +205,23 @@ def test_field_start_without_a_timed_schedule_is_refused():
     f = field_from_args(argparse.Namespace(**{**base, "field_step": 90.0, "field_start": 2.0}))
     assert f.direction(1.9) == pytest.approx(0.0) and f.direction(2.1) == pytest.approx(math.pi / 2)
     assert field_from_args(argparse.Namespace(**{**base, "field_start": None})) is None
+
+
+def test_tracking_field_angle_warns_about_degrees_and_the_cli_takes_any_turn(tmp_path):
+    """track(field_angle=90) is 90 rad: warned at the caller's line, before any frame is read;
+    the command line's degrees (any number of turns) give the same direction without a warning."""
+    pytest.importorskip("skimage")
+    from flutterswim._validate import direction_deg
+    from flutterswim.tracking import track
+
+    def call():
+        with pytest.raises(ParameterError, match="does not exist"):
+            track(tmp_path / "none.tif", px_per_mm=70.0, field_angle=90.0)
+
+    _warned(call, "field_angle")
+    for deg in (400.0, -190.0, 720.0 + 35.0, 180.0):
+        rad = _quiet(lambda deg=deg: direction_deg("--field-angle-deg", deg))
+        assert -math.pi < rad <= math.pi
+        assert (math.cos(rad), math.sin(rad)) == pytest.approx((math.cos(math.radians(deg)), math.sin(math.radians(deg))))
+    with pytest.raises(ParameterError, match="--field-angle-deg"):
+        direction_deg("--field-angle-deg", math.nan)

@@ -61,6 +61,13 @@ def finite_array(name: str, value: Any, shape: tuple[int, ...] | None = None) ->
     return arr
 
 
+def direction_deg(name: str, value: Any) -> float:
+    """A direction given in degrees (a command line's) as radians in (-pi, pi]: the same
+    direction, so that a turn or more in degrees does not read as degrees given as radians
+    (:func:`angle`'s warning)."""
+    return math.radians(math.remainder(finite(name, value), 360.0))
+
+
 def angle(name: str, value: Any, *, stacklevel: int = 1) -> float:
     """Return ``value`` (an angle in radians) as float, or raise if it is not finite; warn
     (UserWarning naming ``name``) if its magnitude exceeds 2 pi, likely degrees given where

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .._validate import ParameterError, finite, positive, positive_int
+from .._validate import ParameterError, direction_deg, finite, positive, positive_int
 from .io import FRAME_SUFFIXES, MOVIE_SUFFIXES, STACK_SUFFIXES, parse_roi
 
 __all__ = ["DEFAULT_PATTERN", "CSV_COLUMNS", "Trial", "failures_path", "find_trials", "track_batch"]
@@ -207,7 +207,7 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
         f = o.pop("fps", fps)
         kw = dict(track_kwargs)
         if "field_angle_deg" in o:
-            kw["field_angle"] = math.radians(o.pop("field_angle_deg"))
+            kw["field_angle"] = direction_deg("field_angle_deg", o.pop("field_angle_deg"))
         kw.update(o)
         try:
             tk = track(tr_.path, px_per_mm=ppm, fps=f, **kw)

@@ -4,10 +4,9 @@ and ``flutterswim track-batch FOLDER --px-per-mm X --fps 50 --out trials.csv [--
 from __future__ import annotations
 
 import json
-import math
 import sys
 
-from .._validate import finite, positive, positive_int
+from .._validate import direction_deg, positive, positive_int
 from ..defaults import N_CYCLES_MOVIE
 
 __all__ = ["register"]
@@ -71,7 +70,7 @@ def _cmd_track(args) -> int:
     from .track import failures, track
 
     positive_int("--last", args.last)  # checked before tracking, as the output paths
-    finite("--field-angle-deg", args.field_angle_deg)
+    field_angle = direction_deg("--field-angle-deg", args.field_angle_deg)
     out = check_output_file(args.out, (".nc",), what="--out")
     if args.kymograph:
         check_output_file(args.kymograph, (".png", ".pdf", ".svg"), what="--kymograph")
@@ -81,7 +80,7 @@ def _cmd_track(args) -> int:
 
         times = read_times(args.times)
     tr = track(args.input, px_per_mm=args.px_per_mm, fps=args.fps, roi=args.roi, n_points=args.points,
-               start_end=args.start_end, field_angle=math.radians(args.field_angle_deg), dark_line=args.dark_line,
+               start_end=args.start_end, field_angle=field_angle, dark_line=args.dark_line,
                sigma=args.sigma, times=times,
                progress=not args.quiet)
     save_track(tr, out)
@@ -113,13 +112,11 @@ def _cmd_batch(args) -> int:
     for name, v in (("--px-per-mm", args.px_per_mm), ("--fps", args.fps)):
         if v is not None:
             positive(name, v)
-    if args.field_angle_deg is not None:
-        finite("--field-angle-deg", args.field_angle_deg)
+    field = {} if args.field_angle_deg is None else {"field_angle": direction_deg("--field-angle-deg", args.field_angle_deg)}
     out, rows, failed = track_batch(args.folder, args.out, px_per_mm=args.px_per_mm, fps=args.fps,
                                     pattern=args.pattern or DEFAULT_PATTERN, n_last=args.last, plot=args.plot,
                                     progress=not args.quiet, dark_line=args.dark_line,
-                                    **({} if args.field_angle_deg is None else
-                                       {"field_angle": math.radians(args.field_angle_deg)}),
+                                    **field,
                                     **({} if args.start_end is None else {"start_end": args.start_end}))
     for trial, why in failed:
         print(f"flutterswim track-batch: {trial}: {why}", file=sys.stderr)

@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage as ndi
 
-from .._validate import ParameterError, finite, non_negative, positive, positive_int
+from .._validate import ParameterError, angle, finite, non_negative, positive, positive_int
 from ..analysis.track import Track
 from .centreline import fit_centreline
 from .io import Frames, open_frames
@@ -414,7 +414,8 @@ _OPTION_CHECKS = {
     "n_points": lambda v: positive_int("n_points", v, 5), "tip_k": lambda v: positive("tip_k", v),
     "tip_floor_px": lambda v: positive("tip_floor_px", v),
     "sigma": lambda v: None if v is None else positive("sigma", v),
-    "field_angle": lambda v: finite("field_angle", v), "t0": lambda v: finite("t0", v),
+    # (radians: more than a turn is likely degrees; user -> track -> check_options -> here)
+    "field_angle": lambda v: angle("field_angle", v, stacklevel=3), "t0": lambda v: finite("t0", v),
     "min_contrast": lambda v: non_negative("min_contrast", v), "length_tol": lambda v: positive("length_tol", v),
     "jump_tol": lambda v: positive("jump_tol", v), "gap_fraction": lambda v: non_negative("gap_fraction", v),
     "window_px": lambda v: non_negative("window_px", v), "smooth_frames": _smooth_frames,
