@@ -115,3 +115,23 @@ def test_measured_onset_rate_is_the_linear_theory_near_the_hopf_point(over):
         s = settle(g, n_segments=n, frames_per_tau=25, chunk=chunk, t_max=80.0, n_cycles=2)
         assert s.outcome == "limit_cycle"
         assert s.growth_rate_measured == pytest.approx(lam.real, rel=2e-2), chunk
+
+
+def test_crossings_index_the_chunks_own_frames():
+    """settle hands the watch each chunk after the first without its first frame (the previous
+    chunk's last); the upward crossings' (chunk, frame, fraction) index the chunk's own frames,
+    from which Newton shooting takes its first state: they give back the crossing's time."""
+    t = np.arange(0.0, 20.0, DT)
+    q = np.sin(OMEGA * t + 0.3)
+    bounds = [0, 97, 180, 181, 333, t.size - 1]  # chunks share their boundary frame
+    parts = [(t[a:b + 1], q[a:b + 1]) for a, b in zip(bounds[:-1], bounds[1:])]
+    w = _Watch()
+    for k, (tk, qk) in enumerate(parts):
+        sl = slice(1, None) if k else slice(None)
+        w.add(k, tk[sl], qk[sl], skipped=sl.start or 0)
+    assert len(w.up_t) > 10
+    for (k, j, f), tc in zip(w.up_i, w.up_t):
+        tk, qk = parts[k]
+        assert 0 <= j < tk.size - 1 and 0 <= f <= 1
+        assert tk[j] + f * (tk[j + 1] - tk[j]) == pytest.approx(tc, abs=1e-12)
+        assert qk[j] < qk[j + 1]  # an upward crossing

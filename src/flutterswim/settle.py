@@ -103,8 +103,10 @@ class _Watch:
         self.amps: list[float] = []
         self._prev: tuple[np.ndarray, np.ndarray] | None = None  # last two frames (t, q) seen so far
 
-    def add(self, k: int, t: np.ndarray, q: np.ndarray) -> float:
-        """Add chunk k (frames t, q); return the half-range of q over its second half.
+    def add(self, k: int, t: np.ndarray, q: np.ndarray, skipped: int = 0) -> float:
+        """Add chunk k (frames t, q, the chunk's own frames from its ``skipped``-th: those
+        before repeat the previous chunk's last); return the half-range of q over its second
+        half. ``up_i`` indexes the chunk's own frames.
 
         The last two frames seen are carried into the next chunk: an extremum on the last
         frame of a chunk needs the frame after it, and a crossing between chunks the frame
@@ -130,7 +132,7 @@ class _Watch:
         for j in c:
             f = (mid - q[j]) / (q[j + 1] - q[j])
             self.up_t.append(float(t[j] + f * (t[j + 1] - t[j])))
-            self.up_i.append((k, j - off, float(f)))
+            self.up_i.append((k, j - off + skipped, float(f)))
         self._prev = (t[-2:].copy(), q[-2:].copy())
         amp = float(0.5 * (half.max() - half.min()))
         self.amps.append(amp)
@@ -215,7 +217,7 @@ def settle(params: Parameters | Groups, *, initial=None, n_cycles: int = default
             outcome, reason = "failed", f"the solver failed at t={part.t_final:.6g}: {part.message}"
             break
         sl = slice(1, None) if k else slice(None)
-        amp = watch.add(k, part.t[sl] / tau, part.theta[sl, 0])
+        amp = watch.add(k, part.t[sl] / tau, part.theta[sl, 0], skipped=sl.start or 0)
         k += 1
         state, t0 = part.final_state(), t1
         amps = watch.amps
