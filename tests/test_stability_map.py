@@ -71,6 +71,12 @@ def test_map_netcdf_roundtrip(coarse, tmp_path):
     assert np.array_equal(back.omega, coarse.omega, equal_nan=True)
     ds = coarse.to_dataset()
     assert ds["re_omega"].dims == ("eta_perp", "chi")
+    # eta_perp = 0 (no drag) has no eigenvalue: NaN in both parts (its imaginary part read 0,
+    # a neutral non-oscillating mode), and no Newton iterations
+    row = ds.sel(eta_perp=0.0)
+    assert np.all(np.isnan(row["re_omega"])) and np.all(np.isnan(row["im_omega"]))
+    assert np.all(row["iterations"] == -1)
+    assert np.all(np.isfinite(ds["im_omega"].sel(eta_perp=ETA[1:])))
 
 
 @pytest.mark.slow

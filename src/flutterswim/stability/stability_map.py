@@ -195,7 +195,7 @@ def _stability_map(eta_perp, chi, eta_range, chi_range, step, max_step, tol, max
     if np.any(eta < 0):
         raise ParameterError(f"eta_perp={eta[eta < 0][0]!r} must be >= 0 (eta_perp = 0 gives NaN)")
     max_step = positive("max_step", max_step)
-    omega = np.full((eta.size, chis.size), np.nan + 0j)
+    omega = np.full((eta.size, chis.size), complex(np.nan, np.nan))  # no drag: no eigenvalue, NaN in both parts
     iters = np.full((eta.size, chis.size), -1, dtype=np.int64)
     ve = np.flatnonzero(eta > 0)
     if ve.size == 0:
