@@ -90,6 +90,8 @@ def _cmd_fit(args) -> int:
         print(f"flutterswim fit: failed: {' '.join(str(exc).split())}", file=sys.stderr)
         return 1
     res.save(out)
+    if res.settings.get("out_of_reach"):  # no values to speak of: the one line why (the JSON has the rest)
+        return _verdict(res)
     n = int(summary.n[np.isclose(summary.voltage_V, v)][0])
     if not args.paper_cost and n < FEW_TRIALS:
         import sys
@@ -113,7 +115,8 @@ def _verdict(res) -> int:
         return 0
     import sys
 
-    print(f"flutterswim fit: failed: not converged: {res.message}", file=sys.stderr)
+    why = res.message if res.settings.get("out_of_reach") else f"not converged: {res.message}"
+    print(f"flutterswim fit: failed: {why}", file=sys.stderr)
     return 1
 
 

@@ -23,6 +23,7 @@ import numpy as np
 from .._validate import ParameterError, positive, positive_int
 from ..params import Parameters, preset
 from .model import DescriptorModel, NotSwimming, OutsideModel, Unresolved, to_identifiable, to_physical
+from .reach import MAX_FAILED_IN_A_ROW, MAX_FAILED_POINTS, Reach, Stuck  # noqa: F401 (the limits: public here)
 from .uncertainty import NAMES, covariance, identifiability_card
 
 __all__ = ["FitResult", "fit", "PAPER_GUESS", "paper_cost"]
@@ -30,9 +31,6 @@ __all__ = ["FitResult", "fit", "PAPER_GUESS", "paper_cost"]
 #: The paper's initial guess (SI): B0 = 2e-8 N mm^2, tau0 = 0.3 s, kappa_E0 = 18 1/mm.
 PAPER_GUESS = (2.0e-14, 0.3, 18.0e3)
 PENALTY = 1e3  # weighted residual when there is no stable stroke
-#: trial points in a row without a stable stroke after which a fit stops (each costs orbit
-#: solves that fail slowly; the optimiser only shrinks its step towards the last good point)
-MAX_FAILED_IN_A_ROW = 6
 
 
 def paper_cost(measured: np.ndarray, model: np.ndarray) -> float:
@@ -128,34 +126,6 @@ def _weighted(model, x, mean, sem):
     return (y - mean) / sem, y
 
 
-class _Stuck(Exception):
-    """MAX_FAILED_IN_A_ROW trial points without a stroke: stop at the best point so far."""
-
-    def __init__(self, x, message):
-        super().__init__(message)
-        self.x = x
-
-
-class _FailureStreak:
-    """Counts trial points in a row without a stable stroke; raises :class:`_Stuck` (with the
-    best point that had one) at MAX_FAILED_IN_A_ROW."""
-
-    def __init__(self):
-        self.in_a_row, self.best_x, self.best = 0, None, math.inf
-
-    def record(self, x, r, y) -> None:
-        if y is not None:
-            self.in_a_row = 0
-            if float(np.sum(r ** 2)) < self.best:
-                self.best_x, self.best = np.array(x, float), float(np.sum(r ** 2))
-            return
-        self.in_a_row += 1
-        if self.in_a_row >= MAX_FAILED_IN_A_ROW and self.best_x is not None:
-            raise _Stuck(self.best_x, f"stopped: the last {self.in_a_row} points the fit tried have no stable stroke "
-                         "(the model fails there); the data are outside what the model can reproduce near the best "
-                         "point found")
-
-
 def _start(model, x0, mean) -> None:
     """Raise :class:`OutsideModel` if the model has no stroke at the start ``x0`` (nothing to fit
     from); a stroke not resolved there (Unresolved) propagates, for a finer model."""
@@ -221,7 +191,7 @@ STALL_PAPER_C = 1e-4
 
 
 def _stalled(res: "FitResult", model) -> bool:
-    if not getattr(model, "n_unresolved", 0):
+    if not getattr(model, "n_unresolved", 0) or res.settings.get("out_of_reach"):
         return False
     if res.cost_kind == "sem":
         return not res.cost <= STALL_CHI2
@@ -297,8 +267,8 @@ def _fit_once(measured, sem=None, *, base, guess, cost, tip, model, profiles, bo
     from scipy.optimize import least_squares, minimize
 
     _start(model, x0, mean)
+    track = Reach()  # the strokes the fit computed, and its failed points
     if cost == "sem":
-        track = _FailureStreak()
 
         def fun(x):
             r, y = _weighted(model, x, mean, sem_arr)
@@ -312,7 +282,7 @@ def _fit_once(measured, sem=None, *, base, guess, cost, tip, model, profiles, bo
         try:
             res = least_squares(fun, x0, jac=jac, method="trf", xtol=1e-13, ftol=1e-15, gtol=1e-15, max_nfev=60)
             x, ok, msg = res.x, bool(res.success), str(res.message)
-        except _Stuck as stuck:
+        except Stuck as stuck:
             x, ok, msg = stuck.x, False, str(stuck)
         at_bound = ()
     else:
@@ -352,13 +322,17 @@ def _fit_once(measured, sem=None, *, base, guess, cost, tip, model, profiles, bo
     cov = covariance(jw_w)
     card = identifiability_card(jw_w, sens)
     chi2 = float(np.sum(((y - mean) / weights) ** 2))
+    # a poor fit whose data are beyond every stroke it computed is no fit (nor would a finer model be)
+    beyond = track.beyond(mean, sem_arr) if cost == "sem" and not chi2 <= STALL_CHI2 else None
+    if beyond:
+        ok, msg = False, _outside(mean, beyond)
     prof = {}
-    if profiles and sem_arr is not None:
+    if profiles and sem_arr is not None and not beyond:
         from .profile import profile_likelihood
 
         prof = profile_likelihood(model, base, x, mean, sem_arr, cov.sigma_rel)
     boot = None
-    if bootstrap:
+    if bootstrap and not beyond:
         if sem_arr is None:
             raise ParameterError("bootstrap needs the standard errors (sem)")
         boot = _bootstrap(model, x, mean, sem_arr, bootstrap, seed)
@@ -370,7 +344,8 @@ def _fit_once(measured, sem=None, *, base, guess, cost, tip, model, profiles, bo
                       "extrapolate": bool(getattr(model, "_fine", None) is not None),
                       "model": getattr(model, "resolution", type(model).__name__), "guess": list(guess), "cost": cost,
                       "base": {k: float(v) for k, v in asdict(base).items()},
-                      "uncertainty_weights": "sem" if sem_arr is not None else "5% of the measured values"},
+                      "uncertainty_weights": "sem" if sem_arr is not None else "5% of the measured values",
+                      **({"out_of_reach": beyond} if beyond else {})},
                      at_bound)
 
 

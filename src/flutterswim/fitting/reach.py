@@ -1,0 +1,88 @@
+"""What the model reached during a fit, and whether the data are beyond it.
+
+A fit records every trial point: the descriptors of those with a stroke, and how many had
+none. It stops after MAX_FAILED_IN_A_ROW failed points in a row or MAX_FAILED_POINTS in all
+(failed and successful points interleave when the optimiser presses against the edge of the
+region with a stroke: each failure costs orbit solves that fail slowly).
+
+Which descriptors can be out of reach: the period never (tau scales it and nothing else);
+the advance and the lateral excursion only from above, since both vanish at the onset of
+swimming (the stroke grows from zero amplitude at the Hopf point), so any smaller value is
+reached near it. A measured advance or lateral is *out of reach* when, less Z_MARGIN of its
+SEMs, it exceeds the largest value the model reached by more than a finer model could add
+(MAX_REFINEMENT_CHANGE: the largest change from N to 2N segments the model accepts).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .model import MAX_REFINEMENT_CHANGE
+
+__all__ = ["Reach", "Stuck", "MAX_FAILED_IN_A_ROW", "MAX_FAILED_POINTS", "Z_MARGIN"]
+
+#: trial points in a row without a stable stroke after which a fit stops
+MAX_FAILED_IN_A_ROW = 6
+#: trial points in all without a stable stroke after which a fit stops
+MAX_FAILED_POINTS = 2 * MAX_FAILED_IN_A_ROW
+#: SEMs by which a measured value must exceed the model's reach to be called out of reach
+Z_MARGIN = 3.0
+
+_NAMES = ("period", "advance", "lateral")
+_UNITS = ("s", "mm", "mm")
+
+
+class Stuck(Exception):
+    """Too many trial points without a stroke: stop at the best point so far (``x``)."""
+
+    def __init__(self, x, message):
+        super().__init__(message)
+        self.x = x
+
+
+class Reach:
+    """Trial points of one fit: the best with a stroke, the range of each descriptor over all
+    with a stroke, and the failures (in a row and in all)."""
+
+    def __init__(self):
+        self.in_a_row, self.failed, self.best_x, self.best = 0, 0, None, math.inf
+        self.lo, self.hi, self.n_strokes = np.full(3, np.inf), np.full(3, -np.inf), 0
+
+    def record(self, x, r, y) -> None:
+        """Note trial point ``x`` with weighted residuals ``r`` and descriptors ``y`` (None: no
+        stroke); raise :class:`Stuck` when the failures reach a limit and a stroke was found."""
+        if y is not None:
+            self.in_a_row, self.n_strokes = 0, self.n_strokes + 1
+            self.lo, self.hi = np.minimum(self.lo, y), np.maximum(self.hi, y)
+            if float(np.sum(r ** 2)) < self.best:
+                self.best_x, self.best = np.array(x, float), float(np.sum(r ** 2))
+            return
+        self.in_a_row += 1
+        self.failed += 1
+        if self.best_x is None:
+            return
+        if self.in_a_row >= MAX_FAILED_IN_A_ROW:
+            raise Stuck(self.best_x, f"stopped: the last {self.in_a_row} points the fit tried have no stable stroke "
+                        "(the model fails there); the data are outside what the model can reproduce near the best "
+                        "point found")
+        if self.failed >= MAX_FAILED_POINTS:
+            raise Stuck(self.best_x, f"stopped: {self.failed} of the points the fit tried have no stable stroke "
+                        "(the model fails there); the data are outside what the model can reproduce near the best "
+                        "point found")
+
+    def beyond(self, mean, sem) -> str | None:
+        """Why the data are beyond what the model reached (the descriptors out of reach,
+        measured vs the model's range), or None."""
+        if self.n_strokes == 0 or sem is None:
+            return None
+        out = []
+        for k in (1, 2):  # the period is never out of reach; advance and lateral only from above
+            if mean[k] - Z_MARGIN * sem[k] > self.hi[k] * (1.0 + MAX_REFINEMENT_CHANGE):
+                out.append(f"{_NAMES[k]} {mean[k]:.4g} +- {sem[k]:.2g} {_UNITS[k]} measured, the model's "
+                           f"{self.lo[k]:.4g} to {self.hi[k]:.4g} {_UNITS[k]}")
+        if not out:
+            return None
+        return ("; ".join(out) + f" over the {self.n_strokes} strokes the fit computed ({self.failed} trial points "
+                "had none); more segments would not change this")

@@ -1,0 +1,122 @@
+"""Data the model cannot reproduce: the fit stops soon and says which descriptor is beyond
+the model's reach (measured vs the model's range); data the model can reproduce are fitted
+as before. The stand-in model has the orbit model's structure (period = tau g, advance and
+lateral functions of (eta_perp, chi)) and an onset of swimming: no stroke for chi below
+chi_c, and a stroke growing from zero amplitude above it (advance ~ amplitude^2)."""
+
+import importlib
+import math
+
+import numpy as np
+import pytest
+
+import flutterswim as fs
+from flutterswim import cli
+from flutterswim.fitting import fit, to_identifiable
+from flutterswim.fitting.model import NotSwimming
+from flutterswim.fitting.surrogate import ScalingSurrogate
+
+BASE = fs.PAPER
+TRUTH = np.array([1.94e-14, 0.375, 19.1e3])
+REL_SEM = np.array([0.005, 0.05, 0.03])
+
+
+class Onset:
+    """ScalingSurrogate with an onset at chi_c (a supercritical Hopf point): NotSwimming
+    below, amplitude sqrt(1 - chi_c / chi) above; counts its calls and failures."""
+
+    def __init__(self, chi_c):
+        self.sur, self.chi_c, self.calls, self.failed = ScalingSurrogate(BASE), chi_c, 0, 0
+
+    def __call__(self, x):
+        self.calls += 1
+        eta_perp, chi, tau = np.exp(x)
+        if not chi > self.chi_c:
+            self.failed += 1
+            raise NotSwimming(f"the straight state is stable at chi={chi:.4g}")
+        g = math.sqrt(1.0 - self.chi_c / chi)
+        return self.sur(x) * np.array([1.0, g * g, g])
+
+
+@pytest.fixture()
+def onset():
+    x = to_identifiable(BASE, *TRUTH)
+    return Onset(0.7 * math.exp(x[1])), x
+
+
+def test_data_from_the_model_are_fitted_and_data_beyond_it_are_refused(onset):
+    """Data made by the model at a point (and with the period 10x: tau 10x, nothing refused;
+    with the lateral 1/4: reached near the onset) are fitted back; data with the lateral 4x
+    the model's are refused, naming the lateral, its measured value and the model's range,
+    and the range's top is indeed below the data (the largest lateral over chi)."""
+    m, x = onset
+    y = m(x)
+    for scale, tau_factor in (((1, 1, 1), 1.0), ((10, 1, 1), 10.0)):
+        d = y * np.array(scale)
+        res = fit(d, d * REL_SEM, model=m)
+        assert res.converged and res.cost < 1e-12, res.message
+        assert res.tau == pytest.approx(TRUTH[1] * tau_factor, rel=1e-6)
+    small = y * np.array([1, 1, 0.25])
+    res = fit(small, small * REL_SEM, model=m)
+    assert res.converged and res.cost < 1e-12 and "out_of_reach" not in res.settings
+    far = y * np.array([1, 1, 4])
+    res = fit(far, far * REL_SEM, model=m)
+    assert not res.converged
+    assert "outside what the model can reproduce" in res.message
+    assert "lateral" in res.settings["out_of_reach"] and "advance" not in res.settings["out_of_reach"]
+    assert f"lateral {far[2]:.4g} +- {far[2] * REL_SEM[2]:.2g} mm measured, the model's" in res.message
+    top = float(res.message.split("the model's ")[1].split(" to ")[1].split(" mm")[0])
+    # the model's lateral over a wide span of chi at the fitted eta_perp never reaches the data
+    lat = [m(np.array([res_x, c, x[2]]))[2] for res_x in (x[0],) for c in np.linspace(x[1] - 0.3, x[1] + 4, 200)]
+    assert max(lat) < far[2] - 3 * far[2] * REL_SEM[2] and top <= max(lat) * 1.0001
+
+
+class Pressing(Onset):
+    """The optimiser pressed against the edge of the stroke's region: every other new trial
+    point fails (as the orbit model's do there), so no streak of failures builds up; points
+    next to one that succeeded (the Jacobian's differences) succeed."""
+
+    def __init__(self, chi_c):
+        super().__init__(chi_c)
+        self.ok, self.new = [], 0
+
+    def __call__(self, x):
+        if not any(np.max(np.abs(x - p)) < 1e-4 for p in self.ok):
+            self.new += 1
+            if self.new % 2 == 0:
+                self.failed += 1
+                raise NotSwimming("no stroke here")
+            self.ok.append(np.array(x, float))
+        return super().__call__(x)
+
+
+def test_interleaved_failures_stop_the_fit():
+    """Failed trial points that alternate with successful ones stop the fit after
+    MAX_FAILED_POINTS in all (before: only 6 in a row did, so such a fit ran on)."""
+    fit_module = importlib.import_module("flutterswim.fitting.fit")
+    x = to_identifiable(BASE, *TRUTH)
+    m = Pressing(0.7 * math.exp(x[1]))
+    y = Onset(m.chi_c)(x) * np.array([1, 1, 4])
+    res = fit_module.fit(y, y * REL_SEM, model=m)
+    limit = getattr(fit_module, "MAX_FAILED_POINTS", 2 * fit_module.MAX_FAILED_IN_A_ROW)  # (the old code had none)
+    assert m.failed <= limit, (m.failed, limit)
+    assert not res.converged and "lateral" in res.settings.get("out_of_reach", "")
+
+
+def test_cli_data_beyond_the_model_one_line_naming_the_descriptor(tmp_path, monkeypatch, capsys):
+    """The CLI on data with 4x the model's lateral: exit 1, one line, no traceback, naming the
+    lateral and the model's range (not suggesting more segments)."""
+    ff = importlib.import_module("flutterswim.fitting.fit")
+    x = to_identifiable(BASE, *TRUTH)
+    m = Onset(0.7 * math.exp(x[1]))
+    y = m(x) * np.array([1, 1, 4])
+    real_fit = ff.fit
+    monkeypatch.setattr(ff, "fit", lambda mean, sem, **kw: real_fit(mean, sem, model=m, cost=kw.get("cost", "sem")))
+    csv = tmp_path / "t.csv"
+    csv.write_text("voltage_V,sample,period_s,advance_mm,lateral_mm\n"
+                   + "".join(f"85,{k},{v[0]},{v[1]},{v[2]}\n" for k, v in enumerate((y * 1.01, y, y * 0.99))))
+    status = cli.main(["fit", str(csv), "--out", str(tmp_path / "f.json")])
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert status == 1 and len(err) == 1, (status, err)
+    assert "outside what the model can reproduce" in err[0] and "lateral" in err[0] and "the model's" in err[0]
+    assert "not converged" not in err[0] and "--segments" not in err[0] and "Traceback" not in err[0]
