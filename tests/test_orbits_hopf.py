@@ -31,6 +31,10 @@ def test_discrete_leading_eigenvalue_converges_to_the_continuum_root():
     ns = np.array([24, 48, 96])
     errs = [abs(leading_pair(g, n) - ref) for n in ns]
     assert -2.4 < _slope(ns, errs) < -1.8
+    # and at fine resolution, where the spectrum's largest |lambda| (~ N^4) is 1e9: the flutter
+    # pair is still found, and closer to the continuum root than at N = 128
+    fine = [abs(leading_pair(g, n) - ref) for n in (128, 256)]
+    assert fine[1] < 0.5 * fine[0]
 
 
 def test_straight_state_has_the_bent_equilibrium_zero_mode():

@@ -230,6 +230,14 @@ def test_pixels_that_are_not_finite_do_not_cost_a_frame(sim):
 
 
 
+def test_frames_of_noise_alone_say_too_noisy():
+    """Frames with no ridge above the noise anywhere (noise alone, or far below SNR 1): the
+    error says the movie is too noisy, not only that the line may be dark."""
+    noise = np.random.default_rng(0).poisson(100, (12, 96, 96)).astype(np.uint16)
+    with pytest.raises(ParameterError, match=r"lost contrast \(12\).*too noisy a movie"):
+        track(noise, px_per_mm=70.0, fps=FPS)
+
+
 def test_a_dark_line_on_a_bright_background(sim, tmp_path):
     """A bright-field movie (uint16, the line darker than its background, the same noise):
     by default every frame is lost and the error names the option; with dark_line=True the

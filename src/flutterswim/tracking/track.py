@@ -682,7 +682,8 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         if counts.get("lost contrast", 0) > T // 2:
             c = contrast[np.isfinite(contrast)]
             level = (f"; the ridge stands {float(np.median(c)):.2g} noise SD above the background (median over "
-                     f"{c.size} frames; {min_contrast:g} needed): too noisy a movie, or") if c.size else ";"
+                     f"{c.size} frames; {min_contrast:g} needed): too noisy a movie, or") if c.size else \
+                "; no frame showed a ridge above the noise: too noisy a movie (or no filament in view), or"
             hint = (f"{level} if the filament is brighter than its background, leave out dark_line (--dark-line)"
                     if dark_line else f"{level} if the filament is darker than its background, give dark_line=True "
                     "(--dark-line)")
