@@ -29,6 +29,30 @@ def test_branch_and_plot(tmp_path, capsys):
     assert any(np.allclose(np.asarray(y)[1:], ds["advance"].values * 1e3, equal_nan=True) for y in ys)
 
 
+def test_branch_of_negative_fields_is_the_mirror_branch(tmp_path):
+    """chi -> -chi is the filament turned by pi: the stroke exists for kappa_E_ratio below the
+    mirror Hopf point, and a range there is continued from it (it was refused, naming the
+    positive Hopf point, or failed on chi = 0, which has no oscillatory mode)."""
+    xr = pytest.importorskip("xarray")
+    opts = ["--points", "6", "--segments", "8", "--steps", "16", "--quiet"]
+    paths = {}
+    for rng in ("kappa_E_ratio=0.7:1", "kappa_E_ratio=-1:-0.7"):
+        paths[rng] = tmp_path / f"b{len(paths)}.nc"
+        assert main(["branch", rng, "--out", str(paths[rng]), *opts]) == 0
+    pos, neg = (xr.open_dataset(p, engine="h5netcdf") for p in paths.values())
+    assert neg.attrs["hopf_kappa_E_ratio"] == pytest.approx(-pos.attrs["hopf_kappa_E_ratio"], rel=1e-9)
+    assert neg["kappa_E_ratio"].values[-1] == pytest.approx(-1.0)
+    # the mirror stroke: the same period and advance at the mirrored field
+    np.testing.assert_allclose(np.interp(0.9, pos["kappa_E_ratio"], pos["period"]),
+                               np.interp(0.9, -neg["kappa_E_ratio"].values, neg["period"].values), rtol=1e-3)
+    from flutterswim.orbits.continuation import _hopf_bracket
+    from flutterswim.orbits.parameter import Axis
+    import flutterswim as fs
+
+    lo, hi = _hopf_bracket(Axis(fs.PAPER, "kappa_E_ratio"), 8, -1.0, 1.0)  # its grid holds chi = 0
+    assert lo < neg.attrs["hopf_kappa_E_ratio"] < hi
+
+
 def test_branch_cli_rejects_bad_input_with_one_line(tmp_path, capsys):
     assert main(["branch", "zeta=0:1", "--out", str(tmp_path / "b.nc")]) == 2
     err = capsys.readouterr().err

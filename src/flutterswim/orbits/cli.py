@@ -48,7 +48,8 @@ def _parse_range(text: str) -> tuple[str, float, float]:
 def _cmd_branch(args) -> int:
     from .._paths import check_output_file
     from ..params import preset
-    from .continuation import continue_orbits
+    from .._validate import positive_int
+    from .continuation import _hopf_bracket, continue_orbits
     from .linear import hopf_point
     from .parameter import Axis
     from .. import defaults
@@ -62,8 +63,15 @@ def _cmd_branch(args) -> int:
         check_output_file(args.plot, (".png", ".pdf", ".svg"), what="plot")
     n = defaults.SWEEP_N_SEGMENTS if args.segments is None else args.segments
     steps = BRANCH_STEPS if args.steps is None else args.steps
-    # continue towards the end of the range where the straight state is unstable
-    hp = hopf_point(params, name, n_segments=n, bracket=None)
+    # the Hopf point in the range typed, else between the base value and the range's nearer end
+    # (kappa_E_ratio -2:-1 is the mirror branch from -0.68, not the one from +0.68), else near
+    # the base value; continue towards the end of the range where the straight state is unstable
+    n = positive_int("n_segments", n, minimum=4)
+    axis = Axis(params, name)
+    base = axis.value()
+    near = lo if abs(lo - base) <= abs(hi - base) else hi
+    bracket = _hopf_bracket(axis, n, lo, hi) or (None if near == base else _hopf_bracket(axis, n, base, near))
+    hp = hopf_point(params, name, n_segments=n, bracket=bracket)
     from .normal_form import normal_form
 
     nf = normal_form(hp)

@@ -295,10 +295,10 @@ def _scaled(tol: float, u: np.ndarray) -> float:
 def _hopf_bracket(axis: Axis, n: int, base: float, to: float) -> tuple[float, float] | None:
     """A bracket of the Hopf point between the values the user asked about, if there is one;
     else None (search around the base value)."""
-    from .linear import leading_pair
+    from .linear import flutter_growth
 
     grid = np.linspace(min(base, to), max(base, to), 9)
-    g = [leading_pair(axis.at(v), n).real for v in grid]
+    g = [flutter_growth(axis, v, n) for v in grid]
     for i in range(len(grid) - 1):
         if g[i] * g[i + 1] <= 0:
             return float(grid[i]), float(grid[i + 1])

@@ -43,6 +43,15 @@ def leading_pair(params, n_segments: int) -> complex:
     return complex(cplx[np.argmax(cplx.real)])
 
 
+def flutter_growth(axis: Axis, value: float, n_segments: int) -> float:
+    """Re of the leading complex pair at ``value`` of ``axis`` [1/tau]; -1 where there is no
+    oscillatory mode at all (chi = 0: the passive relaxation's real eigenvalues), no flutter."""
+    try:
+        return leading_pair(axis.at(value), n_segments).real
+    except ParameterError:
+        return -1.0
+
+
 def leading_mode(params, n_segments: int) -> complex:
     """The eigenvalue of largest real part [1/tau] (Im >= 0), leaving out the zero mode of the
     bent-equilibrium family: the growth rate and angular frequency of the straight state."""
@@ -84,10 +93,7 @@ def hopf_point(params, parameter: str = "kappa_E_ratio", *, n_segments: int = 48
     axis = Axis(params, parameter)
 
     def growth(v: float) -> float:
-        try:
-            return leading_pair(axis.at(v), n_segments).real
-        except ParameterError:  # no oscillatory mode at all: no flutter
-            return -1.0
+        return flutter_growth(axis, v, n_segments)
 
     if bracket is None:
         bracket = _bracket(growth, axis.value())
