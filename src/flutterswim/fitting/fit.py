@@ -280,8 +280,12 @@ def _fit_once(measured, sem=None, *, base, guess, cost, tip, model, profiles, bo
             return model_jacobian(model, x, y) / sem_arr[:, None]
 
         try:
-            res = least_squares(fun, x0, jac=jac, method="trf", xtol=1e-13, ftol=1e-15, gtol=1e-15, max_nfev=60)
-            x, ok, msg = res.x, bool(res.success), str(res.message)
+            # in steps from the start: the first trust region is then 1 (a factor e per
+            # parameter), not the start's length in log units (about 6: factors of hundreds,
+            # where the model has no stroke and its solves fail slowly)
+            res = least_squares(lambda d: fun(x0 + d), np.zeros_like(x0), jac=lambda d: jac(x0 + d), method="trf",
+                                xtol=1e-13, ftol=1e-15, gtol=1e-15, max_nfev=60)
+            x, ok, msg = x0 + res.x, bool(res.success), str(res.message)
         except Stuck as stuck:
             x, ok, msg = stuck.x, False, str(stuck)
         at_bound = ()
