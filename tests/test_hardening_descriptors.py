@@ -131,3 +131,20 @@ def test_a_settled_record_is_described_over_its_settled_cycles():
     assert d.limit_cycle
     assert d.advance_per_cycle_mm == pytest.approx(1e3 * v * period, rel=2e-3)
     assert "settles" in d.note and d.n_cycles_used < 29
+
+
+@pytest.mark.parametrize("turn_deg", [30.0, -60.0])
+def test_a_swimmer_off_the_fields_line_is_noted(turn_deg):
+    """The same swimmer turned in the image, the field's direction left at 0: its advance along
+    the field is cos(turn) of the path's, and the note says so and names the option; given the
+    field's direction (or its opposite), the advance is the path's and there is no note."""
+    tr = _track(0.05)
+    a = math.radians(turn_deg)
+    x, y = tr.x * math.cos(a) - tr.y * math.sin(a), tr.x * math.sin(a) + tr.y * math.cos(a)
+    ref = describe(tr, n_last=10)
+    off = describe(Track(t=tr.t, x=x, y=y, s=tr.s, length=1.0, units="m"), n_last=10)
+    assert off.advance_per_cycle_mm == pytest.approx(ref.advance_per_cycle_mm * math.cos(a), rel=1e-6)
+    assert f"swims at {turn_deg:.3g} deg to the field direction taken" in off.note and "--field-angle-deg" in off.note
+    for fa in (a, a + math.pi):
+        on = describe(Track(t=tr.t, x=x, y=y, s=tr.s, length=1.0, units="m", field_angle=fa), n_last=10)
+        assert on.note == "" and abs(on.advance_per_cycle_mm) == pytest.approx(ref.advance_per_cycle_mm, rel=1e-6)

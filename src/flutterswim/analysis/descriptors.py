@@ -113,6 +113,10 @@ def _lateral_series(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray) -> l
 # movie 0.05 px (its centroid's noise over the body's hundreds of pixels is about 0.01 px)
 _STILL_BL = 1e-6
 _STILL_PX = 0.05
+# a swimmer more than about 5.7 degrees off the field's line (the advance along it 0.5 %
+# short of the advance along the path) is noted: the field's direction given is likely wrong
+# (the paper's swims within 0.001 degree of it), or the field turns
+_ALONG_FIELD_COS = 0.995
 
 _POOLED_HARMONICS = 5
 _POOLED_MIN_F = 10.0
@@ -631,6 +635,12 @@ def describe(
         note = (note + "; " if note else "") + (
             f"the lateral excursions are not measured: {per_stroke:.2g} frames per stroke, a cycle needs at "
             "least 4 (a higher frame rate)")
+    if not still and abs(math.cos(rel)) < _ALONG_FIELD_COS:  # (along the field's line, either way)
+        note = (note + "; " if note else "") + (
+            f"swims at {math.degrees(rel):.3g} deg to the field direction taken ({math.degrees(fa):.3g} deg in the "
+            f"image): the advance is measured along the field, {100 * (1 - abs(math.cos(rel))):.2g} % less than "
+            "along the path; a swimmer in a steady field swims along its line, so if the field points elsewhere, "
+            "give its direction (field_angle, --field-angle-deg)")
     adv_total = (xc[-1] - xc[0]) * math.cos(float(np.mean(tr.field_angle))) + (yc[-1] - yc[0]) * math.sin(
         float(np.mean(tr.field_angle))
     )

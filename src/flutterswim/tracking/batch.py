@@ -178,7 +178,7 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
     failures [(trial, reason)])."""
     from .. import __version__
     from .._paths import atomic_write_text, check_output_file, is_ours
-    from ..analysis.descriptors import describe
+    from ..analysis.descriptors import _ALONG_FIELD_COS, describe
     from .track import check_options, track
 
     # every input checked before the first trial is tracked
@@ -217,8 +217,8 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
             failed.append((str(tr_.path), why if isinstance(exc, ParameterError) else
                            f"{type(exc).__name__}: {why}" if why else type(exc).__name__))
             continue
-        if abs(math.cos(math.radians(d.direction_to_field_deg))) < math.cos(math.radians(45.0)):
-            # the stroke swims along the field: this far across it, the field's direction is wrong
+        if abs(math.cos(math.radians(d.direction_to_field_deg))) < _ALONG_FIELD_COS:
+            # the stroke swims along the field's line: this far off it, the field's direction is wrong
             warnings.warn(f"trial {str(tr_.path)!r} swims at {d.direction_to_field_deg:.0f} deg to the field, taken "
                           f"at {d.field_direction_deg:.0f} deg in the image; advance_mm is the advance along it. "
                           "Give the field's direction: --field-angle-deg, or field_angle_deg in the trial's sidecar",
