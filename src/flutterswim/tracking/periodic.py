@@ -295,13 +295,15 @@ def periodic_shape(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, period_frames: 
 
 
 def periodic_shape_flagging(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, reason: list, period_frames: float,
-                            max_fraction: float = 0.01, **kw) -> tuple[np.ndarray, np.ndarray, dict]:
+                            max_fraction: float = 0.05, **kw) -> tuple[np.ndarray, np.ndarray, dict]:
     """:func:`periodic_shape`, where a few lone frames (none within 2 frames of another) far from an otherwise accepted template
     (more than ``max_frame_ratio`` times the median frame's distance) are flagged instead of
     refusing the template for the whole movie: each such frame (at most ``max_fraction`` of
     the good frames, at least one) gets ok False and the reason "template outlier: ...", and
     the template is fitted again without it. ``ok`` and ``reason`` are updated in place;
-    info["outliers"] lists the frames flagged."""
+    info["outliers"] lists the frames flagged. (A long body whose trailing end curls close to
+    itself once a stroke gives such a frame in each: with one allowed per 100 frames the template
+    was refused and the tips were 0.8-1.0 px off; 5 % takes one a stroke at 20 frames a stroke.)"""
     flagged: list[int] = []
     n_max = max(1, int(max_fraction * np.count_nonzero(ok)))
     X0, Y0 = X, Y
