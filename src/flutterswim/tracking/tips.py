@@ -24,7 +24,7 @@ from scipy.interpolate import make_interp_spline
 
 from .segment import background_plane
 
-__all__ = ["refine_tips", "resample"]
+__all__ = ["refine_tips", "resample", "end_span"]
 
 
 def _arclength(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -183,6 +183,34 @@ def resample(x: np.ndarray, y: np.ndarray, q_a: float, q_b: float, n_points: int
     return np.interp(su, sa, P[:, 0]), np.interp(su, sa, P[:, 1])
 
 
+# the end polynomial's span against the frame's ridge contrast (matched-filter ridge over the
+# filtered noise's SD; about 2.4 x the renderer's peak SNR at 3, 2.2 x at 5): its bias and its
+# noise trade. Fitted over 40 px the quartic misses a well-resolved end's curvature (noise-free,
+# the stroke at 48 segments: leading end -0.29 % on the paper's, -0.49 % at 2 x threshold,
+# -0.64 % at 20 um/px); over 20 px by -0.28..+0.05 %, but its scatter, and a noise-induced
+# outward shift, grow: at SNR 3 (contrast ~7) the leading end's RMS over 6 strokes was 0.12-1.10 %
+# at 40 px and 0.42-1.28 % at 20 px, at SNR 5 (contrast ~11) 0.42-0.70 % at 40 px (12 of 20 movies
+# outside 0.5 %) and 0.22-0.83 % at 20 px (3 of 19): 40 px up to contrast 8, 20 px from 10.5,
+# linear between (benchmarks/RESULTS.md, stop 31). The contrast is taken at the PSF of 1.2 px
+# these were measured with: the ridge's noise across the line grows as sigma / contrast (the
+# contrast of a line of peak SNR p is about p sqrt(sigma)), so a blurred frame counts as
+# contrast x 1.2 / sigma (defocus to 1.92 px at SNR 5: contrast 9.4, as noisy as 5.9 in focus;
+# over 20-25 px its tips were 0.33-0.38 px RMS and two frames flagged, over 40 px 0.23-0.26 px)
+_SPAN_NOISY, _SPAN_CLEAN = 40.0, 20.0
+_CONTRAST_NOISY, _CONTRAST_CLEAN = 8.0, 10.5
+_SIGMA_REF = 1.2
+
+
+def end_span(contrast: float, sigma: float = _SIGMA_REF) -> float:
+    """The span [px] of the end polynomial for a frame of this ridge contrast and PSF sigma
+    [px] (NaN contrast: the noisy span)."""
+    c = contrast * _SIGMA_REF / sigma
+    if not math.isfinite(c) or c <= _CONTRAST_NOISY:
+        return _SPAN_NOISY
+    f = min((c - _CONTRAST_NOISY) / (_CONTRAST_CLEAN - _CONTRAST_NOISY), 1.0)
+    return _SPAN_NOISY + f * (_SPAN_CLEAN - _SPAN_NOISY)
+
+
 def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float = 1.2,
                 inner: float = 14.0, outer: float = 6.0, pivot: float | None = None, trim: float = 5.0,
                 span: float = 40.0, hook: float = 6.0, hook_deg: float = 25.0, degree: int = 4,
@@ -200,7 +228,9 @@ def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float =
     moment, B (theta_s - kappa) = 0, so its curvature is the spontaneous curvature there, not
     zero (on the paper's stroke kappa l is about 9 RMS at one end, 5 at the other, 7.5 in the
     middle), and it changes along the end; a quadratic overshoots the lateral excursions by
-    ~0.5 %; quartic over 40 px had the least bias on rendered strokes. Returns (x, y) resampled at P equal steps
+    ~0.5 %; quartic over 40 px had the least bias on rendered strokes of 24 segments at SNR 3 (a
+    well-resolved end, or a clean frame, wants 20 px: :func:`end_span`, which
+    :func:`~flutterswim.tracking.track.track_frame` passes by the frame's contrast). Returns (x, y) resampled at P equal steps
     between the refined ends, and the two end corrections along the curve [px] (NaN where a
     fit failed; that end is then kept). ``saturation``: the value at which the frame is clipped;
     pixels at it are left out of the end fits. ``plane``: the frame's background plane

@@ -50,7 +50,7 @@ from ..analysis.track import Track
 from .centreline import fit_centreline
 from .io import Frames, open_frames
 from .segment import _STATIC_SHARE, BACKGROUND_SIGMA, _moving_best, background_plane, clean_frame, segment
-from .tips import refine_tips
+from .tips import end_span, refine_tips
 
 __all__ = ["track", "track_frame", "track_image", "coarse_box", "static_objects", "orient", "failures", "START_ENDS"]
 
@@ -178,7 +178,7 @@ def track_frame(img: np.ndarray, *, n_points: int = 49, sigma: float = 1.2, k_lo
         return out
     x, y = c.x, c.y
     if refine:
-        x, y, da, db = refine_tips(img, x, y, sigma=sigma, saturation=sat, plane=plane)
+        x, y, da, db = refine_tips(img, x, y, sigma=sigma, saturation=sat, plane=plane, span=end_span(math.inf if seg.noise == 0 else contrast, sigma))
         if not (math.isfinite(da) and math.isfinite(db)):
             out["reason"] = "tip not found: the line-end fit failed"
             return out
