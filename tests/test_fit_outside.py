@@ -120,3 +120,20 @@ def test_cli_data_beyond_the_model_one_line_naming_the_descriptor(tmp_path, monk
     assert status == 1 and len(err) == 1, (status, err)
     assert "outside what the model can reproduce" in err[0] and "lateral" in err[0] and "the model's" in err[0]
     assert "not converged" not in err[0] and "--segments" not in err[0] and "Traceback" not in err[0]
+
+
+def test_the_jacobian_at_the_edge_of_the_stroke_takes_the_side_with_one():
+    """At a point whose neighbour on one side has no stroke (the onset), the Jacobian is the
+    one-sided difference from the other side (it raised NotSwimming and ended the fit with a
+    traceback); on a linear model both are exact."""
+    from flutterswim.fitting.fit import model_jacobian
+
+    A = np.array([[1.0, 2.0, 0.5], [-1.0, 0.3, 0.0], [0.2, 0.0, 4.0]])
+    edge = np.array([0.1, 0.2, 0.3])
+
+    def linear(x):
+        if x[0] > edge[0] + 1e-9 or x[2] < edge[2] - 1e-9:  # no stroke beyond the edge, in 2 directions
+            raise NotSwimming("beyond the onset")
+        return A @ x
+
+    np.testing.assert_allclose(model_jacobian(linear, edge, linear(edge)), A, rtol=1e-6)

@@ -361,7 +361,13 @@ def model_jacobian(model, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     for k in range(3):
         e = np.zeros(3)
         e[k] = 1e-5
-        jac[:, k] = (model(x + e) - model(x - e)) / 2e-5
+        try:
+            jac[:, k] = (model(x + e) - model(x - e)) / 2e-5
+        except NotSwimming:  # a neighbour without a stroke (the edge of the region): one side
+            try:
+                jac[:, k] = (model(x + e) - y) / 1e-5
+            except NotSwimming:
+                jac[:, k] = (y - model(x - e)) / 1e-5
     return jac
 
 
