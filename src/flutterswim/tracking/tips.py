@@ -188,8 +188,8 @@ def resample(x: np.ndarray, y: np.ndarray, q_a: float, q_b: float, n_points: int
 # noise trade. Fitted over 40 px the quartic misses a well-resolved end's curvature (noise-free,
 # the stroke at 48 segments: leading end -0.29 % on the paper's, -0.49 % at 2 x threshold,
 # -0.64 % at 20 um/px); over 20 px by -0.28..+0.05 %, but its scatter, and a noise-induced
-# outward shift, grow: at SNR 3 (contrast ~7) the leading end's RMS over 6 strokes was 0.12-1.10 %
-# at 40 px and 0.42-1.28 % at 20 px, at SNR 5 (contrast ~11) 0.42-0.70 % at 40 px (12 of 20 movies
+# outward shift, grow: at SNR 3 (contrast ~7) the leading end's RMS over 6 strokes was 0.31-1.12 %
+# at 40 px and 0.42-2.84 % at 20 px, at SNR 5 (contrast ~11) 0.42-0.70 % at 40 px (12 of 20 movies
 # outside 0.5 %) and 0.22-0.83 % at 20 px (3 of 19): 40 px up to contrast 8, 20 px from 10.5,
 # linear between (benchmarks/RESULTS.md, stop 31). The contrast is taken at the PSF of 1.2 px
 # these were measured with: the ridge's noise across the line grows as sigma / contrast (the
