@@ -269,10 +269,17 @@ def _fit_once(measured, sem=None, *, base, guess, cost, tip, model, profiles, bo
     _start(model, x0, mean)
     track = Reach()  # the strokes the fit computed, and its failed points
     if cost == "sem":
+        # a point without a stroke costs more than any with one seen: a fixed PENALTY can be
+        # less than the start's residuals (data far from the model, small SEMs), and the
+        # optimiser then accepted such a point and asked for a Jacobian there
+        worst = [PENALTY]
 
         def fun(x):
             r, y = _weighted(model, x, mean, sem_arr)
             track.record(x, r, y)
+            if y is None:
+                return np.full(3, worst[0])
+            worst[0] = max(worst[0], 10.0 * float(np.max(np.abs(r))))
             return r
 
         def jac(x):
