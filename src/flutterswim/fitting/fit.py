@@ -118,12 +118,29 @@ class FitResult:
         atomic_write_text(p, json.dumps({"software": "flutterswim fit", **self.to_dict()}, indent=2))
 
 
-def _weighted(model, x, mean, sem):
+class Penalty:
+    """The residuals of a trial point without a stroke, for one optimisation: ten times the
+    largest residual seen at a point with one (at least PENALTY), so that the optimiser never
+    takes such a point over one with a stroke (a fixed PENALTY was below the start's residuals
+    on data far from the model: the optimiser took the point and asked for a Jacobian there)."""
+
+    def __init__(self) -> None:
+        self.value = PENALTY
+
+    def seen(self, r: np.ndarray) -> np.ndarray:
+        self.value = max(self.value, 10.0 * float(np.max(np.abs(r))))
+        return r
+
+    def failed(self, n: int) -> np.ndarray:
+        return np.full(n, self.value)
+
+
+def _weighted(model, x, mean, sem, penalty: Penalty):
     try:
         y = model(x)
     except NotSwimming:
-        return np.full(3, PENALTY), None
-    return (y - mean) / sem, y
+        return penalty.failed(3), None
+    return penalty.seen((y - mean) / sem), y
 
 
 def _start(model, x0, mean) -> None:
@@ -269,17 +286,11 @@ def _fit_once(measured, sem=None, *, base, guess, cost, tip, model, profiles, bo
     _start(model, x0, mean)
     track = Reach()  # the strokes the fit computed, and its failed points
     if cost == "sem":
-        # a point without a stroke costs more than any with one seen: a fixed PENALTY can be
-        # less than the start's residuals (data far from the model, small SEMs), and the
-        # optimiser then accepted such a point and asked for a Jacobian there
-        worst = [PENALTY]
+        penalty = Penalty()
 
         def fun(x):
-            r, y = _weighted(model, x, mean, sem_arr)
+            r, y = _weighted(model, x, mean, sem_arr, penalty)
             track.record(x, r, y)
-            if y is None:
-                return np.full(3, worst[0])
-            worst[0] = max(worst[0], 10.0 * float(np.max(np.abs(r))))
             return r
 
         def jac(x):
@@ -388,7 +399,8 @@ def _bootstrap(model, x, mean, sem, n, seed):
     ys = []
     for _ in range(n):
         d = mean + sem * rng.standard_normal(3)
-        r = least_squares(lambda z, d=d: _weighted(model, z, d, sem)[0], x,
+        penalty = Penalty()
+        r = least_squares(lambda z, d=d, penalty=penalty: _weighted(model, z, d, sem, penalty)[0], x,
                           jac=lambda z: model_jacobian(model, z, model(z)) / sem[:, None], method="trf",
                           xtol=1e-12, ftol=1e-14, gtol=1e-14, max_nfev=40)
         ys.append(LOG_MAP @ r.x)

@@ -18,7 +18,7 @@ def profile_likelihood(model, base, x_best: np.ndarray, mean: np.ndarray, sem: n
     the best fit, minimised over the other two; ``sigma_rel`` from where chi^2 rises by 1."""
     from scipy.optimize import least_squares
 
-    from .fit import _weighted, model_jacobian
+    from .fit import Penalty, _weighted, model_jacobian
 
     minv = np.linalg.inv(LOG_MAP)
     y_best = LOG_MAP @ x_best
@@ -36,8 +36,10 @@ def profile_likelihood(model, base, x_best: np.ndarray, mean: np.ndarray, sem: n
                 y[free] = zz
                 return minv @ y
 
-            def fun(zz, to_x=to_x):
-                return _weighted(model, to_x(zz), mean, sem)[0]
+            penalty = Penalty()
+
+            def fun(zz, to_x=to_x, penalty=penalty):
+                return _weighted(model, to_x(zz), mean, sem, penalty)[0]
 
             def jac(zz, free=free, to_x=to_x):
                 xx = to_x(zz)

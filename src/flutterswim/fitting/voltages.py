@@ -17,7 +17,7 @@ import numpy as np
 
 from .._validate import ParameterError, positive
 from ..params import Parameters, preset
-from .fit import PAPER_GUESS, PENALTY, FitResult, model_jacobian, paper_cost
+from .fit import PAPER_GUESS, FitResult, Penalty, model_jacobian, paper_cost
 from .model import DescriptorModel, NotSwimming, Unresolved, to_identifiable, to_physical
 from .uncertainty import covariance, identifiability_card
 
@@ -116,11 +116,13 @@ def fit_voltages(voltages, means, sems, *, v_ref: float | None = None, n_trials=
                     pass
             return x0, "the guess"
 
+        penalty = Penalty()
+
         def fun(x):
             try:
-                return voltage_residuals(m, x, v, mu, se, v_ref)
+                return penalty.seen(voltage_residuals(m, x, v, mu, se, v_ref))
             except NotSwimming:  # no stroke at one of the voltages
-                return np.full(3 * v.size, PENALTY)
+                return penalty.failed(3 * v.size)
 
         def at_voltage(f, x, vk):
             try:
