@@ -45,11 +45,11 @@ def test_branch_of_negative_fields_is_the_mirror_branch(tmp_path):
     # the mirror stroke: the same period and advance at the mirrored field
     np.testing.assert_allclose(np.interp(0.9, pos["kappa_E_ratio"], pos["period"]),
                                np.interp(0.9, -neg["kappa_E_ratio"].values, neg["period"].values), rtol=1e-3)
-    from flutterswim.orbits.continuation import _hopf_bracket
+    from flutterswim.orbits.linear import hopf_bracket
     from flutterswim.orbits.parameter import Axis
     import flutterswim as fs
 
-    lo, hi = _hopf_bracket(Axis(fs.PAPER, "kappa_E_ratio"), 8, -1.0, 1.0)  # its grid holds chi = 0
+    lo, hi = hopf_bracket(Axis(fs.PAPER, "kappa_E_ratio"), 8, -1.0, 1.0)  # its grid holds chi = 0
     assert lo < neg.attrs["hopf_kappa_E_ratio"] < hi
 
 

@@ -49,8 +49,8 @@ def _cmd_branch(args) -> int:
     from .._paths import check_output_file
     from ..params import preset
     from .._validate import positive_int
-    from .continuation import _hopf_bracket, continue_orbits
-    from .linear import hopf_point
+    from .continuation import continue_orbits
+    from .linear import hopf_bracket, hopf_point
     from .parameter import Axis
     from .. import defaults
     from .continuation import BRANCH_STEPS
@@ -70,7 +70,7 @@ def _cmd_branch(args) -> int:
     axis = Axis(params, name)
     base = axis.value()
     near = lo if abs(lo - base) <= abs(hi - base) else hi
-    bracket = _hopf_bracket(axis, n, lo, hi) or (None if near == base else _hopf_bracket(axis, n, base, near))
+    bracket = hopf_bracket(axis, n, lo, hi) or (None if near == base else hopf_bracket(axis, n, base, near))
     hp = hopf_point(params, name, n_segments=n, bracket=bracket)
     from .normal_form import normal_form
 

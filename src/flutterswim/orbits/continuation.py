@@ -19,7 +19,7 @@ import numpy as np
 
 from .. import defaults
 from .._validate import ParameterError, finite, positive, positive_int
-from .linear import hopf_point
+from .linear import hopf_bracket, hopf_point
 from .normal_form import normal_form
 from .parameter import Axis
 from .periodic import OrbitNotFound, PeriodicOrbit, orbit_from_flow
@@ -155,7 +155,7 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     lo, hi = sorted((base, to))
     span = hi - lo
     hopf = hopf_point(params, parameter, n_segments=n_segments,
-                      bracket=None if span == 0 else _hopf_bracket(axis, n_segments, base, to))
+                      bracket=None if span == 0 else hopf_bracket(axis, n_segments, base, to))
     nf = normal_form(hopf)
     side = nf.direction if nf.supercritical else -nf.direction
     if (to - hopf.value) * side <= 0:
@@ -290,19 +290,6 @@ def _scaled(tol: float, u: np.ndarray) -> float:
     stiff steps amplify (large eta_perp, few segments) to ~1e-9 at max|u| ~ 17: an absolute
     1e-10 is below that floor, so Newton wanders there (eta_perp ~ 163, N = 8, 16 steps)."""
     return tol * (1.0 + float(np.max(np.abs(u))))
-
-
-def _hopf_bracket(axis: Axis, n: int, base: float, to: float) -> tuple[float, float] | None:
-    """A bracket of the Hopf point between the values the user asked about, if there is one;
-    else None (search around the base value)."""
-    from .linear import flutter_growth
-
-    grid = np.linspace(min(base, to), max(base, to), 9)
-    g = [flutter_growth(axis, v, n) for v in grid]
-    for i in range(len(grid) - 1):
-        if g[i] * g[i + 1] <= 0:
-            return float(grid[i]), float(grid[i + 1])
-    return None
 
 
 def _weights(m: int, length_u: float, length_p: float) -> np.ndarray:

@@ -21,7 +21,7 @@ from .parameter import Axis
 from ._threads import one_blas_thread
 from .system import ShapeSystem
 
-__all__ = ["discrete_spectrum", "leading_pair", "leading_mode", "HopfPoint", "hopf_point"]
+__all__ = ["discrete_spectrum", "leading_pair", "leading_mode", "HopfPoint", "hopf_point", "hopf_bracket"]
 
 
 def discrete_spectrum(params, n_segments: int) -> np.ndarray:
@@ -50,6 +50,17 @@ def flutter_growth(axis: Axis, value: float, n_segments: int) -> float:
         return leading_pair(axis.at(value), n_segments).real
     except ParameterError:
         return -1.0
+
+
+def hopf_bracket(axis: Axis, n: int, base: float, to: float) -> tuple[float, float] | None:
+    """A bracket (lo, hi) of a Hopf point of ``axis`` between ``base`` and ``to`` (a sign change
+    of the flutter growth rate on 9 values), or None if there is none there."""
+    grid = np.linspace(min(base, to), max(base, to), 9)
+    g = [flutter_growth(axis, v, n) for v in grid]
+    for i in range(len(grid) - 1):
+        if g[i] * g[i + 1] <= 0:
+            return float(grid[i]), float(grid[i + 1])
+    return None
 
 
 def leading_mode(params, n_segments: int) -> complex:
