@@ -163,3 +163,6 @@ def test_a_point_without_a_stroke_is_never_taken_over_one_with_a_stroke(tmp_path
 
     d = json.loads(out.read_text())
     assert status in (0, 1) and np.all(np.isfinite([d["values"]["B_N_m2"], d["values"]["tau_s"]]))
+    # and when it is not a fit, the line says the data are out of reach, not "more segments"
+    if status == 1:
+        assert "out of the model's reach" in err and "advance" in err and "--segments" not in err, err

@@ -445,6 +445,51 @@ def test_a_fit_that_meets_unresolved_strokes_refines_or_says_it_is_not_a_fit():
         refine_while_stalled(run, Stand(16, 1000, top=16, raise_at_start=True), _stalled, misfit)
 
 
+def test_a_misfit_beyond_what_resolution_could_change_is_called_out_of_reach():
+    """With no finer model left, a fit stopped against unresolved strokes says "more segments"
+    only when its misfit could come from them: a descriptor missed by more than twice their
+    change with resolution (plus 3 SEM) is named, with both values, as out of the model's reach
+    (data with the advance 1 % of the model's: the message had asked for more segments)."""
+    from dataclasses import replace as dc_replace
+
+    from flutterswim.fitting.fit import RESOLUTION_MISS_FACTOR, _stalled, refine_while_stalled
+    from flutterswim.fitting.surrogate import ScalingSurrogate
+
+    sur = ScalingSurrogate(BASE)
+    y = sur(to_identifiable(BASE, 1.94e-14, 0.375, 19.1e3))
+    good = fit(y, y * REL_SEM, model=sur)
+
+    class Top:  # the finest model, its last refused stroke changing by 10 % from N to 2N
+        n_segments, last_change, last_unresolved = 48, 0.10, "changes by 10 %"
+
+        def __init__(self):
+            self.n_unresolved = 0
+
+        def finer(self):
+            return None
+
+    def ending_at(model_values):
+        def run(m):
+            m.n_unresolved = 3
+            return dc_replace(good, cost=1e4, model=np.asarray(model_values, float))
+        return run
+
+    meas, sem = good.measured, good.sem
+    lim = RESOLUTION_MISS_FACTOR * 0.10
+    # the advance 8 times the measured: out of reach, named with both values
+    far = refine_while_stalled(ending_at(meas * [1.0, 8.0, 1.0]), Top(), _stalled, lambda r: "chi2")
+    assert not far.converged and "out of the model's reach" in far.message and "more segments would not" in far.message
+    assert "advance" in far.message and "period" not in far.message and "lateral" not in far.message
+    # just inside what a 10 % change could do (less than twice it, plus 3 SEM): more segments asked for
+    m_in = meas * (1.0 + 0.9 * lim)
+    near = refine_while_stalled(ending_at(m_in), Top(), _stalled, lambda r: "chi2")
+    assert not near.converged and "give more --segments" in near.message
+    # just outside (more than twice the change plus 3 SEM): out of reach
+    m_out = (meas + 3.0 * sem * 1.01) / (1.0 - lim)
+    assert "out of the model's reach" in refine_while_stalled(ending_at(m_out), Top(), _stalled,
+                                                               lambda r: "chi2").message
+
+
 @pytest.mark.slow
 def test_near_onset_the_default_fit_refines_and_recovers_the_truth():
     """At kappa_E = 0.7 x the paper's (just above the onset of swimming), 24 and 48 segments

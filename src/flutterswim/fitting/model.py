@@ -87,6 +87,7 @@ class DescriptorModel:
     #: points refused as not resolved so far, and the last refusal's message
     n_unresolved: int = 0
     last_unresolved: str = ""
+    last_change: float = 0.0  # the largest relative change from N to 2N of the last unresolved stroke
     executor: object = field(default=None, repr=False, compare=False)  # for parallel differences
     _cache: list = field(default_factory=list, repr=False)
     _memo: dict = field(default_factory=dict, repr=False)
@@ -212,6 +213,7 @@ class DescriptorModel:
                     # not the same stroke resolved twice (another branch, or too close to onset
                     # for N segments): no extrapolation is meaningful
                     self.n_unresolved += 1
+                    self.last_change = float(change)
                     self.last_unresolved = (
                         f"the stroke at eta_perp={eta_perp:.4g}, chi={chi:.4g} changes by {100 * change:.3g} % from "
                         f"{self.n_segments} to {self._fine.n_segments} segments (limit "
