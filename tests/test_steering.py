@@ -47,6 +47,32 @@ def test_csv_schedule(tmp_path):
         from_csv(bad)
 
 
+def test_csv_schedule_units_comments_and_inconsistent_rows(tmp_path):
+    """The header's units are read (t_ms, angle [rad]: 10000 and 1.5708 were read as 10000 s
+    and 1.57 deg); a comment may precede the header; rows mixing 2 and 3 columns (the strength
+    column was dropped) and times out of order (one long line without the file) name the line;
+    a unit recognised but not taken is refused."""
+    from flutterswim.steering.schedules import from_csv
+
+    f = tmp_path / "field.csv"
+    same = ["t,angle\n0,0\n10,90\n", "t_ms,angle_rad\n0,0\n10000,1.5707963267948966\n",
+            "# by hand\ntime [s], angle (deg)\n0,0\n10,90\n", "t (ms),field_angle_deg\n0,0\n10000,90\n"]
+    for text in same:
+        f.write_text(text)
+        fld = from_csv(f)
+        assert fld.direction(5.0) == pytest.approx(math.radians(45), rel=1e-12), text
+        assert fld.direction(20.0) == pytest.approx(math.radians(90), rel=1e-12), text
+    for text, words in [("0,0,1\n5,45\n10,90,1\n", r"field.csv.*line 2.*2 columns.*line 1 has 3"),
+                        ("t,angle\n0,0\n10,90\n5,45\n", r"field.csv.*line 4.*t = 5.*line 3"),
+                        ("t,angle\n0,0\n0,90\n", r"line 3.*must increase"),
+                        ("t_min,angle\n0,0\n1,90\n", r"line 1.*t_min.*allowed: s, ms"),
+                        ("t,angle_grad\n0,0\n1,90\n", r"angle_grad.*allowed: deg"),
+                        ("t,angle\n", "no rows")]:
+        f.write_text(text)
+        with pytest.raises(fs.ParameterError, match=words):
+            from_csv(f)
+
+
 def test_circle_fit_and_cycle_average_are_exact():
     a = np.linspace(0, 1.5, 50)
     x, y = 3.0 + 2.0 * np.cos(a), -1.0 + 2.0 * np.sin(a)
@@ -346,3 +372,105 @@ def test_a_trapped_run_says_why_in_one_line():
     assert "\n" not in line and line.startswith("failed:")
     assert "bent equilibrium" in line and "t = 12.5 s" in line and "0.04 mm/s" in line and "0.61 mm/s" in line
     assert "t = " not in trapped_reason({**m, "trapped_at_s": None})  # found at the end (the JSON's null)
+
+
+def _watched(ctrl, xy0, velocity, until):
+    """Feed the controller two periods of a swimmer moving at ``velocity`` from ``xy0``."""
+    for t in np.arange(0.0, until, 1.0 / ctrl.fps):
+        ctrl.observe(t, np.asarray(xy0) + t * np.asarray(velocity))
+    return t
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+@pytest.mark.parametrize("heading_error_deg", [60.0, 100.0, 150.0])
+def test_controller_turns_the_field_towards_the_path_at_any_heading_error(sign, heading_error_deg):
+    """A swimmer heading along x and a path along sign * y: the field turns towards the path
+    (by lead_max, the feedback saturated), to the left for a path to the left, for heading
+    errors below and above 90 degrees (above 90, err (1 + gain) passed pi, its wrap turned the
+    field the other way and the swimmer swam off; the mirror image is the mirror command)."""
+    from flutterswim.steering.control import Controller
+    from flutterswim.steering.path import _polyline
+
+    a = math.radians(heading_error_deg)
+    path = _polyline(np.array([[0.0, 0.0], [20 * L * math.cos(a), sign * 20 * L * math.sin(a)]]), False, "line",
+                     1e-5)
+    ctrl = Controller(path, period=0.4, speed=1e-3, omega_max=0.26, lookahead=0.15 * L, correction=0.4 * L)
+    t = _watched(ctrl, (0.0, 0.0), (1e-3, 0.0), 0.9)
+    cmd = ctrl.update(t)
+    assert ctrl.heading_estimate == pytest.approx(0.0, abs=1e-9)
+    step = ctrl.rate_fraction * ctrl.omega_max / ctrl.fps
+    assert cmd == pytest.approx(sign * step, rel=1e-9)  # the first step of the turn, towards the path
+    for _ in range(200):  # held at lead_max ahead of the heading, on the path's side
+        cmd = ctrl.update(t)
+    assert cmd == pytest.approx(sign * ctrl.lead_max, rel=1e-9)
+
+
+def test_corner_overshoot_is_measured_outward_for_right_and_left_turns():
+    """The same stroke-averaged trajectory overshooting a 90 degree corner by 0.3 body lengths,
+    turning left and its mirror image turning right: the same overshoot (a right turn read its
+    inward cut, 0.38 against 0.007 for the left turn)."""
+    from types import SimpleNamespace
+
+    from flutterswim.steering.path import _polyline
+    from flutterswim.steering.reduced import ReducedModel
+    from flutterswim.steering.steer import metrics
+
+    red = ReducedModel(U=1e-3, period=0.05, k=4.0, omega_max=0.26, omega_max_bracket=(0.25, 0.27), r_min=1e-3 / 0.26,
+                       onset_time=0.0)
+    d = 0.3 * L
+    out = {}
+    for sign in (1.0, -1.0):
+        path = _polyline(np.array([[0.0, 0.0], [8 * L, 0.0], [8 * L, sign * 8 * L]]), False, "corner", 1e-5)
+        # along the first edge past the corner by d, then across, then back onto the second edge
+        way = np.array([[0.0, 0.0], [8 * L + d, 0.0], [8 * L + d, sign * 2 * L], [8 * L, sign * 3 * L],
+                        [8 * L, sign * 8 * L]])
+        seg = np.hypot(*np.diff(way, axis=0).T)
+        s = np.r_[0.0, np.cumsum(seg)]
+        t = np.linspace(0.0, s[-1] / red.U, 4001)
+        x, y = np.interp(t * red.U, s, way[:, 0]), np.interp(t * red.U, s, way[:, 1])
+        run = SimpleNamespace(t=t, x=x[:, None], y=y[:, None])
+        out[sign] = metrics(run, path, red, 0.0, L)["corner_overshoot_bl"]
+    assert out[1.0] == pytest.approx(0.3, rel=1e-3)
+    assert out[-1.0] == pytest.approx(out[1.0], rel=1e-9)
+
+
+def test_a_path_tighter_than_the_controllers_turn_is_warned_before_any_run(monkeypatch):
+    """The controller turns at most rate_fraction Omega_max, a radius U / (0.8 Omega_max) = 1.25
+    r_min: a circle of 1.1 r_min (above the swimmer's own limit) was called feasible and followed
+    at the controller's radius, 0.36 body lengths RMS off. Now it is warned, and a circle of 1.4
+    r_min is not; both before the onset is simulated."""
+    import importlib
+    import warnings
+
+    from flutterswim.steering.reduced import ReducedModel
+
+    sim_mod = importlib.import_module("flutterswim.simulate")
+
+    class Started(Exception):
+        pass
+
+    def no_run(*a, **kw):
+        raise Started
+
+    monkeypatch.setattr(sim_mod, "simulate", no_run)
+    model = ReducedModel(U=1.06e-3, period=0.378, k=3.83, omega_max=0.26, omega_max_bracket=(0.259, 0.262),
+                         r_min=1.06e-3 / 0.26, onset_time=12.0)
+    with pytest.warns(UserWarning, match="tightest turn the controller makes"):
+        with pytest.raises(Started):
+            steer(P, lambda p, h: circle(1.1 * model.r_min, p, h), model)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(Started):
+            steer(P, lambda p, h: circle(1.4 * model.r_min, p, h), model)
+    with pytest.raises(fs.ParameterError, match="rate_fraction"):
+        steer(P, lambda p, h: circle(1.4 * model.r_min, p, h), model, rate_fraction=1.5)
+
+
+def test_paths_far_too_long_or_too_small_are_refused_by_name():
+    """A waypoint 1e9 body lengths away ran out of memory sampling the path; a square of 1e-9
+    body lengths failed with 'ValueError: arange'. Both are refused, naming the path."""
+    with pytest.raises(fs.ParameterError, match="square.*at most"):
+        square(1e9 * L)
+    with pytest.raises(fs.ParameterError, match="square.*at least"):
+        square(1e-9 * L)
+    assert square(0.1 * L).length == pytest.approx(0.4 * L, rel=1e-12)

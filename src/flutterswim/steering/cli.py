@@ -109,7 +109,10 @@ def _cmd_steer(args) -> int:
     atomic_write_text(met, json.dumps(_nulls(m), indent=2, allow_nan=False))
     print(f"{out}: {res.path.name}, {'closed' if res.closed_loop else 'open'} loop: cross-track RMS "
           f"{m['cross_track_rms_bl']:.3f} body lengths (max {m['cross_track_max_bl']:.3f}), corner overshoot "
-          f"{m['corner_overshoot_bl']:.3f}, trapped: {m['trapped']}; metrics in {met}")
+          f"{m['corner_overshoot_bl']:.3f}, trapped: {m['trapped']}; metrics in {met}"
+          + ("" if m.get("path_feasible", True) else
+             f" (the path bends down to a radius of {m['path_min_radius_bl']:.2f} body lengths, tighter than the "
+             f"controller turns, {m['controller_min_radius_bl']:.2f}: not followed there)"))
     if args.plot:
         from .plot import plot_steer
 

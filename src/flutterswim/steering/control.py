@@ -110,9 +110,11 @@ class Controller:
         if abs(err) > 0.8 * math.pi and self._turn_sign != 0.0:
             err = self._turn_sign * abs(err)
         self._turn_sign = math.copysign(1.0, err) if err != 0.0 else self._turn_sign
-        target = heading + err * (1.0 + self.heading_gain)
-        # within lead_max of the heading, and turning no faster than the rate limit
-        target = heading + max(-self.lead_max, min(self.lead_max, wrap(target - heading)))
+        # the field leads the heading by the error with feedback, within lead_max of the heading
+        # (not wrapped: beyond 90 degrees of error, err (1 + gain) passes pi, and its wrap would
+        # turn the field the other way, away from the path)
+        target = heading + max(-self.lead_max, min(self.lead_max, err * (1.0 + self.heading_gain)))
+        # turning no faster than the rate limit
         max_step = self.rate_fraction * self.omega_max / self.fps
         self.command += max(-max_step, min(max_step, wrap(target - self.command)))
         return self.command

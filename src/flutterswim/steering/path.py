@@ -54,10 +54,23 @@ class RefPath:
         return i, float(t[0] * r[1] - t[1] * r[0])
 
 
+#: the most points a polyline is sampled at (100 m at the 10 um step: a path far longer than
+#: an hour of swimming, ~3.6 m, which ``steer`` refuses anyway; a waypoint 1e9 body lengths away
+#: ran out of memory here)
+MAX_PATH_POINTS = 10_000_000
+
+
 def _polyline(vertices: np.ndarray, closed: bool, name: str, step: float) -> RefPath:
     v = np.asarray(vertices, float)
     if closed:
         v = np.vstack([v, v[:1]])
+    total = float(np.sum(np.hypot(*np.diff(v, axis=0).T)))
+    if not total <= MAX_PATH_POINTS * step:
+        raise ParameterError(f"{name}: the path is {total:.4g} m long; at most {MAX_PATH_POINTS * step:g} m "
+                             f"(sampled every {step:g} m) is allowed")
+    if not total >= 10 * step:
+        raise ParameterError(f"{name}: the path is {total:.4g} m long; at least {10 * step:g} m (ten times its "
+                             f"sampling step of {step:g} m) is needed")
     pts, corners = [v[0]], []
     for a, b in zip(v[:-1], v[1:]):
         n = max(2, int(math.ceil(np.linalg.norm(b - a) / step)))

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -83,34 +84,85 @@ def _ramp(angle: float, start: float, duration: float, phi0: float) -> Field:
                                      kind="linear"))
 
 
+# units a field CSV's header may give its first two columns (t_ms, "angle [rad]"): factors to
+# seconds and to degrees; units recognised but not taken (t_min) are refused, not misread
+_TIME_UNITS = {"s": 1.0, "ms": 1e-3}
+_ANGLE_UNITS = {"deg": 1.0, "degrees": 1.0, "rad": math.degrees(1.0)}
+_REFUSED_UNITS = ("us", "min", "h", "hr", "tau", "grad", "turn", "turns", "rev")
+
+
+def _header_unit(field: str, allowed: dict, what: str, where: str) -> float:
+    """The factor of the unit a header field names (``t_ms``, ``angle [rad]``), 1 if none."""
+    units = "|".join(sorted((*allowed, *_REFUSED_UNITS), key=len, reverse=True))
+    m = re.fullmatch(rf"\s*[A-Za-z]\w*?(?:(?:_|\s*[\[(]|\s+)\s*({units})\s*[\])]?)?\s*", field, flags=re.I)
+    unit = m.group(1).lower() if m and m.group(1) else None
+    if unit is None:
+        return 1.0
+    if unit not in allowed:
+        raise ParameterError(f"{where}: the header's {what} column {field.strip()!r} is in {unit}; allowed: "
+                             f"{', '.join(allowed)} (no unit: {next(iter(allowed))})")
+    return allowed[unit]
+
+
 def from_csv(path: str | Path) -> Field:
-    """A schedule from a CSV of ``t, angle[, strength]`` (header optional; t in the run's time
-    unit, angle in degrees), interpolated linearly and held after the last row."""
+    """A schedule from a CSV of ``t, angle[, strength]`` (t in the run's time unit, angle in
+    degrees), interpolated linearly and held after the last row. Blank lines and lines starting
+    with ``#`` are skipped; a first row that holds no number is a header, whose first two
+    columns may name their unit (``t_ms``, ``t [s]``, ``angle_rad``, ``angle [deg]``). Every row
+    has two columns, or every row three."""
     p = Path(path)
     if not p.is_file():
         raise ParameterError(f"field CSV={str(p)!r} is not a file")
-    rows = []
+    rows, lines = [], []
+    t_scale, a_scale, first = 1.0, 1.0, True
     with open(p, newline="") as f:
-        for i, row in enumerate(csv.reader(f)):
+        reader = csv.reader(f)
+        for row in reader:
+            where = f"field CSV={str(p)!r}, line {reader.line_num}"
+            while row and not row[-1].strip():
+                row.pop()  # trailing empty fields
             if not row or row[0].strip().startswith("#"):
                 continue
             try:
                 vals = [float(v) for v in row[:3]]
             except ValueError:
-                if i == 0:
+                if first and all(_is_text(v) for v in row[:3]):
+                    first = False
+                    t_scale = _header_unit(row[0], _TIME_UNITS, "time", where)
+                    if len(row) > 1:
+                        a_scale = _header_unit(row[1], _ANGLE_UNITS, "angle", where)
                     continue  # a header
-                raise ParameterError(f"field CSV={str(p)!r}, line {i + 1}: numbers t, angle[, strength] are required") from None
+                raise ParameterError(f"{where}: numbers t, angle[, strength] are required, not "
+                                     f"{','.join(row[:3])!r}") from None
+            first = False
+            if len(vals) < 2:
+                raise ParameterError(f"{where}: {','.join(row)!r} has one field; t, angle[, strength] are required")
             if not all(np.isfinite(vals)):
-                raise ParameterError(f"field CSV={str(p)!r}, line {i + 1}: {row[:3]} is not finite; finite t, angle[, "
-                                     "strength] are required")
+                raise ParameterError(f"{where}: {row[:3]} is not finite; finite t, angle[, strength] are required")
+            if rows and len(vals) != len(rows[0]):
+                raise ParameterError(f"{where}: {len(vals)} columns, line {lines[0]} has {len(rows[0])}; give every "
+                                     "row t, angle or every row t, angle, strength")
+            if rows and not vals[0] > rows[-1][0]:
+                raise ParameterError(f"{where}: t = {row[0].strip()} does not follow line {lines[-1]}'s "
+                                     f"{rows[-1][0]:g}; the times must increase")
             rows.append(vals)
-    if len(rows) < 1 or any(len(r) < 2 for r in rows):
-        raise ParameterError(f"field CSV={str(p)!r} needs rows of t, angle_deg[, strength]")
-    a = np.array([r[:2] for r in rows])
-    direction = Piecewise(a[:, 0], np.radians(a[:, 1]), kind="linear")
-    if all(len(r) == 3 for r in rows):
-        return Field(direction=direction, strength=Piecewise(a[:, 0], [r[2] for r in rows], kind="linear"))
+            lines.append(reader.line_num)
+    if not rows:
+        raise ParameterError(f"field CSV={str(p)!r} holds no rows of t, angle_deg[, strength]")
+    a = np.array(rows)
+    t = a[:, 0] * t_scale
+    direction = Piecewise(t, np.radians(a[:, 1] * a_scale), kind="linear")
+    if a.shape[1] == 3:
+        return Field(direction=direction, strength=Piecewise(t, a[:, 2], kind="linear"))
     return Field(direction=direction)
+
+
+def _is_text(v: str) -> bool:
+    try:
+        float(v)
+    except ValueError:
+        return True
+    return False
 
 
 def add_field_options(p) -> None:
@@ -123,7 +175,8 @@ def add_field_options(p) -> None:
     g.add_argument("--field-step", type=float, default=None, help="jump to this direction [deg] at --field-start")
     g.add_argument("--field-ramp", type=float, nargs=2, default=None, metavar=("ANGLE_DEG", "DURATION_S"),
                    help="turn linearly to ANGLE_DEG over DURATION_S from --field-start")
-    g.add_argument("--field-csv", default=None, help="CSV of t, angle_deg[, strength]")
+    g.add_argument("--field-csv", default=None,
+                   help="CSV of t, angle[, strength] in s and degrees, or the units its header names (t_ms, angle_rad)")
 
 
 def field_from_args(args) -> Field | None:

@@ -16,7 +16,7 @@ from .._validate import ParameterError, non_negative, positive, positive_int
 from ..field import Constant, Field
 from ..params import Parameters
 from .control import Controller, wrap
-from .path import RefPath
+from .path import RefPath, fillet, min_radius
 from .reduced import ReducedModel
 
 __all__ = ["SteerResult", "steer", "metrics"]
@@ -59,6 +59,9 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     noise_px = non_negative("noise_px", noise_px)
     um_per_px = positive("um_per_px", um_per_px)
     laps = positive("laps", laps)
+    rate_fraction = positive("rate_fraction", rate_fraction)
+    if not rate_fraction <= 1.0:
+        raise ParameterError(f"rate_fraction={rate_fraction!r} must be in (0, 1]: a fraction of the step-out rate")
     if not isinstance(delay_frames, (int, np.integer)) or delay_frames < 0:
         raise ParameterError(f"delay_frames={delay_frames!r} must be an integer >= 0")
     seed = positive_int("seed", seed, minimum=0)  # numpy's generator takes seeds >= 0
@@ -70,6 +73,17 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     if not est <= _MAX_DURATION_S:
         raise ParameterError(f"path: {laps:g} lap(s) at the swimmer's {reduced.U * 1e3:.3g} mm/s take {est:.3g} s; at "
                              f"most {_MAX_DURATION_S:g} s is simulated (a shorter path, or fewer laps)")
+    # the tightest turn the controller commands, U / (rate_fraction Omega_max), above the
+    # swimmer's own U / Omega_max (a circle between the two was called feasible, and followed
+    # at the controller's radius: 0.36 body lengths RMS off a circle of 1.1); checked on the
+    # path as made at the origin (its shape does not depend on where it starts), before any run
+    r_turn = reduced.U / (rate_fraction * reduced.omega_max)
+    r_path = min_radius(fillet(path_factory((0.0, 0.0), 0.0), r_turn), r_turn)
+    if r_path < 0.95 * r_turn:
+        warnings.warn(f"the path bends with a radius down to {r_path / params.l:.2f} body lengths, below the "
+                      f"tightest turn the controller makes, U/({rate_fraction:g} Omega_max) = {r_turn / params.l:.2f} "
+                      f"(the swimmer's own U/Omega_max = {reduced.r_min / params.l:.2f}): it cannot be followed "
+                      "there (scale the path up)", stacklevel=2)
     # onset along the initial field direction (0), then control
     first = simulate(params, onset, n_segments=n_segments, frame_dt=dt)
     cx, cy = _centroid(first)
@@ -77,16 +91,8 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     start = np.array([cx[m].mean(), cy[m].mean()]) + reduced.U * reduced.period / 2 * np.array([1.0, 0.0])
     path: RefPath = path_factory(start, 0.0)
     duration = 1.1 * laps * path.length / reduced.U + 3 * reduced.period  # corners slow it down
-    # the controller tracks the path with its corners rounded to the turning radius it allows
-    from .path import fillet, min_radius
-
-    r_turn = reduced.U / (rate_fraction * reduced.omega_max)
+    # the controller tracks the path with its corners rounded to the tightest turn it commands
     tracked = fillet(path, r_turn)
-    r_path = min_radius(tracked, r_turn)
-    if r_path < 0.95 * reduced.r_min:
-        warnings.warn(f"the path bends with a radius down to {r_path / params.l:.2f} body lengths, below the "
-                      f"swimmer's smallest turning radius U/Omega_max = {reduced.r_min / params.l:.2f}: it cannot be "
-                      "followed there (scale the path up)", stacklevel=2)
     ctrl = Controller(tracked, reduced.period, reduced.U, reduced.omega_max, lookahead_bl * params.l,
                       correction_bl * params.l, rate_fraction=rate_fraction, fps=fps)
     for t, x, y in zip(first.t, cx, cy):  # the camera has watched the onset too
@@ -96,7 +102,7 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     t = onset
     pending = deque_of(delay_frames, 0.0)
     n = int(round(duration / dt))
-    plan = _open_loop_plan(path, reduced, onset) if not closed_loop else None
+    plan = _open_loop_plan(path, reduced, onset, rate_fraction, fps) if not closed_loop else None
     bar = None
     if progress:
         from tqdm.auto import tqdm
@@ -125,7 +131,8 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     run = concatenate(parts)
     met = metrics(run, path, reduced, onset, params.l)
     met["path_min_radius_bl"] = r_path / params.l
-    met["path_feasible"] = bool(r_path >= 0.95 * reduced.r_min)
+    met["path_feasible"] = bool(r_path >= 0.95 * r_turn)
+    met["controller_min_radius_bl"] = r_turn / params.l
     met["trapped"] = bool(math.isfinite(trapped_at)) or met["trapped"]
     met["trapped_at_s"] = trapped_at  # when the run was stopped for it (NaN: not stopped)
     met.update(closed_loop=closed_loop, noise_px=noise_px, um_per_px=um_per_px, fps=fps, delay_frames=delay_frames,
@@ -149,9 +156,10 @@ def _stalled(parts, reduced: ReducedModel) -> bool:
     return float(np.hypot(*(b - a))) < 0.2 * reduced.U * 5 * reduced.period
 
 
-def _open_loop_plan(path: RefPath, reduced: ReducedModel, t0: float):
+def _open_loop_plan(path: RefPath, reduced: ReducedModel, t0: float, rate_fraction: float, fps: float):
     """Field direction planned for the path at speed U, with the unicycle lag compensated and
-    the same turn-rate limit: the heading the swimmer should have at arc length U (t - t0)."""
+    the same turn-rate limit (``rate_fraction`` Omega_max, commands at ``fps``): the heading the
+    swimmer should have at arc length U (t - t0)."""
     ang = np.unwrap(np.arctan2(np.gradient(path.points[:, 1]), np.gradient(path.points[:, 0])))
     state = {"cmd": 0.0}
 
@@ -160,7 +168,7 @@ def _open_loop_plan(path: RefPath, reduced: ReducedModel, t0: float):
         if path.closed:
             s %= path.length
         want = float(np.interp(s, path.s, ang))
-        step = 0.8 * reduced.omega_max / 50.0
+        step = rate_fraction * reduced.omega_max / fps
         state["cmd"] += max(-step, min(step, wrap(want - state["cmd"])))
         return state["cmd"]
 
@@ -194,7 +202,10 @@ def metrics(run, path: RefPath, reduced: ReducedModel, t0: float, body_length: f
         w = np.abs(path.s[idx] - path.s[c]) < 1.5 * bl
         if not w.any():
             continue
-        over.append(float(max(0.0, -e[w].min())))  # left turns: outward is to the right
+        # outward: to the right of a left turn (e < 0), to the left of a right turn
+        d0, d1 = path.points[c] - path.points[c - 1], path.points[c + 1] - path.points[c]
+        left = d0[0] * d1[1] - d0[1] * d1[0] > 0
+        over.append(float(max(0.0, -e[w].min() if left else e[w].max())))
         # time from passing the vertex until the error stays below 0.1 body length, up to where
         # the next corner's zone begins (there the swimmer cuts that corner, on purpose)
         after = np.nonzero((path.s[idx] > path.s[c]) & (path.s[idx] < s_next - 1.5 * bl))[0]
