@@ -131,6 +131,9 @@ def test_xarray_reads_the_store_without_flutterswim(tmp_path):
     code = (
         "import sys, xarray as xr, json\n"
         "ds = xr.open_zarr(sys.argv[1])\n"
+        # and on to NetCDF (a nested attribute had made to_netcdf fail)
+        "ds.to_netcdf(sys.argv[1] + '.nc', engine='h5netcdf')\n"
+        "assert xr.open_dataset(sys.argv[1] + '.nc', engine='h5netcdf').a.shape == ds.a.shape\n"
         "print(json.dumps({'dims': dict(ds.sizes), 'chi': ds.chi.values.tolist(), 'tau': ds.tau.values.tolist(),"
         " 'a': ds.a.values.tolist(), 'a_dims': list(ds.a.dims), 'reason': [str(r) for r in ds.reason.values.ravel()],"
         " 'attrs': {k: ds[k].attrs for k in list(ds.variables)}, 'spec': ds.attrs['sweep_spec']}))\n"

@@ -62,6 +62,18 @@ def test_branch_cli_rejects_bad_input_with_one_line(tmp_path, capsys):
 
 
 
+@pytest.mark.parametrize("rng, words", [("tau=-1:1", "tau=-1 is not allowed"), ("tau=0:1", "tau=0 is not allowed"),
+                                         ("B=-1e-13:1e-14", "B=-1e-13"), ("eta_perp=-50:100", "eta_perp=-50"),
+                                         ("l=0.004:-0.005", "l=-0.005")])
+def test_branch_cli_refuses_ends_outside_the_parameters_domain(tmp_path, capsys, rng, words):
+    """A range reaching values a parameter cannot take (tau <= 0) was continued from the Hopf
+    point to its valid end, exit 0: now one line naming the end, exit 2, nothing written."""
+    out = tmp_path / "b.nc"
+    assert main(["branch", rng, "--out", str(out), "--points", "4", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert words in err and err.count("\n") == 1 and not out.exists(), err
+
+
 @pytest.mark.parametrize("argv, words", [
     (["kappa_E_ratio=nan:2"], "nan"), (["kappa_E_ratio=0.6:-inf"], "-inf"),
     (["kappa_E_ratio=0.6:0.9", "--segments", "2"], "--segments=2"),

@@ -53,7 +53,7 @@ def _run_and_kill(tmp_path, backend):
             if (out / "zarr.json").exists():
                 try:
                     g = zarr.open_group(str(out), mode="r")
-                    if "spec" in g.attrs:
+                    if "sweep_spec" in g.attrs:
                         d = np.asarray(g["done"][:]) == 1
                         if d.sum() >= 4:
                             os.killpg(proc.pid, signal.SIGKILL)  # the sweep and its workers

@@ -55,9 +55,16 @@ def _cmd_branch(args) -> int:
     from .. import defaults
     from .continuation import BRANCH_STEPS
 
+    from .._validate import ParameterError
+
     name, lo, hi = _parse_range(args.range)
     params = preset(args.preset)
-    Axis(params, name)  # validates the name before any work
+    axis = Axis(params, name)  # validates the name before any work
+    for v in (lo, hi):  # and both ends (tau=-1:1 was continued from the Hopf point to 1)
+        try:
+            axis.at(v)
+        except ParameterError as exc:
+            raise ParameterError(f"range={args.range!r}: {name}={v:g} is not allowed ({exc})") from None
     out = check_output_file(args.out, (".nc",))
     if args.plot:
         check_output_file(args.plot, (".png", ".pdf", ".svg"), what="plot")
@@ -67,7 +74,6 @@ def _cmd_branch(args) -> int:
     # (kappa_E_ratio -2:-1 is the mirror branch from -0.68, not the one from +0.68), else near
     # the base value; continue towards the end of the range where the straight state is unstable
     n = positive_int("n_segments", n, minimum=4)
-    axis = Axis(params, name)
     base = axis.value()
     near = lo if abs(lo - base) <= abs(hi - base) else hi
     bracket = hopf_bracket(axis, n, lo, hi) or (None if near == base else hopf_bracket(axis, n, base, near))

@@ -63,13 +63,15 @@ def _cmd_sweep(args) -> int:
     ds = sweep(args.axes, args.preset, out=args.out, backend=backend, workers=args.workers, scheduler=args.scheduler,
                mode=args.mode, continuation=args.continuation, settings=settings or None,
                progress=not args.no_progress, overwrite=args.overwrite)
-    print(f"{args.out}: {ds.attrs['n_done']}/{ds.attrs['n_points']} points, {ds.attrs['n_failed']} failed")
+    missing = int(ds.attrs["n_points"]) - int(ds.attrs["n_done"])  # a worker lost with its point: not saved
+    print(f"{args.out}: {ds.attrs['n_done']}/{ds.attrs['n_points']} points, {ds.attrs['n_failed']} failed"
+          + (f", {missing} not computed (rerun the same command to compute them)" if missing else ""))
     if args.plot:
         from .plot import plot_sweep
 
         plot_sweep(ds, args.plot)
         print(f"figure: {args.plot}")
-    return 1 if ds.attrs["n_failed"] else 0
+    return 1 if ds.attrs["n_failed"] or missing else 0
 
 
 def _cmd_plot(args) -> int:

@@ -1,8 +1,9 @@
 """One sweep point: simulate to a converged limit cycle (or a time cap), then describe it.
 
 The point function takes a plain task dict and returns a plain dict of floats (flags as
-0/1), so it pickles to any worker; it never writes anything. Times in the returned values
-are in s for physical parameters and in tau for dimensionless groups.
+0/1), so it pickles to any worker; it never writes anything. The returned values are in the
+base's units: s and mm for physical parameters (also where an eta_par or eta_perp axis runs the
+point as dimensionless groups: converted with the point's tau and l), tau and l for groups.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..initial import InitialState
+from ..params import Parameters
 from ..settle import OUTCOMES, Settled, settle
 from .spec import PointSettings, base_from_dict, point_params
 
@@ -43,7 +45,6 @@ def run_point(task: Mapping[str, Any]) -> dict[str, Any]:
     Returns {"values": {VARIABLES: float}, "final_state": array}."""
     st = PointSettings(**task["settings"])
     params = point_params(base_from_dict(task["base"]), task["values"])
-    from ..params import Parameters
 
     tunit = params.tau if isinstance(params, Parameters) else 1.0
     init = task.get("initial")
@@ -57,8 +58,34 @@ def run_point(task: Mapping[str, Any]) -> dict[str, Any]:
     if not np.all(np.isfinite(res.run.state_final)):
         raise PointFailure(f"non-finite state by t={res.run.t_final:.6g}")
     values = res.values()
+    base = base_from_dict(task["base"])
+    if isinstance(base, Parameters) and not isinstance(params, Parameters):
+        # eta_par / eta_perp on a physical base: the point ran as dimensionless groups (times in
+        # tau, lengths in l); the store's units are the base's (s, mm), with its tau and l
+        from .spec import PHYSICAL
+
+        phys = point_params(base, {k: v for k, v in task["values"].items() if k in PHYSICAL})
+        values = in_physical_units(values, phys.tau, phys.l)
     return {"values": {k: float(values[k]) for k in VARIABLES}, "final_state": np.asarray(res.run.state_final, float),
             "reason": res.reason}
+
+
+def in_physical_units(values: Mapping[str, float], tau: float, l: float) -> dict[str, float]:
+    """A point's record from dimensionless groups (times in tau, lengths in 1e-3 l under the
+    *_mm names) in the sweep's physical units, with the time scale ``tau`` [s] and length ``l``
+    [m]: *_s times x tau, rates and frequencies / tau, *_mm x l (1e-3 l -> mm), speeds x l / tau;
+    body-length ratios, angles, flags and ``t_simulated`` (always in tau) unchanged."""
+    out = dict(values)
+    for k, v in values.items():
+        if k == "speed_mm_s":
+            out[k] = v * l / tau
+        elif k == "speed_bl_s" or k.endswith("_per_s") or k.endswith("_hz"):
+            out[k] = v / tau
+        elif k.endswith("_mm"):
+            out[k] = v * l
+        elif k.endswith("_s") and k != "t_simulated":
+            out[k] = v * tau
+    return out
 
 
 def timed(fn, task):

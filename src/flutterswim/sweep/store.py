@@ -330,7 +330,8 @@ class SweepStore:
         ds.attrs.update({
             "title": "flutterswim parameter sweep", "Conventions": "CF-1.10",
             "source": f"flutterswim {__version__}", "format": FORMAT,
-            "sweep_spec": spec.to_json(), "spec": json.loads(spec.to_json()),
+            # (strings only: a nested attribute is no NetCDF attribute, and open_zarr(...).to_netcdf failed)
+            "sweep_spec": spec.to_json(),
             "fingerprint": spec.fingerprint, "variables": json.dumps(variables), "n_state": ns,
             "time_unit": tu,
             "swept": json.dumps(list(spec.names)),
