@@ -222,3 +222,43 @@ def test_report_keeps_targets_of_earlier_runs(tmp_path):
     assert 'id="table1"' in html and 'id="b_readings"' in html
     assert html.count("built by an earlier run") == 1
     assert list(res.records) == ["b_readings"]  # this run's own records (its exit status)
+
+
+def test_mode_is_per_target_and_a_quick_build_is_rebuilt_for_full(tmp_path):
+    """A folder built quick, then one target --full: that target is rebuilt (even when its
+    inputs do not depend on the mode), the manifest and the report say the folder is mixed and
+    name the quick builds, not "full" for all; a --full run of all then rebuilds the rest."""
+    from flutterswim.reproduce.report import write_report
+    from flutterswim.reproduce.targets import with_earlier
+
+    calls: list[str] = []
+    ts = [_counter_target(n, calls) for n in ("a", "b", "c")]
+    build_targets(ts, tmp_path, Settings("quick"))
+    calls.clear()
+    rec = build_targets(ts[2:], tmp_path, Settings("full"))
+    assert calls == ["c"] and rec["c"].reran and rec["c"].mode == "full"
+    run = json.loads((tmp_path / "manifest.json").read_text())["run"]
+    assert run["mode"] == "mixed" and run["quick_targets"] == ["a", "b"] and run["full_targets"] == ["c"]
+    assert run["mode_summary"] == "mixed: c full; the other 2 quick" and run["this_run_mode"] == "full"
+    html = write_report(tmp_path, with_earlier(ts, tmp_path, rec), "full").read_text()
+    assert "Mode <b>mixed: c full; the other 2 quick</b> (this run: full)" in html
+    assert html.count("Quick build:") == 2 and html.count('class="mode-quick">quick<') == 2
+    calls.clear()
+    rec = build_targets(ts, tmp_path, Settings("full"))
+    assert calls == ["a", "b"] and not rec["c"].reran  # c is a full build already
+    assert json.loads((tmp_path / "manifest.json").read_text())["run"]["mode"] == "full"
+    html = write_report(tmp_path, rec, "full").read_text()
+    assert "Mode <b>full</b>" in html and "Quick build" not in html
+    calls.clear()
+    build_targets(ts[:1], tmp_path, Settings("quick"))  # and back: --quick rebuilds a full build
+    assert calls == ["a"]
+
+
+def test_reproduce_rebuilds_a_quick_target_for_full(tmp_path):
+    from flutterswim.reproduce import reproduce
+
+    reproduce(tmp_path / "r", targets=["table1"])
+    res = reproduce(tmp_path / "r", targets=["table1"], mode="full")
+    assert res.records["table1"].reran and res.records["table1"].mode == "full"
+    assert Manifest.load(tmp_path / "r").targets["table1"]["mode"] == "full"
+    assert "Mode <b>full</b>" in res.report.read_text()

@@ -1,10 +1,12 @@
 """The manifest: one JSON file per output folder recording, for every target, its inputs
 (and their key), the package version, the wall time, and the SHA-256 of each output file.
 
-A target is up to date when its entry has the same input key, every listed output file
-still has its recorded hash, and every flutterswim source file loaded when it was built is
-unchanged. The manifest is rewritten atomically after each target, so an
-interrupted run keeps every target finished before the interruption.
+A target is up to date when its entry has the same input key and mode (quick or full), every
+listed output file still has its recorded hash, and every flutterswim source file its code
+depends on (the static import closure of its build, :mod:`.sources`) is unchanged. The run
+summary gives the folder's mode: quick, full, or mixed with the targets of each. The manifest
+is rewritten atomically after each target, so an interrupted run keeps every target finished
+before the interruption.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from typing import Any
 
 from .io import clean_json, sha256_file
 
-__all__ = ["Manifest", "input_key", "code_hashes", "code_fingerprint", "MANIFEST_NAME"]
+__all__ = ["Manifest", "input_key", "code_hashes", "code_fingerprint", "mode_summary", "MANIFEST_NAME"]
 
 MANIFEST_NAME = "manifest.json"
 
@@ -33,35 +35,35 @@ def _root() -> Path:
     return Path(__file__).resolve().parents[1]
 
 
-def code_hashes() -> dict[str, str]:
-    """SHA-256 of the source of every flutterswim module loaded so far (path relative to the
-    package) plus the report template: the code a target was built with. A change to one of
-    them makes the target out of date; edits to modules it never loaded do not."""
-    import sys
+def code_hashes(functions: list, *, root: str | os.PathLike | None = None) -> dict[str, str]:
+    """SHA-256 of each package source file the ``functions`` depend on (their static import
+    closure, :func:`.sources.function_closure`; path relative to the package folder ``root``):
+    the code a target was built with. A change to one of them makes the target out of date;
+    edits to modules outside the closure do not."""
+    from .sources import function_closure
 
-    root = _root()
-    out = {}
-    for name, mod in list(sys.modules.items()):
-        f = getattr(mod, "__file__", None)
-        if not (name == "flutterswim" or name.startswith("flutterswim.")) or not f:
-            continue
-        p = Path(f).resolve()
-        if p.suffix == ".py" and p.is_file() and root in p.parents:
-            out[str(p.relative_to(root))] = sha256_file(p)
-    for p in sorted((root / "reproduce" / "templates").glob("*.j2")):
-        out[str(p.relative_to(root))] = sha256_file(p)
-    return dict(sorted(out.items()))
+    root = _root() if root is None else Path(root).resolve()
+    files = function_closure(functions, root=root)
+    return {str(p.relative_to(root)): sha256_file(p) for p in sorted(files, key=lambda p: p.relative_to(root))}
 
 
-def code_fingerprint() -> str:
-    """SHA-256 over all the package's Python sources (paths and contents, sorted)."""
-    root = _root()
-    h = hashlib.sha256()
-    for p in sorted(root.rglob("*.py")) + sorted(root.rglob("*.j2")):
-        h.update(str(p.relative_to(root)).encode())
-        h.update(b"\0")
-        h.update(p.read_bytes())
-    return h.hexdigest()
+def code_fingerprint(functions: list, *, root: str | os.PathLike | None = None) -> str:
+    """SHA-256 over :func:`code_hashes` (paths and digests, sorted)."""
+    text = json.dumps(code_hashes(functions, root=root), sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def mode_summary(modes: dict[str, str]) -> str:
+    """The mode of a folder from each built target's mode: "quick", "full", or, when they differ,
+    "mixed: fig6cd full; the other 12 quick" (the smaller groups by name, the largest counted)."""
+    groups: dict[str, list[str]] = {}
+    for name, mode in modes.items():
+        groups.setdefault(mode or "mode not recorded", []).append(name)
+    if len(groups) <= 1:
+        return next(iter(groups), "none built")
+    order = sorted(groups, key=lambda m: (-len(groups[m]), m))
+    parts = [f"{', '.join(sorted(groups[m]))} {m}" for m in reversed(order[1:])]
+    return f"mixed: {'; '.join(parts)}; the other {len(groups[order[0]])} {order[0]}"
 
 
 @dataclass
@@ -88,9 +90,13 @@ class Manifest:
             return cls(folder)  # unreadable: every target reruns
         return cls(folder, dict(data.get("targets", {})), dict(data.get("run", {})))
 
-    def up_to_date(self, name: str, key: str) -> bool:
+    def up_to_date(self, name: str, key: str, mode: str | None = None) -> bool:
+        """``mode``: the mode asked for (a quick build is not up to date for --full, nor a full
+        one for --quick); None accepts either."""
         e = self.targets.get(name)
         if not e or e.get("key") != key or e.get("status") not in ("ok", "skipped"):
+            return False
+        if mode is not None and e.get("mode") != mode:
             return False
         for rel, digest in e.get("outputs", {}).items():
             p = self.folder / rel
@@ -106,6 +112,18 @@ class Manifest:
                 return False
         return True
 
+    def modes(self) -> dict[str, str]:
+        """name -> mode of every target built ok ("" when an older manifest did not record it)."""
+        return {k: e.get("mode", "") for k, e in self.targets.items() if e.get("status") == "ok"}
+
+    def run_summary(self) -> dict[str, Any]:
+        """``run`` (this run's settings) with the folder's mode and its quick and full targets."""
+        modes = self.modes()
+        text = mode_summary(modes)
+        return {**self.run, "mode": text.split(":")[0], "mode_summary": text,
+                "quick_targets": sorted(k for k, m in modes.items() if m == "quick"),
+                "full_targets": sorted(k for k, m in modes.items() if m == "full")}
+
     def record(self, name: str, entry: dict[str, Any]) -> None:
         self.targets[name] = clean_json(entry)
         self.save()
@@ -114,7 +132,7 @@ class Manifest:
         from .. import __version__
         from .._paths import atomic_path
 
-        body = {"generator": f"flutterswim {__version__}", "run": clean_json(self.run),
+        body = {"generator": f"flutterswim {__version__}", "run": clean_json(self.run_summary()),
                 "targets": {k: self.targets[k] for k in sorted(self.targets)}}
         with atomic_path(self.path) as tmp:
             tmp.write_text(json.dumps(body, indent=1, sort_keys=True, allow_nan=False) + "\n")

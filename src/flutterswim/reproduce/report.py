@@ -41,10 +41,13 @@ def environment() -> list[tuple[str, str]]:
 
 
 def write_report(out: Path, records: dict, mode: str, *, name: str = "report.html") -> Path:
+    """``mode``: this run's; the report gives the folder's (mixed when its targets differ) and
+    labels each quick build."""
     import jinja2
 
     from .. import __version__
     from .._paths import atomic_path
+    from .manifest import mode_summary
 
     rows = []
     for rec in records.values():
@@ -55,7 +58,7 @@ def write_report(out: Path, records: dict, mode: str, *, name: str = "report.htm
             if p.is_file():
                 imgs.append({"name": f, "data": base64.b64encode(p.read_bytes()).decode("ascii")})
         comps = list(rec.outcome.comparisons)
-        rows.append({"name": t.name, "title": t.title, "caption": t.caption, "status": rec.status,
+        rows.append({"name": t.name, "title": t.title, "caption": t.caption, "status": rec.status, "mode": rec.mode,
                      "reran": rec.reran, "wall_time": rec.wall_time, "error": rec.error, "images": imgs,
                      "videos": [v for v in t.videos if (out / v).is_file()], "rows": comps,
                      "notes": list(rec.outcome.notes), "files": sorted(rec.outputs.items()),
@@ -63,7 +66,8 @@ def write_report(out: Path, records: dict, mode: str, *, name: str = "report.htm
     env = jinja2.Environment(loader=jinja2.PackageLoader("flutterswim.reproduce", "templates"),
                              autoescape=jinja2.select_autoescape(["html", "j2"]), undefined=jinja2.StrictUndefined)
     html = env.get_template("report.html.j2").render(
-        generator=f"flutterswim {__version__}", mode=mode, records=rows,
+        generator=f"flutterswim {__version__}", records=rows, run_mode=mode,
+        mode=mode_summary({r["name"]: r["mode"] for r in rows if r["status"] == "ok"}),
         n_ok=sum(r["status"] == "ok" for r in rows), n_skipped=sum(r["status"] == "skipped" for r in rows),
         n_failed=sum(r["status"] == "failed" for r in rows), n_reran=sum(r["reran"] for r in rows),
         n_agree=sum(r["n_agree"] for r in rows), n_disagree=sum(r["n_rows"] - r["n_agree"] for r in rows),

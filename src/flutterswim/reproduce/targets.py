@@ -1,8 +1,8 @@
 """Targets and the engine that builds them.
 
 A :class:`Target` names its output files, its inputs (a JSON-able dict, with the package
-version and the output hashes of the targets it depends on; the manifest adds the hashes of
-the source files loaded) and a ``build(ctx)`` function that
+version and the output hashes of the targets it depends on; the manifest adds the mode and the
+hashes of the source files its code depends on) and a ``build(ctx)`` function that
 writes the outputs and returns an :class:`Outcome` (comparisons with the paper, notes). The
 engine :func:`build_targets` skips targets whose manifest entry is up to date, records each
 finished target in the manifest at once, and writes ``<name>.json`` (the outcome) as data.
@@ -128,7 +128,7 @@ class Target:
 @dataclass(frozen=True)
 class TargetRecord:
     """A target after the run: status ok / skipped / failed; reran: built in this run;
-    wall_time [s] of the build that made the outputs."""
+    wall_time [s] of the build that made the outputs; mode: quick or full, of that build."""
 
     target: Target
     status: str
@@ -137,6 +137,7 @@ class TargetRecord:
     outcome: Outcome
     error: str = ""
     outputs: dict = field(default_factory=dict)  # file -> sha256
+    mode: str = ""
 
 
 def _inputs(t: Target, settings: Settings, records: dict) -> dict:
@@ -144,6 +145,12 @@ def _inputs(t: Target, settings: Settings, records: dict) -> dict:
 
     deps = {d: records[d].outputs for d in t.deps if d in records}
     return {"target": t.name, "settings": t.params(settings), "version": __version__, "deps": deps}
+
+
+def target_code(t: Target) -> dict[str, str]:
+    """SHA-256 of the package sources ``t`` is built with: the closure of its build and params
+    functions and of this engine (which writes its summary)."""
+    return code_hashes([t.build, t.params, build_targets])
 
 
 def _outcome_from_summary(t: Target, out: Path) -> Outcome:
@@ -169,7 +176,7 @@ def with_earlier(all_targets: list[Target], out: Path, records: dict[str, Target
             oc = Outcome(oc.status, oc.comparisons, oc.notes + ("built by an earlier run (not selected by this "
                                                                "run's --only)",), oc.values)
             merged[t.name] = TargetRecord(t, e.get("status", oc.status), False, float(e.get("wall_time_s", 0.0)), oc,
-                                          e.get("error", ""), dict(e.get("outputs", {})))
+                                          e.get("error", ""), dict(e.get("outputs", {})), e.get("mode", ""))
     return merged
 
 
@@ -177,10 +184,11 @@ def build_targets(targets: list[Target], out: Path, settings: Settings, *, log: 
                   force: bool = False) -> dict[str, TargetRecord]:
     """Build ``targets`` in order into ``out`` (checked by the caller), skipping up-to-date ones.
     A failing target is recorded (status failed, the error) and the others go on; targets
-    depending on a failed one fail too."""
+    depending on a failed one fail too. A target built in the other mode is rebuilt."""
     log = log or (lambda msg: None)
     man = Manifest.load(out)
-    man.run = {"mode": settings.mode, "trials": settings.trials}
+    man.run = {"this_run_mode": settings.mode, "trials": settings.trials}
+    mode = settings.mode
     records: dict[str, TargetRecord] = {}
     for t in targets:
         inputs = _inputs(t, settings, records)
@@ -188,15 +196,16 @@ def build_targets(targets: list[Target], out: Path, settings: Settings, *, log: 
         bad = [d for d in t.deps if d not in records or records[d].status == "failed"]
         if bad:
             err = f"needs target(s) {', '.join(bad)}, which failed"
-            records[t.name] = TargetRecord(t, "failed", True, 0.0, Outcome("failed", notes=(err,)), err)
-            man.record(t.name, {"title": t.title, "status": "failed", "error": err, "key": key, "inputs": inputs})
+            records[t.name] = TargetRecord(t, "failed", True, 0.0, Outcome("failed", notes=(err,)), err, mode=mode)
+            man.record(t.name, {"title": t.title, "status": "failed", "error": err, "key": key, "inputs": inputs,
+                                "mode": mode})
             log(f"{t.name}: FAILED ({err})")
             continue
-        if not force and man.up_to_date(t.name, key):
+        if not force and man.up_to_date(t.name, key, mode):
             e = man.targets[t.name]
             oc = _outcome_from_summary(t, out)
             records[t.name] = TargetRecord(t, e["status"], False, float(e.get("wall_time_s", 0.0)), oc,
-                                           outputs=dict(e["outputs"]))
+                                           outputs=dict(e["outputs"]), mode=mode)
             log(f"{t.name}: up to date")
             continue
         log(f"{t.name}: building ...")
@@ -211,9 +220,9 @@ def build_targets(targets: list[Target], out: Path, settings: Settings, *, log: 
             err = f"{type(exc).__name__}: {' '.join(str(exc).split())}"
             if os.environ.get("FLUTTERSWIM_DEBUG"):
                 traceback.print_exc()
-            records[t.name] = TargetRecord(t, "failed", True, wall, Outcome("failed", notes=(err,)), err)
+            records[t.name] = TargetRecord(t, "failed", True, wall, Outcome("failed", notes=(err,)), err, mode=mode)
             man.record(t.name, {"title": t.title, "status": "failed", "error": err, "key": key,
-                                "inputs": inputs, "wall_time_s": wall})
+                                "inputs": inputs, "wall_time_s": wall, "mode": mode})
             log(f"{t.name}: FAILED in {wall:.1f} s: {err}")
             continue
         write_json(out / t.summary_file, {"target": t.name, "title": t.title, "status": oc.status,
@@ -224,16 +233,17 @@ def build_targets(targets: list[Target], out: Path, settings: Settings, *, log: 
         missing = [f for f in t.outputs if f not in produced]
         if oc.status == "ok" and missing:
             err = f"the build did not write {missing}"
-            records[t.name] = TargetRecord(t, "failed", True, wall, oc, err)
-            man.record(t.name, {"title": t.title, "status": "failed", "error": err, "key": key, "inputs": inputs})
+            records[t.name] = TargetRecord(t, "failed", True, wall, oc, err, mode=mode)
+            man.record(t.name, {"title": t.title, "status": "failed", "error": err, "key": key, "inputs": inputs,
+                                "mode": mode})
             log(f"{t.name}: FAILED: {err}")
             continue
         hashes = {f: sha256_file(out / f) for f in produced}
-        records[t.name] = TargetRecord(t, oc.status, True, wall, oc, outputs=hashes)
+        records[t.name] = TargetRecord(t, oc.status, True, wall, oc, outputs=hashes, mode=mode)
         from .. import __version__
 
-        man.record(t.name, {"title": t.title, "status": oc.status, "key": key, "inputs": inputs,
+        man.record(t.name, {"title": t.title, "status": oc.status, "key": key, "inputs": inputs, "mode": mode,
                             "version": __version__, "wall_time_s": wall, "outputs": hashes,
-                            "code": code_hashes()})
+                            "code": target_code(t)})
         log(f"{t.name}: {oc.status} in {wall:.1f} s")
     return records
