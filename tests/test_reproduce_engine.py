@@ -250,8 +250,9 @@ def test_mode_is_per_target_and_a_quick_build_is_rebuilt_for_full(tmp_path):
     html = write_report(tmp_path, rec, "full").read_text()
     assert "Mode <b>full</b>" in html and "Quick build" not in html
     calls.clear()
-    build_targets(ts[:1], tmp_path, Settings("quick"))  # and back: --quick rebuilds a full build
-    assert calls == ["a"]
+    rec = build_targets(ts, tmp_path, Settings("quick"))  # a full build serves --quick: not replaced
+    assert calls == [] and all(r.mode == "full" and not r.reran for r in rec.values())
+    assert json.loads((tmp_path / "manifest.json").read_text())["run"]["mode"] == "full"
 
 
 def test_reproduce_rebuilds_a_quick_target_for_full(tmp_path):
@@ -262,3 +263,27 @@ def test_reproduce_rebuilds_a_quick_target_for_full(tmp_path):
     assert res.records["table1"].reran and res.records["table1"].mode == "full"
     assert Manifest.load(tmp_path / "r").targets["table1"]["mode"] == "full"
     assert "Mode <b>full</b>" in res.report.read_text()
+
+
+def test_a_full_build_whose_inputs_depend_on_the_mode_serves_a_quick_run(tmp_path):
+    """A target whose inputs differ between the modes (a grid step), built --full: a quick run
+    keeps it (it had rebuilt it coarser, replacing the full results), and reports it as full;
+    changed full inputs still rebuild it."""
+    calls: list[str] = []
+
+    def build(ctx):
+        calls.append("g")
+        write_json(ctx.path("g_data.json"), {"step": ctx.settings.mode})
+        return Outcome("ok", (compare("x", 1.0, 1.0, rtol=0.1),))
+
+    step = {"full": 0.1}
+    g = Target("g", "g", "", build, lambda s: {"step": step["full"] if s.mode == "full" else 1.0},
+               data=("g_data.json",))
+    build_targets([g], tmp_path, Settings("full"))
+    calls.clear()
+    rec = build_targets([g], tmp_path, Settings("quick"))
+    assert calls == [] and rec["g"].mode == "full" and not rec["g"].reran
+    assert json.loads((tmp_path / "g_data.json").read_text())["step"] == "full"
+    step["full"] = 0.05  # the full build is no longer what --full would make: rebuilt, quick
+    rec = build_targets([g], tmp_path, Settings("quick"))
+    assert calls == ["g"] and rec["g"].mode == "quick"

@@ -42,8 +42,18 @@ def test_plot_marks_self_intersection_red_and_onset(tmp_path):
     xs_red = sorted({float(v) for l in red for v in l.get_xdata()})
     assert xs_red and min(xs_red) == pytest.approx(1.5) and max(xs_red) == pytest.approx(2.0)
     assert all(max(l.get_xdata()) <= 1.6 + 1e-9 for l in black)
+    # the onset of the model the points ran with (N segments: 0.6835 at 24 against the
+    # continuum's 0.6865, where a point at 0.685 swam left of the mark), the continuum's dotted
+    from flutterswim.orbits.linear import hopf_point
+    from flutterswim.sweep.spec import PointSettings
+
+    n = PointSettings().n_segments
+    rd = hopf_point(PAPER, "kappa_E_ratio", n_segments=n).value
+    assert rd < rc and abs(rd / rc - 1) < 0.02
     vlines = [l for l in ax.lines if l.get_color() == "tab:blue"]
-    assert vlines and np.allclose(vlines[0].get_xdata(), rc)
+    assert vlines and np.allclose(vlines[0].get_xdata(), rd)
+    dotted = [l for l in ax.lines if l.get_color() == "0.6" and l.get_linestyle() == ":"]
+    assert dotted and np.allclose(dotted[0].get_xdata(), rc)
     # below the onset the advancement is drawn as zero (straight), above it positive
     y = {round(float(v[0]), 6): float(v[1]) for l in ax.lines if l.get_color() in ("k", "tab:red")
          for v in zip(l.get_xdata(), l.get_ydata())}

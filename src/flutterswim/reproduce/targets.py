@@ -13,7 +13,7 @@ from __future__ import annotations
 import os
 import time
 import traceback
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable
 
@@ -184,7 +184,8 @@ def build_targets(targets: list[Target], out: Path, settings: Settings, *, log: 
                   force: bool = False) -> dict[str, TargetRecord]:
     """Build ``targets`` in order into ``out`` (checked by the caller), skipping up-to-date ones.
     A failing target is recorded (status failed, the error) and the others go on; targets
-    depending on a failed one fail too. A target built in the other mode is rebuilt."""
+    depending on a failed one fail too. A quick build is rebuilt for a full run; a full build
+    that is up to date serves a quick run (it is not replaced by a coarser one)."""
     log = log or (lambda msg: None)
     man = Manifest.load(out)
     man.run = {"this_run_mode": settings.mode, "trials": settings.trials}
@@ -201,12 +202,19 @@ def build_targets(targets: list[Target], out: Path, settings: Settings, *, log: 
                                 "mode": mode})
             log(f"{t.name}: FAILED ({err})")
             continue
-        if not force and man.up_to_date(t.name, key, mode):
+        kept = None
+        if not force:
+            if man.up_to_date(t.name, key, mode):
+                kept = mode
+            elif mode == "quick" and man.up_to_date(
+                    t.name, input_key(_inputs(t, replace(settings, mode="full"), records)), "full"):
+                kept = "full"  # a full build serves a quick run: not replaced by a coarser one
+        if kept:
             e = man.targets[t.name]
             oc = _outcome_from_summary(t, out)
             records[t.name] = TargetRecord(t, e["status"], False, float(e.get("wall_time_s", 0.0)), oc,
-                                           outputs=dict(e["outputs"]), mode=mode)
-            log(f"{t.name}: up to date")
+                                           outputs=dict(e["outputs"]), mode=kept)
+            log(f"{t.name}: up to date" + (" (a full build)" if kept != mode else ""))
             continue
         log(f"{t.name}: building ...")
         t0 = time.perf_counter()

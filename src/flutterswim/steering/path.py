@@ -68,9 +68,8 @@ def _polyline(vertices: np.ndarray, closed: bool, name: str, step: float) -> Ref
     if not total <= MAX_PATH_POINTS * step:
         raise ParameterError(f"{name}: the path is {total:.4g} m long; at most {MAX_PATH_POINTS * step:g} m "
                              f"(sampled every {step:g} m) is allowed")
-    if not total >= 10 * step:
-        raise ParameterError(f"{name}: the path is {total:.4g} m long; at least {10 * step:g} m (ten times its "
-                             f"sampling step of {step:g} m) is needed")
+    if not total >= 0.1 * step:  # (points 1e-12 m apart are merged: a path of 1e-11 m had none left)
+        raise ParameterError(f"{name}: the path is {total:.4g} m long; at least {0.1 * step:g} m is needed")
     pts, corners = [v[0]], []
     for a, b in zip(v[:-1], v[1:]):
         n = max(2, int(math.ceil(np.linalg.norm(b - a) / step)))
