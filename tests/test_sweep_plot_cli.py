@@ -58,6 +58,10 @@ def test_plot_marks_self_intersection_red_and_onset(tmp_path):
     y = {round(float(v[0]), 6): float(v[1]) for l in ax.lines if l.get_color() in ("k", "tab:red")
          for v in zip(l.get_xdata(), l.get_ydata())}
     assert y[0.2] == 0.0 and y[1.0] == pytest.approx(0.1)
+    # and no line joins the last straight point (0.7, drawn at 0) to the first swimming one:
+    # it would draw advances that no point has between them
+    spans = [tuple(np.round(l.get_xdata(), 6)) for l in ax.lines if l.get_color() in ("k", "tab:red")]
+    assert (0.7, 0.8) not in spans and (0.6, 0.7) in spans and (0.8, 0.9) in spans
 
 
 def test_cli_sweep_and_plot(tmp_path, capsys):

@@ -47,11 +47,12 @@ def discrete_critical_ratio(ds) -> tuple[float, int]:
         return math.nan, n
 
 
-def _coloured(ax, x, y, red, **kw):
-    """Line through (x, y) in black, segments touching a red point in red."""
+def _coloured(ax, x, y, red, gaps=None, **kw):
+    """Line through (x, y) in black, segments touching a red point in red; none from point i to
+    i + 1 where ``gaps[i]``."""
     x, y, red = np.asarray(x, float), np.asarray(y, float), np.asarray(red, bool)
     for i in range(x.size - 1):
-        if not (np.isfinite(y[i]) and np.isfinite(y[i + 1])):
+        if not (np.isfinite(y[i]) and np.isfinite(y[i + 1])) or (gaps is not None and gaps[i]):
             continue
         c = "tab:red" if (red[i] or red[i + 1]) else "k"
         ax.plot(x[i : i + 2], y[i : i + 2], color=c, lw=1.8, solid_capstyle="round")
@@ -90,7 +91,10 @@ def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str
     per = np.where(swim, ds[period].values, np.nan)
     red = ds["self_intersecting"].values
     fig, axs = plt.subplots(2, 1, figsize=(5.5, 5.2), sharex=True, constrained_layout=True)
-    _coloured(axs[0], xv, adv, red)
+    # no line from a straight point (drawn at zero) to a swimming one: between them lies the
+    # onset, and a straight line would draw advances that no point has
+    st = np.asarray(straight, bool)
+    _coloured(axs[0], xv, adv, red, gaps=st[:-1] != st[1:])
     _coloured(axs[1], xv, per, red)
     unit = ds.attrs.get("time_unit", "s")
     axs[0].set_ylabel("advance / cycle [body lengths]" if advance.endswith("_bl") else advance)
