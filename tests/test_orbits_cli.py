@@ -111,3 +111,34 @@ def test_readme_orbits_block_runs(tmp_path):
     r = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip().endswith("ok") and (tmp_path / "branch.nc").exists()
+
+
+def test_plot_of_a_subcritical_branch_folding_back_past_the_hopf_point():
+    """A subcritical branch leaves the Hopf point towards smaller values (unstable orbits),
+    folds, and comes back past it (stable orbits, most of its points): the straight state is
+    stable on the side the branch leaves to, below the Hopf point (it was drawn from the Hopf
+    point up, where the straight state is unstable), and the unstable orbits are marked."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import xarray as xr
+
+    from flutterswim.orbits.plot import plot_branch
+
+    hopf = 0.58
+    u = np.linspace(0.0, 1.0, 40)
+    x = np.r_[hopf - 0.05 * np.sin(np.pi * u[:12] / 0.6), np.linspace(0.55, 1.2, 28)]  # out, fold, back
+    stable = np.r_[np.zeros(10, bool), np.ones(30, bool)]
+    amp = np.r_[np.linspace(0.01, 0.5, 12), np.linspace(0.55, 0.8, 28)]
+    ds = xr.Dataset({"advance": ("kappa_E_ratio", amp * 1e-3), "period": ("kappa_E_ratio", 0.5 + 0 * amp, {"units": "s"}),
+                     "lateral_leading": ("kappa_E_ratio", amp * 1e-3), "lateral_trailing": ("kappa_E_ratio", amp * 2e-3),
+                     "self_intersecting": ("kappa_E_ratio", np.zeros(40)), "stable": ("kappa_E_ratio", stable)},
+                    coords={"kappa_E_ratio": ("kappa_E_ratio", x, {"units": "1"})},
+                    attrs={"parameter": "kappa_E_ratio", "hopf_kappa_E_ratio": hopf, "hopf_period": 0.5,
+                           "bifurcation": "subcritical", "lyapunov_coefficient": 3e-4, "range_end": 1.2})
+    fig = plot_branch(ds)
+    ax = fig.axes[0]
+    grey = [ln for ln in ax.lines if ln.get_label() == "straight, stable (linear theory)"]
+    assert grey and max(grey[0].get_xdata()) == pytest.approx(hopf) and min(grey[0].get_xdata()) < hopf
+    rings = [ln for ln in ax.lines if ln.get_marker() == "o" and ln.get_color() == "tab:orange"]
+    assert rings and np.allclose(np.sort(rings[0].get_xdata()), np.sort(x[~stable]))

@@ -10,8 +10,11 @@ import numpy as np
 __all__ = ["plot_branch"]
 
 
-def _segments(ax, x, y, red, **kw):
-    """Plot y(x) in black where ``red`` is false and in red where it is true."""
+def _segments(ax, x, y, red, unstable=None, **kw):
+    """Plot y(x) in black where ``red`` is false and in red where it is true; open circles on
+    the ``unstable`` orbits."""
+    if unstable is not None and np.any(unstable):
+        ax.plot(x[unstable], y[unstable], "o", mfc="none", color="tab:orange", ms=4, zorder=3)
     label = kw.pop("label", None)
     ax.plot(x, np.where(red, np.nan, y), color=kw.pop("color", "k"), label=label, **kw)
     if np.any(red):
@@ -41,7 +44,9 @@ def plot_branch(ds, path=None, *, x_range: tuple[float, float] | None = None):
     unstable = ~ds.stable.values.astype(bool)
     # the branch may lie on either side of the Hopf point; the straight state is stable on the
     # other side (supercritical) or on the branch's side (subcritical: unstable orbits)
-    side = 1.0 if np.nanmedian(x) >= hopf else -1.0
+    # (the side the branch leaves the Hopf point to: a subcritical branch may fold back past it)
+    first = x[np.isfinite(x) & (x != hopf)]
+    side = 1.0 if (first[0] if first.size else np.nanmedian(x)) >= hopf else -1.0
     stable_side = side if ds.attrs.get("bifurcation") == "subcritical" else -side
     if x_range is None:  # the requested range, as far as the file records it
         ends = [float(ds.attrs[k]) for k in ("range_start", "range_end") if k in ds.attrs]
@@ -58,24 +63,23 @@ def plot_branch(ds, path=None, *, x_range: tuple[float, float] | None = None):
     fig, axes = plt.subplots(3, 1, figsize=(6.0, 8.0), sharex=True, constrained_layout=True)
     ax = axes[0]
     ax.plot(sorted([straight_end, hopf]), [0, 0], color="0.5", lw=1.8, label="straight, stable (linear theory)")
-    _segments(ax, xs, np.r_[0.0, ds.advance.values * lscale], np.r_[False, red], lw=1.8,
+    un = np.r_[False, unstable]
+    _segments(ax, xs, np.r_[0.0, ds.advance.values * lscale], np.r_[False, red], un, lw=1.8,
               label="stroke (periodic orbit)")
     ax.set_ylabel(f"advance per cycle [{lunit}]")
     ax2 = axes[1]
-    _segments(ax2, xs, np.r_[ds.attrs["hopf_period"], ds.period.values], np.r_[False, red], lw=1.8)
+    _segments(ax2, xs, np.r_[ds.attrs["hopf_period"], ds.period.values], np.r_[False, red], un, lw=1.8)
     ax2.plot(hopf, ds.attrs["hopf_period"], "o", color="k", ms=4)
     ax2.set_ylabel(f"period [{tunit}]")
     ax3 = axes[2]
-    _segments(ax3, xs, np.r_[0.0, ds.lateral_leading.values * lscale], np.r_[False, red], lw=1.8,
+    _segments(ax3, xs, np.r_[0.0, ds.lateral_leading.values * lscale], np.r_[False, red], un, lw=1.8,
               label="leading end")
-    _segments(ax3, xs, np.r_[0.0, ds.lateral_trailing.values * lscale], np.r_[False, red], lw=1.8,
+    _segments(ax3, xs, np.r_[0.0, ds.lateral_trailing.values * lscale], np.r_[False, red], un, lw=1.8,
               ls="--", label="trailing end")
     ax3.set_ylabel(f"lateral peak-to-peak [{lunit}]")
     ax3.set_xlabel(f"{name} [{ds[name].attrs.get('units', '1')}]")
     for a in axes:
         a.axvline(hopf, color="0.3", ls=":", lw=1)
-        if np.any(unstable):
-            a.plot(x[unstable], np.full(unstable.sum(), np.nan))
         a.set_xlim(lo, hi)
     # the label on the side of the Hopf line with more room, inside the axes
     right = hopf - lo < hi - hopf
@@ -85,6 +89,9 @@ def plot_branch(ds, path=None, *, x_range: tuple[float, float] | None = None):
                Line2D([], [], color="k", lw=1.8, label="stroke (periodic orbit)"),
                Line2D([], [], color="tab:red", lw=1.8, label="self-intersecting stroke"),
                Line2D([], [], color="0.3", ls=":", label="Hopf point (discrete linear stability)")]
+    if np.any(unstable):
+        handles.insert(3, Line2D([], [], marker="o", mfc="none", color="tab:orange", ls="none", ms=4,
+                                 label="unstable orbit (a Floquet multiplier outside the unit circle)"))
     axes[0].legend(handles=handles, fontsize=8, loc="best")
     h3 = [Line2D([], [], color="k", lw=1.8, label="leading end"),
           Line2D([], [], color="k", lw=1.8, ls="--", label="trailing end")]
