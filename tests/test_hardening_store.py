@@ -168,8 +168,8 @@ def test_real_sweep_variables_have_units_and_failure_reasons_are_strings(tmp_pat
     for name in ds.variables:
         assert ds[name].attrs.get("units") is not None and ds[name].attrs.get("long_name"), name
     assert ds["period_s"].attrs["units"] == "s" and ds["frequency_hz"].attrs["units"] == "Hz"
-    reasons = [str(r) for r in ds["reason"].values]
-    assert reasons == ["", ""]
+    reasons = [str(r) for r in ds["reason"].values]  # strings: what each point settled into
+    assert all(isinstance(r, str) and "straight" in r for r in reasons) and not ds["failed"].values.any(), reasons
 
 
 def test_continuation_store_has_a_branch_dimension(tmp_path):

@@ -50,3 +50,23 @@ def test_the_cli_exits_1_when_points_were_not_computed(tmp_path, monkeypatch, ca
 
     monkeypatch.setattr(run, "sweep", complete)
     assert main(["sweep", "kappa_E_ratio=0.7:2:40", "--out", str(tmp_path / "k.zarr"), "--no-progress"]) == 0
+
+
+def test_every_point_says_why_it_ended_as_it_did(tmp_path):
+    """The store's reason holds what a point settled into (a capped point said nothing), and
+    a failure's message where it failed."""
+    import math
+
+    from flutterswim.sweep import sweep
+
+    def point(task):
+        x = task["values"]["chi"]
+        if x > 2:
+            raise RuntimeError("boom")
+        return {"values": {"a": math.sin(x)}, "reason": f"settled at chi={x:g}"}
+
+    point.variables = ["a"]
+    ds = sweep({"chi": [1.0, 2.0, 3.0]}, out=str(tmp_path / "r.zarr"), backend="serial", point_fn=point,
+               progress=False)
+    assert list(ds["reason"].values[:2]) == ["settled at chi=1", "settled at chi=2"]
+    assert "boom" in ds["reason"].values[2] and ds["failed"].values.tolist() == [False, False, True]

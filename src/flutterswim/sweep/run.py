@@ -173,7 +173,10 @@ def _run(store: SweepStore, spec: SweepSpec, fn, variables, *, backend, workers,
             values = state = None
             if not err:
                 values, state, err = _check(result, variables, getattr(fn, "required", None))
-            store.write_point(k, None if err else values, failed=bool(err), message=err, wall_time=wall,
+            # the reason: a failure's, else what the point settled into and why (run_point's
+            # "reason": a capped point said nothing about why it was capped)
+            why = err or (str(result.get("reason", "")) if isinstance(result, Mapping) else "")
+            store.write_point(k, None if err else values, failed=bool(err), message=why, wall_time=wall,
                               state=None if err else state)
             counts["failed"] += bool(err)
             counts["saved"] += 1

@@ -101,7 +101,7 @@ def variable_attrs(name: str, time_unit: str) -> dict[str, str]:
         "self_intersection_fraction": ("1", "fraction of frames in which the filament crosses itself"),
         "done": ("1", "point computed and stored (1 yes, 0 no)"),
         "failed": ("1", "point failed (1 yes, 0 no)"),
-        "reason": ("1", "failure reason (empty if the point succeeded)"),
+        "reason": ("1", "why the point ended as it did: its failure (see failed), or what it settled into"),
         "wall_time_s": ("s", "wall-clock time of the point"),
         "state": ("1", "final integrator state, dimensionless (r0/l, theta, kappa l), for continuation"),
     }
