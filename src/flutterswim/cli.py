@@ -36,6 +36,26 @@ class _Parser(argparse.ArgumentParser):
         return self.commands
 
 
+def _still_and_bent(run) -> str:
+    """A note when a fixed-time run ends without a stroke, bent away from the field: trapped in a
+    bent equilibrium (a sudden turn of the field can do this), which "completed" did not say."""
+    import numpy as np
+
+    from .settle import STRAIGHT_ANGLE, SWIM_AMPLITUDE
+
+    t = np.asarray(run.t)
+    last = t >= t[-1] - 0.2 * (t[-1] - t[0])
+    if t.size < 10 or last.sum() < 5:
+        return ""
+    rel = np.asarray(run.theta)[last] - np.asarray(run.field_angle)[last][:, None]
+    swing = 0.5 * float(np.ptp(rel[:, 0]))  # the end angle's half-range over the last fifth
+    bent = float(np.max(np.abs(np.angle(np.exp(1j * rel[-1])))))
+    if swing < 0.1 * SWIM_AMPLITUDE and bent > STRAIGHT_ANGLE:
+        return (f"; not swimming at the end: still (the end angle swings by {swing:.2g} rad over the last fifth) and "
+                f"bent up to {np.degrees(bent):.0f} degrees off the field, trapped in a bent equilibrium")
+    return ""
+
+
 def _simulate(args: argparse.Namespace) -> int:
     from ._paths import check_output_file
     from ._validate import ParameterError
@@ -67,7 +87,7 @@ def _simulate(args: argparse.Namespace) -> int:
         cycles = defaults.N_CYCLES if args.cycles is None else args.cycles
         run = run_to_limit_cycle(params, n_cycles=cycles, **opts)
     path = run.save(out)
-    note = ""
+    note = _still_and_bent(run) if args.t_end is not None else ""
     if args.t_end is None:  # the settle engine's verdict and its reason
         note = f" -> {run.settings.get('outcome', '?')}: {run.settings.get('outcome_reason', '')}"
         orb = run.settings.get("orbit")
