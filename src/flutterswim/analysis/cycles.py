@@ -125,6 +125,7 @@ class Cycles:
     peak-to-peak lie within 1 % of the exact periodic orbit, usually a cycle or two earlier
     (the paper's run: 6.70 s against 7.38 s), as a cycle can be that close to the orbit while
     its shape still changes from the one before by more than tol.
+    growth_note: why the growth rate is not given where the onset is in the record ("" else).
     """
 
     starts: np.ndarray
@@ -147,6 +148,7 @@ class Cycles:
     tol: float
     tip: int
     tol_used: np.ndarray = field(default_factory=lambda: np.empty((0, 3)))
+    growth_note: str = ""
 
     @property
     def n_cycles(self) -> int:
@@ -273,6 +275,32 @@ def _before_cut(sel: np.ndarray, ramps: np.ndarray, cut: float) -> np.ndarray:
     return sel & (np.arange(sel.size) < first_big[0]) if first_big.size else sel
 
 
+def _log_linear_rate(tm: np.ndarray, la: np.ndarray) -> tuple[float, float]:
+    """Slope of the log amplitudes ``la`` against the cycle times ``tm`` (least squares) and its
+    standard error: the scatter about the line, and in quadrature the line's misfit to a log
+    envelope that bends (the linear regime ending, the start's transient still in it): the
+    curvature b of a quadratic fit makes the slope at either end of the window differ from
+    the line's by b times its span (b^2 less its noise variance; with 3 cycles, which the
+    quadratic goes through, all of b^2)."""
+    x = tm - tm.mean()
+    n = x.size
+    A = np.vstack([x, np.ones_like(x)]).T
+    coef = np.linalg.lstsq(A, la, rcond=None)[0]
+    resid = la - A @ coef
+    sxx = float(x @ x)
+    var = float(resid @ resid) / max(n - 2, 1) / sxx if n > 2 else math.nan
+    if n >= 3:
+        Q = np.vstack([x * x - sxx / n, x, np.ones_like(x)]).T
+        cq = np.linalg.lstsq(Q, la, rcond=None)[0]
+        b2 = float(cq[0]) ** 2
+        if n > 3:
+            rq = la - Q @ cq
+            G = np.linalg.pinv(Q.T @ Q)
+            b2 -= float(rq @ rq) / (n - 3) * float(G[0, 0])
+        var += max(b2, 0.0) * float(np.ptp(x)) ** 2
+    return float(coef[0]), math.sqrt(var) if math.isfinite(var) else math.nan
+
+
 def _enough(sel: np.ndarray, ramps: np.ndarray, noise_amp: np.ndarray) -> bool:
     """Whether the fit's selection holds 4 cycles (2 degrees of freedom for its standard
     error), or 3 each far above the noise (a clean, fast onset)."""
@@ -324,13 +352,19 @@ def detect_cycles(
     sigma) after ``fit_after`` (default: two relaxation times when the source knows tau, from
     the first cycle after a quiet stretch longer than that; else after the second cycle, or
     from the record start after a quiet stretch), above 3 noise sigma, more than a period
-    from the record's ends and below ``fit_max_fraction`` of the final amplitude. A record
-    that ends while the stroke still grows exponentially (its last two cycles each grow by
-    over 10 % and at over 0.8 of the fastest growth, none before was larger, and the last
-    period's cycles still grow at over half that) holds no final amplitude: no onset (NaN),
-    and the fit keeps to cycles whose stroke deflects the tangent angle by at most 0.1 rad
-    (the fundamental's amplitude over the cycle, in the leading shape modes: a static bend and
-    the angle's noise do not count). Variation under 1e-10 of the record's largest
+    from the record's ends, below ``fit_max_fraction`` of the final amplitude and within the
+    linear regime: cycles whose stroke deflects the tangent angle by at most 0.1 rad (the
+    fundamental's amplitude over the cycle, in the leading shape modes: a static bend and the
+    angle's noise do not count). Of those, the fit starts at the cycle (leaving enough) that
+    gives the smallest standard error, which holds the scatter about the line and its misfit:
+    the curvature of a quadratic fit times the window's span (the start's transient or the
+    end of the linear regime bending the log envelope). Where too few cycles are left in the
+    linear regime but the onset has enough beyond it, the rate is NaN and ``growth_note``
+    says why (a fit there is biased by far more than its scatter). A record that ends while
+    the stroke still grows exponentially (its last two cycles each grow by over 10 % and at
+    over 0.8 of the fastest growth, none before was larger, and the last period's cycles
+    still grow at over half that) holds no final amplitude: no onset (NaN), and no cut at a
+    fraction of it. Variation under 1e-10 of the record's largest
     (floating-point rounding) is no stroke; in a noisy record the fit starts two relaxation
     times after the record start where two after the first cycle leave too few cycles.
     """
@@ -485,6 +519,7 @@ def detect_cycles(
     onset = math.nan
     rate = rate_err = math.nan
     win = (math.nan, math.nan)
+    growth_note = ""
     # a quiet stretch before the first cycle: the filament at rest or its stroke under the
     # noise (the section finds no crossings there); the onset is in it, or at the record start
     quiet = K >= 1 and float(starts[0] - t[0]) > 1.5 * W
@@ -514,11 +549,14 @@ def detect_cycles(
             if growing and tail.size >= 2 and np.all(tail > 3.0 * noise_amp[k_last:]):
                 growing = bool(np.all(np.diff(np.log(tail)) > 0.5 * float(np.max(lg))))
         if growing:
-            # no final amplitude to cut at: the fit keeps to cycles whose stroke is still within
-            # the linear regime (its tangent-angle deflection, theta_amp, at most _LINEAR_ANGLE:
-            # sin and tan within 0.3 % of the angle)
+            # no final amplitude to cut at
             r_final = math.inf
-            ok &= theta_amp <= _LINEAR_ANGLE
+        # the fit keeps to cycles whose stroke is still within the linear regime: its
+        # tangent-angle deflection, theta_amp, at most _LINEAR_ANGLE (a tenth of the final
+        # lateral amplitude is far beyond it: the simulated stroke's lateral amplitude grows
+        # 3-13 % faster than the linear rate there, its deflection 0.2-0.5 rad)
+        onset_ok = ok.copy()
+        ok &= theta_amp <= _LINEAR_ANGLE
         cut = fit_max_fraction * r_final
         above = np.nonzero(amps >= onset_fraction * a_final)[0] if not growing else np.empty(0, int)
         if above.size:
@@ -556,15 +594,32 @@ def detect_cycles(
         # cycles above 3 noise sigma, away from the ends, below the cut
         sel = _before_cut((mids >= t_after) & (ramps <= cut) & ok, ramps, cut)
         if _enough(sel, ramps, noise_amp):
-            tm, la = mids[sel], np.log(ramps[sel])
-            A = np.vstack([tm - tm.mean(), np.ones_like(tm)]).T
-            coef, res, *_ = np.linalg.lstsq(A, la, rcond=None)
-            rate = float(coef[0])
-            n = tm.size
-            resid = la - A @ coef
-            s2 = float(resid @ resid) / max(n - 2, 1)
-            rate_err = math.sqrt(s2 / float(np.sum((tm - tm.mean()) ** 2))) if n > 2 else math.nan
-            win = (float(tm[0]), float(tm[-1]))
+            # the start's transient (the other modes, beating with the leading one) may outlast
+            # two relaxation times: the fit starts at the cycle that leaves the smallest standard
+            # error, misfit included (early cycles off the line are dropped, not averaged in)
+            idx = np.nonzero(sel)[0]
+            best = (math.inf, math.nan, 0)
+            for i in range(idx.size):
+                sub = np.zeros_like(sel)
+                sub[idx[i:]] = True
+                if not _enough(sub, ramps, noise_amp):
+                    break
+                r, e = _log_linear_rate(mids[idx[i:]], np.log(ramps[idx[i:]]))
+                if i == 0 or e < best[0]:
+                    best = (e, r, i)
+            rate_err, rate, i0 = best
+            win = (float(mids[idx[i0]]), float(mids[idx[-1]]))
+        elif _enough(_before_cut((mids >= t_after) & (ramps <= cut) & onset_ok, ramps, cut), ramps, noise_amp):
+            # the onset's cycles would hold a fit, but not within the linear regime: no rate
+            # (beyond it the rate is biased far beyond its scatter)
+            n_lin = int(np.count_nonzero(sel))
+            growth_note = (
+                f"growth rate not measured: {n_lin} cycle{'s' if n_lin != 1 else ''} of the onset "
+                f"{'lie' if n_lin != 1 else 'lies'} clear of its start's transient (after t = {t_after:.3g} s), "
+                f"above the noise and within the linear regime (the stroke's tangent-angle deflection at most "
+                f"{_LINEAR_ANGLE:g} rad), fewer than the 4 (3 far above the noise) a fit needs; beyond that "
+                "regime the envelope no longer grows at the linear rate (a start closer to straight, or less "
+                "noise, leaves more such cycles)")
     return Cycles(
         starts=starts,
         periods=periods,
@@ -586,4 +641,5 @@ def detect_cycles(
         tol=float(tol),
         tip=itip,
         tol_used=tol_used,
+        growth_note=growth_note,
     )

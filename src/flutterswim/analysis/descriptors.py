@@ -630,6 +630,8 @@ def describe(
         note = (note + "; " if note else "") + (
             f"described over {idx.size} cycle{'s' if idx.size != 1 else ''}, fewer than the {n_last} asked for "
             f"(n_last, --last): {'; '.join(why)}")
+    if cyc.growth_note:
+        note = (note + "; " if note else "") + cyc.growth_note
     if not np.any(np.isfinite(p2p)):
         per_stroke = float(np.mean(per)) / float(np.median(np.diff(tr.t)))
         note = (note + "; " if note else "") + (
