@@ -1,7 +1,7 @@
 PY ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
-# pytest-xdist workers: the default run takes about 9 min on one process and 6 on two
+# pytest-xdist workers: the default run takes about 17 min of CPU, 8-9 min on two
 TEST_WORKERS ?= 2
 PYTEST := $(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadfile
 

@@ -42,25 +42,29 @@ def test_field_schedule_is_followed(short_run):
     assert np.all(run.field_angle[run.t < 11.0] == 0.0) and np.all(run.field_angle[run.t >= 11.0] == 0.1)
 
 
-def test_cli_json_matches_python_api(short_run):
+def test_cli_json_matches_python_api(short_run, capsys):
+    """The CLI in a process of its own (once), then in this one (main(): the same code, without
+    a Python start per call)."""
+    from flutterswim.cli import main
+
     run, path = short_run
     out = subprocess.run([sys.executable, "-m", "flutterswim.cli", "describe", str(path), "--json", "--last", "3"],
                          capture_output=True, text=True, check=True)
     assert json.loads(out.stdout) == json.loads(json.dumps(describe(fs.load(path), n_last=3).to_dict()))
     # an approximate period (10 % off) is refined from the data: the same cycles, as in Python
     rough = 1.1 * json.loads(out.stdout)["period_s"]
-    given = subprocess.run([sys.executable, "-m", "flutterswim.cli", "describe", str(path), "--json", "--last", "3",
-                            "--period", repr(rough)], capture_output=True, text=True, check=True)
-    d = json.loads(given.stdout)
+    capsys.readouterr()
+    assert main(["describe", str(path), "--json", "--last", "3", "--period", repr(rough)]) == 0
+    d = json.loads(capsys.readouterr().out)
     assert d == json.loads(json.dumps(describe(fs.load(path), n_last=3, period=rough).to_dict()))
     assert d["period_s"] == pytest.approx(json.loads(out.stdout)["period_s"], rel=1e-3)
     # without --last a run is described over defaults.N_CYCLES cycles (a tracked movie over 5)
-    dflt = subprocess.run([sys.executable, "-m", "flutterswim.cli", "describe", str(path), "--json"],
-                          capture_output=True, text=True, check=True)
-    assert json.loads(dflt.stdout) == json.loads(json.dumps(describe(fs.load(path), n_last=N_CYCLES).to_dict()))
-    bad = subprocess.run([sys.executable, "-m", "flutterswim.cli", "describe", str(path), "--period", "-1"],
-                         capture_output=True, text=True)
-    assert bad.returncode == 2 and "period=-1" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
+    assert main(["describe", str(path), "--json"]) == 0
+    dflt = json.loads(capsys.readouterr().out)
+    assert dflt == json.loads(json.dumps(describe(fs.load(path), n_last=N_CYCLES).to_dict()))
+    assert main(["describe", str(path), "--period", "-1"]) == 2
+    err = capsys.readouterr().err
+    assert "period=-1" in err and len(err.strip().splitlines()) == 1
 
 
 def test_cli_reports_bad_input_by_name(tmp_path):
