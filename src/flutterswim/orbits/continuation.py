@@ -102,6 +102,10 @@ class Branch:
             "hopf_omega_per_tau": self.hopf_omega,
             "hopf_period": (2 * math.pi / self.hopf_omega) * (orbs[0].period / orbs[0].period_dimensionless if orbs else 1.0),
             "lyapunov_coefficient": self.lyapunov_coefficient,
+            "lyapunov_coefficient_comment": (
+                "first Lyapunov coefficient l1 [1/tau] for the critical eigenvector q normalised to unit Euclidean "
+                "norm over the 2N state components: its size scales like 1/N (N l1 converges); its sign decides "
+                "the bifurcation"),
             "lyapunov_amplitude2_slope": self.amplitude2_slope,
             "bifurcation": "supercritical" if self.lyapunov_coefficient < 0 else "subcritical",
             "multiplier_crossings": "; ".join(f"{name}={v:.6g}" for v in crossings) if crossings else "none",
