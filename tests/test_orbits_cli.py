@@ -51,6 +51,10 @@ def test_branch_of_negative_fields_is_the_mirror_branch(tmp_path):
 
     lo, hi = hopf_bracket(Axis(fs.PAPER, "kappa_E_ratio"), 8, -1.0, 1.0)  # its grid holds chi = 0
     assert lo < neg.attrs["hopf_kappa_E_ratio"] < hi
+    # a range holding both Hopf points: the one nearer the base value (1), whose branch the
+    # CLI then continues to the far end, 1.2 (it continued the mirror branch to -1)
+    lo, hi = hopf_bracket(Axis(fs.PAPER, "kappa_E_ratio"), 8, -1.0, 1.2, prefer=1.0)
+    assert lo < pos.attrs["hopf_kappa_E_ratio"] < hi
 
 
 def test_branch_cli_rejects_bad_input_with_one_line(tmp_path, capsys):

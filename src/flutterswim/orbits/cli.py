@@ -76,7 +76,9 @@ def _cmd_branch(args) -> int:
     n = positive_int("n_segments", n, minimum=4)
     base = axis.value()
     near = lo if abs(lo - base) <= abs(hi - base) else hi
-    bracket = hopf_bracket(axis, n, lo, hi) or (None if near == base else hopf_bracket(axis, n, base, near))
+    # (of two in the range, -1:1.2 holding the mirror branch's too, the one nearer the base value)
+    bracket = (hopf_bracket(axis, n, lo, hi, prefer=base)
+               or (None if near == base else hopf_bracket(axis, n, base, near)))
     hp = hopf_point(params, name, n_segments=n, bracket=bracket)
     from .normal_form import normal_form
 

@@ -52,15 +52,19 @@ def flutter_growth(axis: Axis, value: float, n_segments: int) -> float:
         return -1.0
 
 
-def hopf_bracket(axis: Axis, n: int, base: float, to: float) -> tuple[float, float] | None:
+def hopf_bracket(axis: Axis, n: int, base: float, to: float, *, prefer: float | None = None
+                 ) -> tuple[float, float] | None:
     """A bracket (lo, hi) of a Hopf point of ``axis`` between ``base`` and ``to`` (a sign change
-    of the flutter growth rate on 9 values), or None if there is none there."""
+    of the flutter growth rate on 9 values), or None if there is none there; of several, the
+    one nearest ``prefer`` (default: the first from the smaller end)."""
     grid = np.linspace(min(base, to), max(base, to), 9)
     g = [flutter_growth(axis, v, n) for v in grid]
-    for i in range(len(grid) - 1):
-        if g[i] * g[i + 1] <= 0:
-            return float(grid[i]), float(grid[i + 1])
-    return None
+    found = [(float(grid[i]), float(grid[i + 1])) for i in range(len(grid) - 1) if g[i] * g[i + 1] <= 0]
+    if not found:
+        return None
+    if prefer is None:
+        return found[0]
+    return min(found, key=lambda b: abs(0.5 * (b[0] + b[1]) - prefer))
 
 
 def leading_mode(params, n_segments: int) -> complex:
