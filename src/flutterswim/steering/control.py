@@ -86,7 +86,8 @@ class Controller:
         pos, heading = est
         self.heading_estimate = heading
         i, e = self.path.project(pos, near=self._near)
-        if abs(e) > self.homing * self.correction:
+        held, homing = self._integral, abs(e) > self.homing * self.correction
+        if homing:
             # far off the path (after a bend tighter than the swimmer can turn): home in on a
             # point of the path ahead of its nearest point, searched over the whole path
             i, e = self.path.project(pos)
@@ -110,6 +111,10 @@ class Controller:
         if abs(err) > 0.8 * math.pi and self._turn_sign != 0.0:
             err = self._turn_sign * abs(err)
         self._turn_sign = math.copysign(1.0, err) if err != 0.0 else self._turn_sign
+        if abs(err * (1.0 + self.heading_gain)) >= self.lead_max and not homing:
+            # the field's lead is saturated (a turn under way): the cross-track integral waits
+            # (it wound up over a 45 degree turn onto a line and overshot the line after it)
+            self._integral = held
         # the field leads the heading by the error with feedback, within lead_max of the heading
         # (not wrapped: beyond 90 degrees of error, err (1 + gain) passes pi, and its wrap would
         # turn the field the other way, away from the path)
