@@ -140,3 +140,29 @@ def test_the_p_value_allows_for_sems_from_few_trials():
     assert np.mean(np.array(p_chi2) < 0.01) > 0.1  # what the chi-square distribution alone would claim
     with pytest.raises(fs.ParameterError, match="n_trials"):
         fit_voltages(V, mu, 0.01 * mu, model=sur, n_trials=[3, 1, 3])
+
+
+def test_a_chi_square_above_its_degrees_of_freedom_widens_the_1_sigma():
+    """Data whose scatter is 3x their stated SEMs (SEMs from too few trials): the 1-sigma from
+    the SEMs alone held the truth in about a quarter of 200 data sets; widened by sqrt(chi2 /
+    dof), the Birge ratio, in over half (a 1-sigma of 6 degrees of freedom: 64 %)."""
+    sur = ScalingSurrogate(BASE)
+    mu = _data(sur)
+    se = mu * np.array([0.002, 0.01, 0.006])
+    rng = np.random.default_rng(12)
+    inside, inside_unscaled, scales = [], [], []
+    for _ in range(200):
+        r = fit_voltages(V, mu + 3.0 * se * rng.standard_normal(mu.shape), se, model=sur, v_ref=85.0,
+                         guess=tuple(TRUTH))
+        err = np.abs(np.log([r.B, r.tau, r.kappa_E]) - np.log(TRUTH))
+        scale = r.settings["sigma_scale"]
+        assert scale == pytest.approx(max(1.0, math.sqrt(r.settings["chi2"] / r.settings["dof"])), rel=1e-12)
+        inside.append(err < r.sigma_rel)
+        inside_unscaled.append(err < r.sigma_rel / scale)
+        scales.append(scale)
+    cover, cover0 = np.mean(inside, axis=0), np.mean(inside_unscaled, axis=0)
+    # (a scale estimated from 6 degrees of freedom: Student-t, |t| < 1 in 64 %; unscaled, the
+    # truth within a third of the scatter: 26 %)
+    assert np.all((cover > 0.5) & (cover < 0.8)), cover
+    assert np.all(cover0 < 0.4), cover0
+    assert 2.5 < np.median(scales) < 3.5

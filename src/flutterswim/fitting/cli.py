@@ -102,8 +102,8 @@ def _cmd_fit(args) -> int:
               + (", the model's resolution: --no-extrapolate" if args.no_extrapolate else "") + ")",
               file=sys.stderr)
     s = res.sigma_rel
-    print(f"{out}: B = {res.B * 1e6:.4g} N mm^2 (+-{s[0]:.1%}), tau = {res.tau:.4g} s (+-{s[1]:.1%}), "
-          f"kappa_E = {res.kappa_E * 1e-3:.4g} 1/mm (+-{s[2]:.1%}) at {v:g} V; paper cost C = {res.paper_cost:.3g}; "
+    print(f"{out}: B = {res.B * 1e6:.4g} N mm^2 (+-{100 * s[0]:.2g}%), tau = {res.tau:.4g} s (+-{100 * s[1]:.2g}%), "
+          f"kappa_E = {res.kappa_E * 1e-3:.4g} 1/mm (+-{100 * s[2]:.2g}%) at {v:g} V; paper cost C = {res.paper_cost:.3g}; "
           f"{res.card.describe()}")
     _plot(args, res, summary, trials, v)
     return _verdict(res)
@@ -163,10 +163,11 @@ def _joint(args, base, trials, summary, out) -> int:
               + " come from fewer than 5 trials, so the reported 1-sigma is itself uncertain (the p-value allows "
               "for it: Student-t residuals)", file=sys.stderr)
     s, st = res.sigma_rel, res.settings
-    print(f"{out}: B = {res.B * 1e6:.4g} N mm^2 (+-{s[0]:.1%}), tau = {res.tau:.4g} s (+-{s[1]:.1%}), "
-          f"kappa_E = {res.kappa_E * 1e-3:.4g} 1/mm (+-{s[2]:.1%}) at {v_ref:g} V "
+    print(f"{out}: B = {res.B * 1e6:.4g} N mm^2 (+-{100 * s[0]:.2g}%), tau = {res.tau:.4g} s (+-{100 * s[1]:.2g}%), "
+          f"kappa_E = {res.kappa_E * 1e-3:.4g} 1/mm (+-{100 * s[2]:.2g}%) at {v_ref:g} V "
           f"({st['kappa_E_per_m_per_V'] * 1e-3:.4g} 1/mm per V) from {len(volts)} voltages; chi2 = {st['chi2']:.3g} "
           f"for {st['dof']} degrees of freedom (p = {st['p_value']:.3g}"
+          + (f"; 1-sigma widened x{st['sigma_scale']:.3g}, sqrt(chi2 / dof)" if st.get("sigma_scale", 1.0) > 1 else "")
           + ("; the data reject kappa_E proportional to V, or the model" if st["p_value"] < 0.01 else "")
           + f"); {res.card.describe()}")
     _plot(args, res, summary, trials, v_ref)
