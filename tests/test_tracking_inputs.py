@@ -59,7 +59,7 @@ def test_batch_corrupt_movie_is_a_failed_trial_and_the_others_are_kept(movie, tm
     rc = main(["track-batch", str(folder), "--px-per-mm", str(movie.px_per_mm), "--fps", "50", "--last", "3",
                "--out", str(out), "--quiet"])
     cap = capsys.readouterr()
-    assert rc == 0, cap.err
+    assert rc == 1, cap.err  # a failed trial fails the batch; the others are kept
     assert [r["sample"] for r in _rows(out)] == ["1", "3"]
     failed = _rows(tmp_path / "trials_failed.csv")
     assert len(failed) == 1 and "85V_sample2.mp4" in failed[0]["trial"]

@@ -162,7 +162,7 @@ def test_batch_csv_sidecar_pattern_failures_and_figure(movie, tmp_path, capsys):
     # rerun over our own CSV is allowed; the CLI gives the same table
     rc = main(["track-batch", str(folder), "--px-per-mm", str(movie.px_per_mm), "--fps", "50", "--out", str(out),
                "--quiet"])
-    assert rc == 0
+    assert rc == 1  # a failed trial fails the batch (the others are kept), as a failed point a sweep
     assert read_trials(out).values == pytest.approx(tr.values)
     said = capsys.readouterr()
     assert "tracked 3 of 4 trials" in said.out and "trials_failed.csv" in said.out

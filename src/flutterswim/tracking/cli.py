@@ -123,4 +123,5 @@ def _cmd_batch(args) -> int:
     failed_csv = f"; the failures and their reasons in {failures_path(out)}" if failed else ""
     print(f"tracked {len(rows)} of {len(rows) + len(failed)} trials; wrote {out}" + (f" and {args.plot}" if args.plot and rows else "")
           + failed_csv)
-    return 0 if rows else 1
+    # a failed trial fails the batch (exit 1), as a failed point fails a sweep; the others are kept
+    return 0 if rows and not failed else 1
