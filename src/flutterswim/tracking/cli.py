@@ -49,7 +49,9 @@ def register(subparsers) -> None:
     q.add_argument("--px-per-mm", type=float, default=None, help="image scale (unless in the sidecars)")
     q.add_argument("--fps", type=float, default=None, help="frame rate (unless in the sidecars or the movies)")
     q.add_argument("--out", default="trials.csv", help="CSV file")
-    q.add_argument("--pattern", default=None, help="regular expression with groups (?P<voltage>) and (?P<sample>)")
+    q.add_argument("--pattern", default=None,
+                   help="regular expression with groups (?P<voltage>) and (?P<sample>), searched in each trial's "
+                        "name without its extension (a folder of frames: its name)")
     q.add_argument("--plot", default=None, help="per-voltage mean +- SEM figure (Fig. 3e) to this PNG")
     q.add_argument("--last", type=int, default=N_CYCLES_MOVIE,
                    help=f"descriptors over the last N cycles (default {N_CYCLES_MOVIE})")
