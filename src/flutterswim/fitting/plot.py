@@ -18,6 +18,7 @@ def plot_fit(res, summary, trials, path=None, *, voltage: float | None = None):
     if path is not None:
         matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
 
     from .data import draw_trials
 
@@ -33,6 +34,8 @@ def plot_fit(res, summary, trials, path=None, *, voltage: float | None = None):
                     label="model at the fit (kappa_E ~ V)")
         else:
             ax.plot([voltage], [res.model[k]], "s", mfc="none", color="k", ms=8, label="model at the fit")
+    tip = res.settings.get("tip", "trailing")
+    axs[0, 2].set_ylabel(f"lateral peak-to-peak, {tip} end [mm]")
     axs[0, 0].legend(fontsize=8)
     names = (("B", 1e6, "B [N mm$^2$]"), ("tau", 1.0, r"$\tau$ [s]"), ("kappa_E", 1e-3, r"$\kappa_E$ [1/mm]"))
     best = (res.B, res.tau, res.kappa_E)
@@ -50,8 +53,9 @@ def plot_fit(res, summary, trials, path=None, *, voltage: float | None = None):
         ax.axvspan(best[k] * scale * (1 - res.sigma_rel[k]), best[k] * scale * (1 + res.sigma_rel[k]),
                    color="tab:red", alpha=0.15, label=r"$\pm 1\sigma$ (Jacobian)")
         ax.set_xlabel(lab + (f" at {res.settings['v_ref_V']:g} V" if joint and n == "kappa_E" else ""))
+        ax.xaxis.set_major_locator(MaxNLocator(4))  # (more overlapped on the tau axis)
         ax.legend(fontsize=7)
-    head = "fit"
+    head = f"fit at {voltage:g} V" if voltage is not None else "fit"
     if joint:
         st = res.settings
         head = (f"joint fit over {len(joint)} voltages, kappa_E ~ V: chi2 = {st['chi2']:.3g} for {st['dof']} "
