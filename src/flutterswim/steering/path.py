@@ -123,7 +123,7 @@ def figure8(size: float, start=(0.0, 0.0), heading: float = 0.0, n: int = 6000) 
     return RefPath(pts, s, np.array([], int), True, f"figure8({size:.4g} m)")
 
 
-def _number(text: str) -> float | None:
+def parse_number(text: str) -> float | None:
     try:
         return float(text)
     except ValueError:
@@ -134,13 +134,19 @@ def _number(text: str) -> float | None:
 _UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6}
 
 
+def header_unit(field: str, units, *, ignore_case: bool = False) -> str | None:
+    """The unit of ``units`` a CSV header field names after its name (``x_mm``, ``x [um]``,
+    ``t (ms)``), as written, or None (a name merely ending in one, ``xm``, names none)."""
+    alts = "|".join(sorted(map(re.escape, units), key=len, reverse=True))
+    m = re.fullmatch(rf"\s*[A-Za-z]\w*?(?:(?:_|\s*[\[(]|\s+)\s*({alts})\s*[\])]?)?\s*", field,
+                     flags=re.I if ignore_case else 0)
+    return m.group(1) if m and m.group(1) else None
+
+
 def _header_scale(row: list[str], where: str) -> float | None:
     """Metres per unit named by a header's first two columns (x_mm, y_mm; "x [um]"), or None
     when they name none (body lengths); columns naming two units are an error."""
-    units = []
-    for field in row[:2]:
-        m = re.fullmatch(r"\s*[A-Za-z]\w*?(?:(?:_|\s*[\[(]|\s+)\s*(mm|um|µm|μm|m)\s*[\])]?)?\s*", field)
-        units.append(m.group(1) if m and m.group(1) else None)
+    units = [header_unit(field, _UNITS) for field in row[:2]]
     named = {u for u in units if u is not None}
     if len(named) > 1:
         raise ParameterError(f"{where}: the header gives x and y different units ({', '.join(sorted(named))}); "
@@ -163,7 +169,7 @@ def waypoints_csv(path: str | Path, scale: float, start=(0.0, 0.0)) -> RefPath:
         for row in reader:
             if not any(field.strip() for field in row):
                 continue
-            if first and all(_number(field) is None for field in row):
+            if first and all(parse_number(field) is None for field in row):
                 first = False
                 unit = _header_scale(row, f"waypoints={str(p)!r}, line {reader.line_num}")
                 if unit is not None:
@@ -175,7 +181,7 @@ def waypoints_csv(path: str | Path, scale: float, start=(0.0, 0.0)) -> RefPath:
             if len(row) < 2:
                 raise ParameterError(f"{where}: {','.join(row)!r} has one field; two numbers x, y are "
                                      f"required{header}")
-            xy = [_number(row[0]), _number(row[1])]
+            xy = [parse_number(row[0]), parse_number(row[1])]
             if None in xy:
                 bad = row[0] if xy[0] is None else row[1]
                 raise ParameterError(f"{where}: {bad.strip()!r} is not a number; two numbers x, y are "

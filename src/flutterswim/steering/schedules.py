@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import csv
 import math
-import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,6 +15,7 @@ import numpy as np
 
 from .._validate import ParameterError, angle as _angle, finite, positive
 from ..field import Constant, Field, Piecewise, Schedule
+from .path import header_unit, parse_number
 
 __all__ = ["Rotation", "rotation", "step", "ramp", "from_csv", "add_field_options", "field_from_args"]
 
@@ -93,11 +93,10 @@ _REFUSED_UNITS = ("us", "min", "h", "hr", "tau", "grad", "turn", "turns", "rev")
 
 def _header_unit(field: str, allowed: dict, what: str, where: str) -> float:
     """The factor of the unit a header field names (``t_ms``, ``angle [rad]``), 1 if none."""
-    units = "|".join(sorted((*allowed, *_REFUSED_UNITS), key=len, reverse=True))
-    m = re.fullmatch(rf"\s*[A-Za-z]\w*?(?:(?:_|\s*[\[(]|\s+)\s*({units})\s*[\])]?)?\s*", field, flags=re.I)
-    unit = m.group(1).lower() if m and m.group(1) else None
+    unit = header_unit(field, (*allowed, *_REFUSED_UNITS), ignore_case=True)
     if unit is None:
         return 1.0
+    unit = unit.lower()
     if unit not in allowed:
         raise ParameterError(f"{where}: the header's {what} column {field.strip()!r} is in {unit}; allowed: "
                              f"{', '.join(allowed)} (no unit: {next(iter(allowed))})")
@@ -126,7 +125,7 @@ def from_csv(path: str | Path) -> Field:
             try:
                 vals = [float(v) for v in row[:3]]
             except ValueError:
-                if first and all(_is_text(v) for v in row[:3]):
+                if first and all(parse_number(v) is None for v in row[:3]):
                     first = False
                     t_scale = _header_unit(row[0], _TIME_UNITS, "time", where)
                     if len(row) > 1:
@@ -155,14 +154,6 @@ def from_csv(path: str | Path) -> Field:
     if a.shape[1] == 3:
         return Field(direction=direction, strength=Piecewise(t, a[:, 2], kind="linear"))
     return Field(direction=direction)
-
-
-def _is_text(v: str) -> bool:
-    try:
-        float(v)
-    except ValueError:
-        return True
-    return False
 
 
 def add_field_options(p) -> None:

@@ -69,7 +69,8 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     rng = np.random.default_rng(seed)
     sigma = noise_px * um_per_px * 1e-6
     # the path's length does not depend on where it starts: too long a path is refused first
-    est = 1.1 * laps * path_factory((0.0, 0.0), 0.0).length / reduced.U + 3 * reduced.period
+    probe = path_factory((0.0, 0.0), 0.0)  # the path's shape and length (not where it starts)
+    est = 1.1 * laps * probe.length / reduced.U + 3 * reduced.period
     if not est <= _MAX_DURATION_S:
         raise ParameterError(f"path: {laps:g} lap(s) at the swimmer's {reduced.U * 1e3:.3g} mm/s take {est:.3g} s; at "
                              f"most {_MAX_DURATION_S:g} s is simulated (a shorter path, or fewer laps)")
@@ -78,7 +79,7 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     # at the controller's radius: 0.36 body lengths RMS off a circle of 1.1); checked on the
     # path as made at the origin (its shape does not depend on where it starts), before any run
     r_turn = reduced.U / (rate_fraction * reduced.omega_max)
-    r_path = min_radius(fillet(path_factory((0.0, 0.0), 0.0), r_turn), r_turn)
+    r_path = min_radius(fillet(probe, r_turn), r_turn)
     if r_path < 0.95 * r_turn:
         warnings.warn(f"the path bends with a radius down to {r_path / params.l:.2f} body lengths, below the "
                       f"tightest turn the controller makes, U/({rate_fraction:g} Omega_max) = {r_turn / params.l:.2f} "
