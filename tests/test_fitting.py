@@ -456,7 +456,8 @@ def test_a_misfit_beyond_what_resolution_could_change_is_called_out_of_reach():
     (data with the advance 1 % of the model's: the message had asked for more segments)."""
     from dataclasses import replace as dc_replace
 
-    from flutterswim.fitting.fit import RESOLUTION_MISS_FACTOR, _stalled, refine_while_stalled
+    from flutterswim.fitting.fit import _stalled, refine_while_stalled
+    from flutterswim.fitting.reach import RESOLUTION_MISS_FACTOR
     from flutterswim.fitting.surrogate import ScalingSurrogate
 
     sur = ScalingSurrogate(BASE)

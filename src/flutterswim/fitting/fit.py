@@ -23,7 +23,7 @@ import numpy as np
 from .._validate import ParameterError, positive, positive_int
 from ..params import Parameters, preset
 from .model import DescriptorModel, NotSwimming, OutsideModel, Unresolved, to_identifiable, to_physical
-from .reach import MAX_FAILED_IN_A_ROW, MAX_FAILED_POINTS, Reach, Stuck  # noqa: F401 (the limits: public here)
+from .reach import MAX_FAILED_IN_A_ROW, MAX_FAILED_POINTS, Reach, Stuck, beyond_resolution  # noqa: F401 (the limits: public here)
 from .uncertainty import NAMES, covariance, identifiability_card
 
 __all__ = ["FitResult", "fit", "PAPER_GUESS", "paper_cost"]
@@ -215,28 +215,6 @@ def _stalled(res: "FitResult", model) -> bool:
     return not res.paper_cost <= STALL_PAPER_C and not res.at_bound
 
 
-#: how many times the last unresolved stroke's change from N to 2N segments (plus 3 SEM) a
-#: descriptor may miss by and still be blamed on the resolution (Richardson's error is a third
-#: of the change at order 2; twice the change is a generous bound for strokes not yet in it)
-RESOLUTION_MISS_FACTOR = 2.0
-
-
-def _beyond_resolution(res: "FitResult", change: float) -> str | None:
-    """The descriptors the best point misses by more than the unresolved strokes' change with
-    resolution could explain (``change``: relative, N to 2N segments), in words, or None."""
-    if not change > 0 or not np.all(np.isfinite(res.sem)):
-        return None
-    meas, mod, sem = (np.ravel(a) for a in (res.measured, res.model, res.sem))
-    allowed = RESOLUTION_MISS_FACTOR * change * np.abs(mod) + 3.0 * sem
-    units = ("s", "mm", "mm") * (meas.size // 3)
-    out = [f"{n} {m:.4g} {u} measured, {y:.4g} {u} in the model ({y / m:.3g} times)"
-           for n, m, y, u, a in zip(res._descriptor_names(), meas, mod, units, allowed) if abs(y - m) > a]
-    if not out:
-        return None
-    return "; ".join(out) + (f", misses beyond {RESOLUTION_MISS_FACTOR:g} x the {100 * change:.3g} % by which the "
-                             "unresolved strokes there change with resolution")
-
-
 def refine_while_stalled(run, model, stalled, misfit):
     """``run(model)`` -> FitResult, repeated from twice the segments (``model.finer()``) while
     ``stalled(res, model)``: the fit hit strokes the model does not resolve and ended with a
@@ -259,7 +237,7 @@ def refine_while_stalled(run, model, stalled, misfit):
             break
         finer = model.finer()
         if finer is None:
-            far = _beyond_resolution(res, getattr(model, "last_change", 0.0))
+            far = beyond_resolution(res, getattr(model, "last_change", 0.0))
             if far:
                 return replace(res, converged=False, message=(
                     f"not a fit: the data are out of the model's reach: at the best point it found, {far}; more "

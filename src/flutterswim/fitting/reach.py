@@ -21,7 +21,7 @@ import numpy as np
 
 from .model import MAX_REFINEMENT_CHANGE
 
-__all__ = ["Reach", "Stuck", "MAX_FAILED_IN_A_ROW", "MAX_FAILED_POINTS", "Z_MARGIN"]
+__all__ = ["Reach", "Stuck", "beyond_resolution", "MAX_FAILED_IN_A_ROW", "MAX_FAILED_POINTS", "Z_MARGIN"]
 
 #: trial points in a row without a stable stroke after which a fit stops
 MAX_FAILED_IN_A_ROW = 6
@@ -86,3 +86,26 @@ class Reach:
             return None
         return ("; ".join(out) + f" over the {self.n_strokes} strokes the fit computed ({self.failed} trial points "
                 "had none); more segments would not change this")
+
+
+#: how many times the last unresolved stroke's change from N to 2N segments (plus 3 SEM) a
+#: descriptor may miss by and still be blamed on the resolution (Richardson's error is a third
+#: of the change at order 2; twice the change is a generous bound for strokes not yet in it)
+RESOLUTION_MISS_FACTOR = 2.0
+
+
+def beyond_resolution(res, change: float) -> str | None:
+    """The descriptors a fit's best point (``res``: a FitResult) misses by more than the
+    unresolved strokes' change with resolution could explain (``change``: relative, N to 2N
+    segments), in words, or None."""
+    if not change > 0 or not np.all(np.isfinite(res.sem)):
+        return None
+    meas, mod, sem = (np.ravel(a) for a in (res.measured, res.model, res.sem))
+    allowed = RESOLUTION_MISS_FACTOR * change * np.abs(mod) + Z_MARGIN * sem
+    units = _UNITS * (meas.size // 3)
+    out = [f"{n} {m:.4g} {u} measured, {y:.4g} {u} in the model ({y / m:.3g} times)"
+           for n, m, y, u, a in zip(res._descriptor_names(), meas, mod, units, allowed) if abs(y - m) > a]
+    if not out:
+        return None
+    return "; ".join(out) + (f", misses beyond {RESOLUTION_MISS_FACTOR:g} x the {100 * change:.3g} % by which the "
+                             "unresolved strokes there change with resolution")
