@@ -71,3 +71,22 @@ def test_cli_reports_bad_input_by_name(tmp_path):
     out = subprocess.run([sys.executable, "-m", "flutterswim.cli", "simulate", "--segments", "2", "--t-end", "1",
                           "--out", str(tmp_path / "x.nc"), "--quiet"], capture_output=True, text=True)
     assert out.returncode == 2 and "--segments=2" in out.stderr
+
+
+def test_a_fixed_time_run_that_ends_still_and_bent_is_named():
+    """simulate --t-end after a field step can end trapped in a bent equilibrium; it printed
+    'completed' alone. The note names it; a swimming run and a straight still one get none."""
+    from types import SimpleNamespace
+
+    from flutterswim.cli import _still_and_bent
+
+    t = np.linspace(0.0, 25.0, 1001)
+    s = np.linspace(0.0, 1.0, 25)
+    field = np.full(t.size, np.pi / 2)
+    bent = np.pi / 2 + np.outer(np.ones(t.size), -np.pi * (1 - s))  # a hairpin, still
+    swim = np.pi / 2 + 0.8 * np.sin(2 * np.pi * t / 0.38)[:, None] * (s - 0.5)[None]
+    straight = np.pi / 2 + 1e-6 * np.sin(2 * np.pi * t / 0.38)[:, None] * np.ones(s.size)
+    note = _still_and_bent(SimpleNamespace(t=t, theta=bent, field_angle=field))
+    assert "trapped in a bent equilibrium" in note and "180 degrees" in note
+    assert _still_and_bent(SimpleNamespace(t=t, theta=swim, field_angle=field)) == ""
+    assert _still_and_bent(SimpleNamespace(t=t, theta=straight, field_angle=field)) == ""

@@ -1,6 +1,7 @@
-"""A sweep's records are in its base's units whatever the axes: an eta_par or eta_perp axis on a
-physical base runs its points as dimensionless groups, and their records must still be in s and
-mm (they were stored in tau and 1e-3 l under the names and units of s and mm)."""
+"""A sweep's records: in its base's units whatever the axes (an eta_par or eta_perp axis on a
+physical base runs its points as dimensionless groups; their records were stored in tau and
+1e-3 l under the names and units of s and mm), each with why the point ended as it did, and
+the CLI's exit status when points are missing."""
 
 from dataclasses import asdict
 
@@ -70,22 +71,3 @@ def test_every_point_says_why_it_ended_as_it_did(tmp_path):
                progress=False)
     assert list(ds["reason"].values[:2]) == ["settled at chi=1", "settled at chi=2"]
     assert "boom" in ds["reason"].values[2] and ds["failed"].values.tolist() == [False, False, True]
-
-
-def test_a_fixed_time_run_that_ends_still_and_bent_is_named():
-    """simulate --t-end after a field step can end trapped in a bent equilibrium; it printed
-    'completed' alone. The note names it; a swimming run and a straight still one get none."""
-    from types import SimpleNamespace
-
-    from flutterswim.cli import _still_and_bent
-
-    t = np.linspace(0.0, 25.0, 1001)
-    s = np.linspace(0.0, 1.0, 25)
-    field = np.full(t.size, np.pi / 2)
-    bent = np.pi / 2 + np.outer(np.ones(t.size), -np.pi * (1 - s))  # a hairpin, still
-    swim = np.pi / 2 + 0.8 * np.sin(2 * np.pi * t / 0.38)[:, None] * (s - 0.5)[None]
-    straight = np.pi / 2 + 1e-6 * np.sin(2 * np.pi * t / 0.38)[:, None] * np.ones(s.size)
-    note = _still_and_bent(SimpleNamespace(t=t, theta=bent, field_angle=field))
-    assert "trapped in a bent equilibrium" in note and "180 degrees" in note
-    assert _still_and_bent(SimpleNamespace(t=t, theta=swim, field_angle=field)) == ""
-    assert _still_and_bent(SimpleNamespace(t=t, theta=straight, field_angle=field)) == ""

@@ -46,16 +46,13 @@ def _parse_range(text: str) -> tuple[str, float, float]:
 
 
 def _cmd_branch(args) -> int:
+    from .. import defaults
     from .._paths import check_output_file
+    from .._validate import ParameterError, positive_int
     from ..params import preset
-    from .._validate import positive_int
-    from .continuation import continue_orbits
+    from .continuation import BRANCH_STEPS, continue_orbits
     from .linear import hopf_bracket, hopf_point
     from .parameter import Axis
-    from .. import defaults
-    from .continuation import BRANCH_STEPS
-
-    from .._validate import ParameterError
 
     name, lo, hi = _parse_range(args.range)
     params = preset(args.preset)

@@ -15,13 +15,17 @@ from .._validate import ParameterError
 __all__ = ["plot_sweep", "critical_ratio", "discrete_critical_ratio"]
 
 
+def _spec(ds):
+    from .spec import SweepSpec
+
+    return SweepSpec.from_dict(json.loads(ds.attrs["sweep_spec"]))
+
+
 def critical_ratio(ds) -> float:
     """kappa_E,cr / kappa_E of the sweep's base (linear stability; NaN if unavailable)."""
     from ..params import Parameters
-    from .spec import SweepSpec
 
-    spec = SweepSpec.from_dict(json.loads(ds.attrs["sweep_spec"]))
-    b = spec.base
+    b = _spec(ds).base
     try:
         from ..stability import critical_chi
 
@@ -35,9 +39,7 @@ def discrete_critical_ratio(ds) -> tuple[float, int]:
     """(kappa_E / kappa_E of the base at the Hopf point of the discrete model the sweep's points
     ran with, its number of segments N); NaN if unavailable. The sweep's points swim from this
     ratio on, not from the continuum's (0.6835 at N = 24 against 0.6865)."""
-    from .spec import SweepSpec
-
-    spec = SweepSpec.from_dict(json.loads(ds.attrs["sweep_spec"]))
+    spec = _spec(ds)
     n = int(spec.settings.n_segments)
     try:
         from ..orbits.linear import hopf_point

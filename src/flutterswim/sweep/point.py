@@ -44,7 +44,8 @@ def run_point(task: Mapping[str, Any]) -> dict[str, Any]:
 
     Returns {"values": {VARIABLES: float}, "final_state": array}."""
     st = PointSettings(**task["settings"])
-    params = point_params(base_from_dict(task["base"]), task["values"])
+    base = base_from_dict(task["base"])
+    params = point_params(base, task["values"])
 
     tunit = params.tau if isinstance(params, Parameters) else 1.0
     init = task.get("initial")
@@ -58,7 +59,6 @@ def run_point(task: Mapping[str, Any]) -> dict[str, Any]:
     if not np.all(np.isfinite(res.run.state_final)):
         raise PointFailure(f"non-finite state by t={res.run.t_final:.6g}")
     values = res.values()
-    base = base_from_dict(task["base"])
     if isinstance(base, Parameters) and not isinstance(params, Parameters):
         # eta_par / eta_perp on a physical base: the point ran as dimensionless groups (times in
         # tau, lengths in l); the store's units are the base's (s, mm), with its tau and l
