@@ -171,3 +171,49 @@ def test_resampling_is_spectrally_exact_for_the_stroke(paper_orbit):
     th = paper_orbit.theta
     back = _resample(_resample(th, 24), th.shape[0])
     assert np.max(np.abs(back - th)) < 1e-4 * np.abs(th).max()
+
+
+def test_irregular_onset_is_told_from_strokes_that_settle_slowly():
+    """The seed's test of the end angle's maxima: irregular motion (a chaotic map's maxima)
+    is named; a stroke still growing or decaying towards its amplitude, or one with two or three
+    maxima per period, is not."""
+    from flutterswim.orbits.periodic import _irregular_peaks
+
+    t = np.linspace(0.0, 40.0, 8001)
+    growing = (1.0 - 0.5 * np.exp(-t / 30.0)) * np.sin(2 * np.pi * t)
+    decaying = (1.0 + 0.3 * np.exp(-t / 20.0) * np.cos(0.7 * t)) * np.sin(2 * np.pi * t)
+    doubled = np.sin(2 * np.pi * t) + 0.4 * np.sin(np.pi * t)  # maxima alternate: period 2
+    tripled = np.sin(2 * np.pi * t) + 0.4 * np.sin(2 * np.pi * t / 3)
+    x, amp = 0.3, []
+    for _ in range(41):  # the logistic map at r = 3.9: chaotic amplitudes, one per cycle
+        x = 3.9 * x * (1 - x)
+        amp.append(x)
+    chaotic = np.repeat(amp, 200)[: t.size] * np.sin(2 * np.pi * t)
+    for q in (growing, decaying, doubled, tripled):
+        assert _irregular_peaks(q) is None
+    assert "maxima" in _irregular_peaks(chaotic)
+
+
+def test_strongly_bent_stroke_closes_at_the_round_off_floor():
+    """chi = 150 at N = 12: the stroke's curvatures reach ~100 and Newton's residual stalls
+    near 4e-9, above the absolute 1e-10; the orbit is accepted at 1e-10 of the state's scale
+    and closes under an independent simulation (it raised 'did not converge' before)."""
+    g = fs.PAPER.groups.replace(chi=150.0)
+    orb = periodic_orbit(g, n_segments=12)
+    u0 = orb.u0
+    scale = 1 + np.max(np.abs(u0))
+    assert orb.residual < 1e-10 * scale
+    run = simulate(g, orb.period, initial=InitialState.from_state(np.r_[0.0, 0.0, u0], 12), n_segments=12,
+                   n_frames=2, rtol=1e-11, atol=1e-13)
+    end = np.concatenate((run.theta[-1], run.kappa[-1]))
+    assert np.max(np.abs(end - u0)) < 1e-6 * scale
+
+
+@pytest.mark.slow
+def test_irregular_onset_raises_a_clear_error():
+    """chi = 220 at N = 12: the simulated onset never settles (the end angle's maxima wander
+    over most of its swing); periodic_orbit says so instead of failing inside Radau steps."""
+    from flutterswim.orbits.periodic import OrbitNotFound
+
+    with pytest.raises(OrbitNotFound, match="irregular"):
+        periodic_orbit(fs.PAPER.groups.replace(chi=220.0), n_segments=12)

@@ -173,7 +173,8 @@ def _check_params(params) -> None:
 def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: int = DEFAULT_STEPS,
                 tol: float = 1e-10, max_newton: int = 12, u_ref: np.ndarray | None = None,
                 warm: Flow | None = None, exact_multipliers: bool = True,
-                sensitivity: bool = False) -> tuple[np.ndarray, float, Flow, float, int]:
+                sensitivity: bool = False, floor: float | None = None
+                ) -> tuple[np.ndarray, float, Flow, float, int]:
     """Newton shooting from the guess (u0, period). Returns (u0, T, flow, residual, steps).
 
     Each Newton step integrates the variational equation with the step matrices formed at
@@ -190,7 +191,8 @@ def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: in
     first-order predictor, and the neighbour's monodromy serves as a chord (no derivative
     passes until the last, which is exact): Newton only if the chord converges slowly.
     ``sensitivity``: the returned flow carries the parameter sensitivity too (a seed for
-    the next neighbour)."""
+    the next neighbour). ``floor``: a residual below it counts as closed once Newton stops
+    reducing it tenfold per step (the round-off floor of the stiff steps)."""
     u = np.array(u0, float)
     T = float(period)
     u_ref = u.copy() if u_ref is None else np.asarray(u_ref, float)
@@ -232,7 +234,8 @@ def solve_orbit(system: ShapeSystem, u0: np.ndarray, period: float, *, steps: in
         res_before, res = res, float(np.max(np.abs(r)))
         if fl.monodromy is not None:
             mono = fl.monodromy
-        if res < tol:
+        stalled = floor is not None and res < floor and math.isfinite(res_before) and res > 0.1 * res_before
+        if res < tol or stalled:
             if exact_next or verify:
                 return u, T, fl, res, it
             if not exact_multipliers:
@@ -368,8 +371,11 @@ def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = 
     a simulation of the onset from the straight state (or, near the Hopf point where that
     onset is too slow, from the Hopf eigenvector by continuation). ``n_segments`` and
     ``steps`` default to the guess's, else to 48 segments (the paper's) and 32 Radau steps
-    per period. Raises :class:`OrbitNotFound` if the straight state is stable (no stroke to
-    find) or Newton fails."""
+    per period. ``tol``: the closing residual max|Phi(u) - u|; where Newton stalls above it
+    (round-off), ``tol`` (1 + max|u|) is enough (as in
+    :func:`~flutterswim.orbits.continuation.continue_orbits`). Raises
+    :class:`OrbitNotFound` if the straight state is stable (no stroke to find), the onset
+    simulated from it is irregular (no stroke to seed from), or Newton fails."""
     _check_params(params)
     if isinstance(guess, PeriodicOrbit):
         n_segments = guess.n_segments if n_segments is None else n_segments
@@ -404,15 +410,19 @@ def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = 
             raise ParameterError(f"guess has n_segments={guess.n_segments}; this orbit needs {n_segments}")
         u0, T = guess.u0, guess.period_dimensionless
         warm = guess.warm_start
+    # where Newton stalls, the closing residual relative to the state's scale is enough, as in
+    # continuation (continuation._scaled: an absolute 1e-10 can be below the round-off floor of
+    # strongly bent strokes; chi = 150 at N = 12 stalled at 4e-9)
+    floor = tol * (1.0 + float(np.max(np.abs(u0))))
     try:
         u, T, fl, res, it = solve_orbit(system, u0, T, steps=steps, tol=tol, max_newton=max_newton, warm=warm,
-                                        sensitivity=True)
+                                        sensitivity=True, floor=floor)
     except OrbitNotFound:
         if warm is None:
             raise
         # the predictor and chord from the neighbour failed (near a fold, say): Newton from its shape
         u, T, fl, res, it = solve_orbit(system, u0, T, steps=steps, tol=tol, max_newton=max_newton,
-                                        sensitivity=True)
+                                        sensitivity=True, floor=floor)
     return replace(orbit_from_flow(params, system, fl, res, it, steps),
                    warm_start=replace(fl, matrices=fl.matrices.without_jacobians()))
 
@@ -451,11 +461,36 @@ def seed_from_simulation(system: ShapeSystem, *, t_max: float = 80.0) -> tuple[n
     up = np.nonzero((q[:-1] - mean < 0) & (q[1:] - mean >= 0))[0]
     if up.size < 3:
         raise OrbitNotFound(f"no periodic stroke within {t_max:g} tau of the onset")
+    if sol.t[-1] >= t_max - 0.04:  # not stopped by the settled check
+        irregular = _irregular_peaks(q)
+        if irregular:
+            raise OrbitNotFound(f"no periodic stroke from the onset at chi={fil.chi:.6g}, eta_perp={fil.eta_perp:.6g}: "
+                                f"after {t_max:g} tau {irregular} (the motion is irregular, not a stroke); pass a "
+                                "neighbouring orbit as guess to look for an unstable one")
     i, j = up[-2], up[-1]
     frac = lambda k: (mean - q[k]) / (q[k + 1] - q[k])  # noqa: E731
     t_i, t_j = sol.t[i] + frac(i) * 0.02, sol.t[j] + frac(j) * 0.02
     u = sol.y[j, 2:] + frac(j) * (sol.y[j + 1, 2:] - sol.y[j, 2:])
     return u, float(t_j - t_i)
+
+
+def _irregular_peaks(q: np.ndarray, n_peaks: int = 10) -> str | None:
+    """What makes the last ``n_peaks`` maxima of the end angle ``q`` irregular, or None: they
+    differ by more than a fifth of the swing, rise and fall in turn more than twice (an onset
+    still growing or decaying towards its stroke moves them one way) and do not repeat every
+    1-4 maxima (a stroke with several maxima per period)."""
+    i = np.nonzero((q[1:-1] > q[:-2]) & (q[1:-1] >= q[2:]))[0] + 1
+    pk = q[i[-n_peaks:]]
+    if pk.size < n_peaks:
+        return None
+    swing = float(np.ptp(q[i[-n_peaks]:]))
+    if any(np.max(np.abs(pk[m:] - pk[:-m])) < 0.02 * swing for m in range(1, 5)):
+        return None  # a stroke of m maxima per period (period doubled, say)
+    turns = int(np.count_nonzero(np.diff(np.sign(np.diff(pk))) != 0))
+    if swing > 0 and np.ptp(pk) > 0.2 * swing and turns > 2:
+        return (f"the end angle's last {n_peaks} maxima still range over {np.ptp(pk):.3g} rad of its "
+                f"{swing:.3g} rad swing, rising and falling {turns} times")
+    return None
 
 
 def _settled_check(n: int, phi: float):
