@@ -159,12 +159,17 @@ def test_waypoints_header_units(tmp_path):
     p = tmp_path / "w.csv"
     L = 3.7e-3
     for header, metres in (("x,y", L), ("x_mm,y_mm", 1e-3), ("x [um],y [um]", 1e-6), ("x (mm),y (mm)", 1e-3),
-                           ("X_m,Y_m", 1.0), ("item,xm", L)):
+                           ("X_m,Y_m", 1.0), ("item,xm", L), ("x_cm,y_cm", 1e-2), ("x_bl,y_bl", L)):
         p.write_text(f"{header}\n0,0\n3,4\n")
         assert waypoints_csv(p, L).length == pytest.approx(5 * metres, rel=1e-6), header
     p.write_text("x_mm,y_um\n0,0\n3,4\n")
     with pytest.raises(ParameterError, match="different units"):
         waypoints_csv(p, L)
+    # a unit not known is refused, not read as body lengths (x_furlong and x [in] were)
+    for header in ("x_furlong,y_furlong", "x [in],y [in]", "x_km,y_km"):
+        p.write_text(f"{header}\n0,0\n3,4\n")
+        with pytest.raises(ParameterError, match=r"not allowed; allowed: m, cm, mm, um"):
+            waypoints_csv(p, L)
 
 
 def test_hopf_point_repr_is_short():

@@ -67,6 +67,9 @@ def test_csv_schedule_units_comments_and_inconsistent_rows(tmp_path):
                         ("t,angle\n0,0\n0,90\n", r"line 3.*must increase"),
                         ("t_min,angle\n0,0\n1,90\n", r"line 1.*t_min.*allowed: s, ms"),
                         ("t,angle_grad\n0,0\n1,90\n", r"angle_grad.*allowed: deg"),
+                        # any unit not taken, not only those listed as refused (were read as s)
+                        ("t_hours,angle_deg\n0,0\n1,90\n", r"t_hours.*in hours.*allowed: s, ms"),
+                        ("t [h],angle\n0,0\n1,90\n", r"'t \[h\]'.*allowed: s, ms"),
                         ("t,angle\n", "no rows")]:
         f.write_text(text)
         with pytest.raises(fs.ParameterError, match=words):

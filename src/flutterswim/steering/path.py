@@ -131,24 +131,36 @@ def parse_number(text: str) -> float | None:
 
 
 # units a waypoints header may give its columns (x_mm, y [um], ...), in metres
-_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6}
+_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6}
+# the default, named: body lengths
+_BODY_LENGTHS = ("bl", "l", "body_lengths")
 
 
-def header_unit(field: str, units, *, ignore_case: bool = False) -> str | None:
-    """The unit of ``units`` a CSV header field names after its name (``x_mm``, ``x [um]``,
-    ``t (ms)``), as written, or None (a name merely ending in one, ``xm``, names none)."""
-    alts = "|".join(sorted(map(re.escape, units), key=len, reverse=True))
-    m = re.fullmatch(rf"\s*[A-Za-z]\w*?(?:(?:_|\s*[\[(]|\s+)\s*({alts})\s*[\])]?)?\s*", field,
-                     flags=re.I if ignore_case else 0)
-    return m.group(1) if m and m.group(1) else None
+def header_unit(field: str) -> str | None:
+    """The unit a CSV header field names after its name (``x_mm``, ``x [um]``, ``t (ms)``,
+    ``angle deg``), as written, or None for a bare name (``x``; a name merely ending in a
+    unit, ``xm``, names none). Any word after the name counts, so a unit the reader does not
+    know (``x_cm`` where cm is not taken, ``t_hours``) is refused by the reader, not misread."""
+    m = re.fullmatch(r"\s*[A-Za-z][\w ]*?\s*[\[(]\s*([^\])]+?)\s*[\])]\s*", field)
+    if m is None:
+        m = re.fullmatch(r"\s*[A-Za-z]\w*?(?:_|\s+)([A-Za-zµμ]+)\s*", field)
+    return m.group(1) if m else None
 
 
 def _header_scale(row: list[str], where: str) -> float | None:
     """Metres per unit named by a header's first two columns (x_mm, y_mm; "x [um]"), or None
-    when they name none (body lengths); columns naming two units are an error."""
-    units = [header_unit(field, _UNITS) for field in row[:2]]
-    named = {u for u in units if u is not None}
-    if len(named) > 1:
+    when they name none (body lengths); an unknown unit, or columns naming two units, are errors."""
+    named = set()
+    for field in row[:2]:
+        unit = header_unit(field)
+        if unit is None or unit.lower() in _BODY_LENGTHS:
+            continue
+        if unit not in _UNITS and unit.lower() not in _UNITS:
+            raise ParameterError(f"{where}: the header's column {field.strip()!r} is in {unit!r}, which is not "
+                                 f"allowed; allowed: {', '.join(u for u in _UNITS if u != 'μm')} "
+                                 "(no unit: body lengths)")
+        named.add(unit if unit in _UNITS else unit.lower())
+    if len({_UNITS[u] for u in named}) > 1:
         raise ParameterError(f"{where}: the header gives x and y different units ({', '.join(sorted(named))}); "
                              "give both in one unit")
     return _UNITS[named.pop()] if named else None
@@ -158,7 +170,7 @@ def waypoints_csv(path: str | Path, scale: float, start=(0.0, 0.0)) -> RefPath:
     """Waypoints ``x, y`` from a CSV (in units of ``scale`` metres, e.g. body lengths),
     relative to the first. Blank lines are skipped; a first row none of whose fields is a
     number (``x,y``) is a header, whose columns may name their unit (``x_mm,y_mm``, ``x [um]``,
-    m, mm, um): the numbers are then in that unit."""
+    m, cm, mm, um; ``bl``: body lengths): the numbers are then in that unit; another unit is refused."""
     p = Path(path)
     if not p.is_file():
         raise ParameterError(f"waypoints={str(p)!r} is not a file")

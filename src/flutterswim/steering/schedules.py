@@ -85,15 +85,14 @@ def _ramp(angle: float, start: float, duration: float, phi0: float) -> Field:
 
 
 # units a field CSV's header may give its first two columns (t_ms, "angle [rad]"): factors to
-# seconds and to degrees; units recognised but not taken (t_min) are refused, not misread
+# seconds and to degrees; any other unit (t_min, t_hours) is refused, not misread
 _TIME_UNITS = {"s": 1.0, "ms": 1e-3}
 _ANGLE_UNITS = {"deg": 1.0, "degrees": 1.0, "rad": math.degrees(1.0)}
-_REFUSED_UNITS = ("us", "min", "h", "hr", "tau", "grad", "turn", "turns", "rev")
 
 
 def _header_unit(field: str, allowed: dict, what: str, where: str) -> float:
     """The factor of the unit a header field names (``t_ms``, ``angle [rad]``), 1 if none."""
-    unit = header_unit(field, (*allowed, *_REFUSED_UNITS), ignore_case=True)
+    unit = header_unit(field)
     if unit is None:
         return 1.0
     unit = unit.lower()
