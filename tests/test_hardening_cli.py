@@ -163,7 +163,9 @@ def test_interrupt_inside_a_compiled_kernel_exits_130(monkeypatch, capsys):
     monkeypatch.setattr(cli, "_describe", kernel_interrupted)
     assert cli.main(["describe", "x.nc"]) == 130
     assert "interrupted" in capsys.readouterr().err
-    assert not cli._interrupted(SystemError("no interrupt here"))
+    from flutterswim._interrupt import interrupted
+
+    assert not interrupted(SystemError("no interrupt here"))
 
 
 def test_negative_roi_is_a_value_not_an_option():

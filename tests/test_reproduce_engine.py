@@ -73,6 +73,34 @@ def test_failure_is_recorded_and_dependents_fail(tmp_path):
     assert Manifest.load(tmp_path).targets["bad"]["status"] == "failed"
 
 
+def _kernel_interrupted(ctx):
+    """Ctrl-C inside a numba kernel: a SystemError whose context is the interrupt."""
+    try:
+        raise KeyboardInterrupt
+    except KeyboardInterrupt:
+        raise SystemError("CPUDispatcher(<function jacobian>) returned a result with an exception set")  # noqa: B904 - the implicit context, as numba leaves it
+
+
+def test_interrupt_inside_a_compiled_kernel_stops_the_build(tmp_path):
+    """It was recorded as the target's failure ("FAILED: SystemError") and the next targets were
+    built; now the run stops as on any Ctrl-C, and the later target is not built."""
+    calls: list[str] = []
+    ts = [Target("k", "k", "", _kernel_interrupted, lambda s: {}), _counter_target("d", calls)]
+    with pytest.raises(KeyboardInterrupt):
+        build_targets(ts, tmp_path, Settings())
+    assert calls == []
+    assert "k" not in Manifest.load(tmp_path).targets
+
+
+def test_interrupt_inside_a_compiled_kernel_stops_a_sweep_point():
+    """A sweep point records any failure and goes on, but an interrupt inside a kernel stops it."""
+    from flutterswim.sweep.point import timed
+
+    with pytest.raises(KeyboardInterrupt):
+        timed(_kernel_interrupted, None)
+    assert timed(lambda task: 1 / 0, None)[1].startswith("ZeroDivisionError")
+
+
 SCRIPT = textwrap.dedent("""
     import sys, time
     from pathlib import Path

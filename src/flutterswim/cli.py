@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 from . import defaults
+from ._interrupt import interrupted
 
 PLOTS = ("ghosts", "swimmer", "kymograph", "descriptors", "summary")
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")
@@ -344,19 +345,6 @@ def _quiet_warnings() -> None:
     warnings.showwarning = show
 
 
-def _interrupted(exc: BaseException) -> bool:
-    """True if a KeyboardInterrupt is in the exception's chain (numba's dispatcher reports an
-    interrupt inside a kernel as "SystemError: ... returned a result with an exception set")."""
-    seen = set()
-    e: BaseException | None = exc
-    while e is not None and id(e) not in seen:
-        if isinstance(e, KeyboardInterrupt):
-            return True
-        seen.add(id(e))
-        e = e.__cause__ or e.__context__
-    return False
-
-
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
@@ -383,7 +371,7 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:
         return 1
     except Exception as exc:  # noqa: BLE001 - every error becomes one line (traceback with --debug)
-        if _interrupted(exc):  # Ctrl-C inside a compiled kernel surfaces as its SystemError
+        if interrupted(exc):  # Ctrl-C inside a compiled kernel surfaces as its SystemError
             print(f"flutterswim {args.command}: interrupted", file=sys.stderr)
             return 130
         if debug:

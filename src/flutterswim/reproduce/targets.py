@@ -17,6 +17,7 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable
 
+from .._interrupt import interrupted
 from .._validate import ParameterError
 from .io import sha256_file, write_json
 from .manifest import Manifest, code_hashes, input_key
@@ -224,6 +225,8 @@ def build_targets(targets: list[Target], out: Path, settings: Settings, *, log: 
         except KeyboardInterrupt:
             raise
         except Exception as exc:  # noqa: BLE001 - a failed target is recorded, the rest go on
+            if interrupted(exc):  # Ctrl-C inside a compiled kernel surfaces as its SystemError
+                raise KeyboardInterrupt from exc
             wall = time.perf_counter() - t0
             err = f"{type(exc).__name__}: {' '.join(str(exc).split())}"
             if os.environ.get("FLUTTERSWIM_DEBUG"):

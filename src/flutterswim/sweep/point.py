@@ -14,6 +14,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from .._interrupt import interrupted
 from ..initial import InitialState
 from ..params import Parameters
 from ..settle import OUTCOMES, Settled, settle
@@ -97,5 +98,7 @@ def timed(fn, task):
     except BaseException as e:  # noqa: BLE001 - any failure of a point is recorded, never raised
         if isinstance(e, (KeyboardInterrupt, SystemExit)):
             raise
+        if interrupted(e):  # Ctrl-C inside a compiled kernel surfaces as its SystemError
+            raise KeyboardInterrupt from e
         msg = f"{type(e).__name__}: {e}".strip()
         return None, msg or type(e).__name__, time.perf_counter() - t0
