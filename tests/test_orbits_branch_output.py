@@ -102,3 +102,23 @@ def test_a_guess_from_another_field_direction_is_turned_to_this_one():
     # and back: a guess at pi/2 for phi = 0
     back = periodic_orbit(g, guess=periodic_orbit(g, guess=o0, phi=math.pi / 2), phi=0.0)
     assert back.period == pytest.approx(o0.period, rel=1e-9)
+
+
+def test_orbits_limited_by_the_time_discretisation_are_called_out():
+    """Where the trivial multiplier is off 1 by more than the gauge (few steps per period, a
+    strongly bent stroke) the branch warns and counts those orbits; where it is not, it is silent."""
+    import warnings
+
+    gauge = 1e-6  # continuation.ACCURACY_GAUGE
+    for steps in (8, 32):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            br = continue_orbits(fs.PAPER.groups, "kappa_E_ratio", 1.3, n_points=3, n_segments=8, steps=steps)
+        err = np.array([o.trivial_multiplier_error for o in br.orbits])
+        ours = [w for w in caught if "trivial Floquet multiplier" in str(w.message)]
+        assert len(ours) == int(np.any(err > gauge))
+        assert br.to_dataset().attrs["n_inaccurate_orbits"] == np.count_nonzero(err > gauge)
+        if ours:
+            assert ours[0].filename == __file__  # points at the caller
+            assert f"{np.count_nonzero(err > gauge)} of {err.size} orbits" in str(ours[0].message)
+        assert steps == 32 or ours  # 8 steps per period do not resolve this stroke to the gauge
