@@ -76,7 +76,7 @@ def test_lyapunov_coefficient_sign_and_amplitude_law(near_onset):
     assert all(o[1].stable for o in orbits)
     # amplitude^2 = s d + c d^2 near the Hopf point: s from the branch against the normal form
     s, c = np.linalg.lstsq(np.stack((d, d * d), 1), a2, rcond=None)[0]
-    assert s == pytest.approx(nf.amplitude2_slope, rel=0.05)
+    assert s == pytest.approx(nf.amplitude2_slope_rms, rel=0.05)
     # the period tends to the Hopf period
     T = np.array([o[1].period for o in orbits])
     T0 = np.polyfit(d, T, 2)[-1]
@@ -195,7 +195,7 @@ def test_periodic_orbit_near_onset_without_a_guess():
     d = 0.005 * hp.value
     orb = periodic_orbit(fs.PAPER.groups.replace(chi=hp.value + d), n_segments=16, steps=16)
     assert orb.stable and orb.residual < 1e-10
-    assert orb.amplitude ** 2 == pytest.approx(nf.amplitude2_slope * d, rel=0.05)
+    assert orb.amplitude ** 2 == pytest.approx(nf.amplitude2_slope_rms * d, rel=0.05)
 
 
 def test_continuation_starts_at_a_nearly_degenerate_hopf_point():

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -22,7 +23,8 @@ from .._validate import ParameterError, finite, positive, positive_int
 from .linear import hopf_bracket, hopf_point
 from .normal_form import normal_form
 from .parameter import Axis
-from .periodic import OrbitNotFound, PeriodicOrbit, orbit_from_flow
+from ..params import Parameters
+from .periodic import OrbitNotFound, PeriodicOrbit, _scales, orbit_from_flow
 from .shooting import StepFailure, flow
 from ._threads import one_blas_thread
 from .system import ShapeSystem
@@ -35,13 +37,20 @@ N_MULTIPLIERS = 6
 #: 1.4e-2); the trivial multiplier within 1e-9 of 1 from the Hopf point to kappa_E ratio 2
 #: (24 steps: period 1.2e-6, advance 3.6e-5, trivial multiplier 1.2e-7 off at ratio 2).
 BRANCH_STEPS = 32
+#: |trivial Floquet multiplier - 1| above which an orbit's time discretisation is called out
+#: (a warning from continue_orbits, the dataset's n_inaccurate_orbits): at 32 steps it stays
+#: below 1e-8 up to kappa_E ratio 2 but reaches 6e-6..1.8e-4 on strongly bent strokes (ratio
+#: 1.95 upper branch, ratio 3; period errors 1.6e-5..4.6e-5 against 128 steps)
+ACCURACY_GAUGE = 1e-6
 #: Largest amplitude (along the unit Hopf eigenvector) of the branch's first orbit
 START_AMPLITUDE_CAP = 6.0
 
 
 @dataclass(frozen=True)
 class Branch:
-    """The orbits along the branch, with the Hopf point and normal form."""
+    """The orbits along the branch, with the Hopf point and normal form. ``amplitude2_slope``:
+    d(amplitude^2)/d(parameter) at the Hopf point for the orbits' RMS ``amplitude``
+    (:attr:`NormalForm.amplitude2_slope_rms`)."""
 
     axis: Axis
     values: np.ndarray
@@ -61,19 +70,28 @@ class Branch:
 
         name = self.axis.name
         orbs = self.orbits
-        si = bool(orbs) and orbs[0].units == "SI"
+        si = isinstance(self.axis.base, Parameters)
         tu, lu = ("s", "m") if si else ("tau", "l")
+        tau_hopf = _scales(self.axis.at(self.hopf_value))[0]  # (1 for groups: periods in tau)
 
         def col(key):
             return np.array([getattr(o, key) for o in orbs], dtype=float)
 
         data = {
             "period": (col("period"), tu, "period of the stroke"),
-            "advance": (col("advance"), lu, "net advance per cycle"),
+            "advance": (col("advance"), lu, "net advance per cycle (its magnitude; its direction: swim_direction)"),
+            "swim_direction": (np.degrees(col("swim_direction")), "degree",
+                               "direction of the net advance per cycle, anticlockwise from the field (x axis), "
+                               "in (-180, 180]"),
+            "leading_end": (np.array([o.leading_end == "s=l" for o in orbs], dtype="i1"), "1",
+                            "the end of the filament that leads along swim_direction (lateral_leading is "
+                            "its excursion)"),
             "speed": (col("speed"), f"{lu} {tu}-1", "mean swimming speed"),
             "lateral_leading": (col("lateral_leading"), lu, "lateral peak-to-peak excursion of the leading end"),
             "lateral_trailing": (col("lateral_trailing"), lu, "lateral peak-to-peak excursion of the trailing end"),
-            "amplitude": (col("amplitude"), "1", "2 |first Fourier coefficient of the shape (theta, kappa)|"),
+            "amplitude": (col("amplitude"), "1",
+                          "2 |first Fourier coefficient of the shape (theta, kappa l)| / sqrt(2N+1): RMS over the "
+                          "2N+1 shape components of the first harmonic's amplitude (resolution independent)"),
             "nonreciprocity": (col("nonreciprocity"), "1", "signed area of the stroke in the first two shape modes"),
             "self_intersecting": (col("self_intersecting").astype("i1"), "1", "filament crosses itself during the stroke (0/1)"),
             "stable": (col("stable").astype("i1"), "1", "orbit stable: all non-trivial Floquet multipliers inside the unit circle (0/1)"),
@@ -89,6 +107,8 @@ class Branch:
         )
         ds["multiplier_real"] = ((name, "multiplier"), mults.real, {"units": "1", "long_name": "Floquet multipliers (largest moduli), real part"})
         ds["multiplier_imag"] = ((name, "multiplier"), mults.imag, {"units": "1", "long_name": "Floquet multipliers (largest moduli), imaginary part"})
+        ds["leading_end"].attrs.update({"flag_values": np.array([0, 1], dtype="i1"),
+                                        "flag_meanings": "s_equals_0 s_equals_l"})
         ds = ds.assign_coords(multiplier=("multiplier", np.arange(N_MULTIPLIERS), {"units": "1", "long_name": "rank by modulus"}))
         crossings = self.multiplier_crossings()
         from .. import __version__
@@ -100,17 +120,27 @@ class Branch:
             "parameter": name,
             f"hopf_{name}": self.hopf_value,
             "hopf_omega_per_tau": self.hopf_omega,
-            "hopf_period": (2 * math.pi / self.hopf_omega) * (orbs[0].period / orbs[0].period_dimensionless if orbs else 1.0),
+            "hopf_period": (2 * math.pi / self.hopf_omega) * tau_hopf,
+            "hopf_period_units": tu,
             "lyapunov_coefficient": self.lyapunov_coefficient,
             "lyapunov_coefficient_comment": (
                 "first Lyapunov coefficient l1 [1/tau] for the critical eigenvector q normalised to unit Euclidean "
-                "norm over the 2N state components: its size scales like 1/N (N l1 converges); its sign decides "
+                "norm over the 2N+1 shape components: its size scales like 1/N (N l1 converges); its sign decides "
                 "the bifurcation"),
             "lyapunov_amplitude2_slope": self.amplitude2_slope,
+            "lyapunov_amplitude2_slope_comment": (
+                f"d(amplitude^2)/d({name}){'' if self.axis.units == '1' else f' [1/({self.axis.units})]'} at the "
+                "Hopf point from the normal form, for "
+                "the RMS amplitude (the amplitude variable's definition)"),
             "bifurcation": "supercritical" if self.lyapunov_coefficient < 0 else "subcritical",
             "multiplier_crossings": "; ".join(f"{name}={v:.6g}" for v in crossings) if crossings else "none",
             "n_segments": self.n_segments,
             "steps_per_period": self.steps,
+            "n_inaccurate_orbits": int(np.count_nonzero(col("trivial_multiplier_error") > ACCURACY_GAUGE)),
+            "n_inaccurate_orbits_comment": (
+                f"orbits whose trivial Floquet multiplier is off 1 by more than {ACCURACY_GAUGE:g} (see "
+                "trivial_multiplier_error): the time discretisation limits their accuracy; more steps per "
+                "period (steps=) checks them"),
             "message": self.message,
         })
         return ds
@@ -229,8 +259,21 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
         ds = min(ds_max, max(ds, step_ds) * (1.5 if it <= 4 else 0.7 if it >= 7 else 1.0))
     if bar is not None:
         bar.close()
+    _warn_inaccurate(parameter, values, orbits, steps)
     return Branch(axis, np.array(values), orbits, hopf.value, hopf.omega, nf.lyapunov_coefficient,
-                  nf.amplitude2_slope, n_segments, steps, time.perf_counter() - t_start, message)
+                  nf.amplitude2_slope_rms, n_segments, steps, time.perf_counter() - t_start, message)
+
+
+def _warn_inaccurate(parameter, values, orbits, steps) -> None:
+    """Warn (UserWarning) if some orbits' trivial multiplier is off 1 by more than ACCURACY_GAUGE."""
+    err = np.array([o.trivial_multiplier_error for o in orbits])
+    bad = np.nonzero(err > ACCURACY_GAUGE)[0]
+    if bad.size:
+        v = np.asarray(values)[bad]
+        warnings.warn(f"{bad.size} of {err.size} orbits ({parameter} {v.min():.6g} to {v.max():.6g}) have the trivial "
+                      f"Floquet multiplier off 1 by up to {err.max():.2g} (> {ACCURACY_GAUGE:g}): {steps} steps per "
+                      "period limit their accuracy there; continue with more (steps=) to check them",
+                      UserWarning, stacklevel=4)  # (the caller of continue_orbits)
 
 
 def _amplitude_start(axis, n, steps, hopf, amp, p_guess, tol, max_newton):

@@ -18,8 +18,10 @@ A^-1 B(q, conj q) is taken as the least-squares solution; its kernel part would 
 
 Near the Hopf point the stroke's complex amplitude z (x = x0 + z q + c.c.) obeys
 dz/dt = (i w + g' d) z + c1 |z|^2 z, with g' = d Re(lambda)/d(parameter) and d the distance
-to the Hopf point: the branch has |z|^2 = -g' d / Re(c1), so the orbit amplitude
-2 |first Fourier coefficient| = 2|z| obeys amplitude^2 = -4 g' d / Re(c1).
+to the Hopf point: the branch has |z|^2 = -g' d / Re(c1), so 2 |first Fourier coefficient
+of the shape| = 2|z| (q of unit norm) obeys (2|z|)^2 = -4 g' d / Re(c1). The orbit's
+``amplitude`` is that over sqrt(2N + 1) (the RMS over the 2N + 1 shape components, which does
+not grow with N): amplitude^2 = -4 g' d / (Re(c1) (2N + 1)).
 """
 
 from __future__ import annotations
@@ -36,9 +38,11 @@ __all__ = ["NormalForm", "normal_form"]
 
 @dataclass(frozen=True)
 class NormalForm:
-    """c1 and l1 = Re(c1)/omega; ``amplitude2_slope`` = d(amplitude^2)/d(parameter) on the
-    branch; ``supercritical`` if l1 < 0 (the branch is stable and exists on the unstable side).
-    c1 and l1 are for q of unit Euclidean norm over the 2N state components, so they scale
+    """c1 and l1 = Re(c1)/omega; ``amplitude2_slope`` = d((2|z|)^2)/d(parameter) on the
+    branch, for the amplitude 2|z| along the unit eigenvector q (it scales like N, as c1's
+    1/N); ``amplitude2_slope_rms`` = amplitude2_slope / (2N + 1), the slope of the orbits'
+    ``amplitude``^2 (:attr:`PeriodicOrbit.amplitude`, resolution independent); ``supercritical`` if l1 < 0 (the branch is stable and exists on the unstable side).
+    c1 and l1 are for q of unit Euclidean norm over the 2N + 1 shape components, so they scale
     like 1/N (N l1 converges: -6.05e-5, -3.24e-5, -1.66e-5 at N = 24, 48, 96 at the paper's
     point); their sign is the model's, and the amplitude law does not depend on it."""
 
@@ -47,6 +51,7 @@ class NormalForm:
     amplitude2_slope: float
     supercritical: bool
     direction: int  # +1: the branch exists for parameter values above the Hopf point
+    amplitude2_slope_rms: float
 
 
 def _b(f, v: np.ndarray, eps: float) -> np.ndarray:
@@ -101,4 +106,4 @@ def normal_form(hopf: HopfPoint, *, eps_b: float = 1e-3, eps_c: float = 1e-2) ->
     l1 = float(c1.real / w)
     slope = float(-4 * hopf.growth_slope / c1.real)
     direction = 1 if slope > 0 else -1
-    return NormalForm(complex(c1), l1, abs(slope), l1 < 0, direction)
+    return NormalForm(complex(c1), l1, abs(slope), l1 < 0, direction, abs(slope) / q.size)

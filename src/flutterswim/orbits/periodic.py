@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .._validate import ParameterError, positive, positive_int
+from .._validate import ParameterError, finite, positive, positive_int
 from ..params import Groups, Parameters
 from .shooting import Flow, StepFailure, flow
 from ._threads import one_blas_thread
@@ -56,7 +56,10 @@ class PeriodicOrbit:
     leading_end: str  # "s=0" or "s=l": the end that leads
     nonreciprocity: float
     self_intersecting: bool
-    amplitude: float  # 2 |first Fourier coefficient of the shape| (dimensionless)
+    #: 2 |first Fourier coefficient of the shape u = (theta, kappa l)| / sqrt(2N + 1): the root
+    #: mean square over the 2N + 1 shape components of the first harmonic's amplitude
+    #: (dimensionless; independent of the resolution, as the sum over components is not)
+    amplitude: float
     multipliers: np.ndarray
     trivial_multiplier_error: float
     stable: bool
@@ -67,6 +70,8 @@ class PeriodicOrbit:
     kappa: np.ndarray = field(repr=False)
     r0: np.ndarray = field(repr=False)  # (M, 2), dimensionless, r(0) = 0 at phase 0
     units: str = "SI"
+    #: field direction (radians) the orbit was computed at; its swim_direction is in the same frame
+    phi: float = 0.0
     #: the converged flow (stages, step matrices, monodromy, parameter sensitivity): a warm
     #: start for a neighbouring orbit (``periodic_orbit(params, guess=this)``). It holds the
     #: step matrices (about 2 MB at N = 24, 9 MB at N = 48): :meth:`compact` drops it, and
@@ -84,6 +89,7 @@ class PeriodicOrbit:
         return state
 
     def __setstate__(self, state):
+        state = {"phi": 0.0, **state}  # (orbits pickled before phi was recorded: phi = 0)
         for k, v in state.items():
             object.__setattr__(self, k, v)
 
@@ -302,18 +308,18 @@ def orbit_from_flow(params, system: ShapeSystem, fl: Flow, residual: float, n_ne
     i1 = int(np.argmin(np.abs(mult - 1.0)))
     others = np.delete(np.abs(mult), i1)
     shape = np.concatenate((theta, kappa), axis=1)
-    c1 = np.fft.fft(shape, axis=0)[1] / shape.shape[0]
+    c1 = np.fft.fft(shape, axis=0)[1] / shape.shape[0]  # (2N + 1,)
     tau, length = _scales(params)
     orb = PeriodicOrbit(
         params=params, n_segments=n, steps=steps, period=T * tau, advance=adv * length,
         speed=adv / T * length / tau, swim_direction=float(math.atan2(e[1], e[0])),
         lateral_leading=leading * length, lateral_trailing=trailing * length,
         leading_end="s=l" if s_l_leads else "s=0", nonreciprocity=float("nan"),
-        self_intersecting=False, amplitude=float(2 * np.linalg.norm(c1)), multipliers=mult,
+        self_intersecting=False, amplitude=float(2 * np.linalg.norm(c1) / math.sqrt(c1.size)), multipliers=mult,
         trivial_multiplier_error=float(abs(mult[i1] - 1.0)),
         stable=bool(others.size == 0 or others.max() < 1.0), residual=residual, n_newton=n_newton,
         phase=np.arange(y.shape[0]) / y.shape[0], theta=theta, kappa=kappa, r0=r0,
-        units="SI" if isinstance(params, Parameters) else "dimensionless",
+        units="SI" if isinstance(params, Parameters) else "dimensionless", phi=float(system.phi),
     )
     return _with_shape_descriptors(orb)
 
@@ -371,7 +377,9 @@ def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = 
     a simulation of the onset from the straight state (or, near the Hopf point where that
     onset is too slow, from the Hopf eigenvector by continuation). ``n_segments`` and
     ``steps`` default to the guess's, else to 48 segments (the paper's) and 32 Radau steps
-    per period. ``tol``: the closing residual max|Phi(u) - u|; where Newton stalls above it
+    per period. ``phi``: the field direction (radians); a guess computed at another direction
+    is turned to this one (the model is invariant under turning the filament with the field:
+    theta + (phi - guess.phi), kappa unchanged). ``tol``: the closing residual max|Phi(u) - u|; where Newton stalls above it
     (round-off), ``tol`` (1 + max|u|) is enough (as in
     :func:`~flutterswim.orbits.continuation.continue_orbits`). Raises
     :class:`OrbitNotFound` if the straight state is stable (no stroke to find), the onset
@@ -383,6 +391,7 @@ def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = 
     n_segments = positive_int("n_segments", DEFAULT_SEGMENTS if n_segments is None else n_segments, minimum=4)
     steps = positive_int("steps", DEFAULT_STEPS if steps is None else steps, minimum=8)
     tol = positive("tol", tol)
+    phi = finite("phi", phi, strict=True)
     system = ShapeSystem.of(params, n_segments, phi)
     warm = None
     if guess is None:
@@ -410,6 +419,13 @@ def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = 
             raise ParameterError(f"guess has n_segments={guess.n_segments}; this orbit needs {n_segments}")
         u0, T = guess.u0, guess.period_dimensionless
         warm = guess.warm_start
+        turn = phi - getattr(guess, "phi", 0.0)
+        if turn != 0.0:
+            # the guess's stroke turned with the field: exactly this orbit's (its flow, at the
+            # other direction, is no warm start)
+            u0 = u0.copy()
+            u0[:n_segments] += turn
+            warm = None
     # where Newton stalls, the closing residual relative to the state's scale is enough, as in
     # continuation (continuation._scaled: an absolute 1e-10 can be below the round-off floor of
     # strongly bent strokes; chi = 150 at N = 12 stalled at 4e-9)
