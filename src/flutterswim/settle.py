@@ -342,7 +342,8 @@ def _at_cap(params, groups, orbit, watch: _Watch, lam: complex, n_segments: int,
 
         try:
             br = continue_orbits(groups, "chi", groups.chi, n_points=6, n_segments=n_segments,
-                                 steps=DEFAULT_STEPS if steps is None else steps)
+                                 steps=DEFAULT_STEPS if steps is None else steps,
+                                 look_beyond=0.0)  # the stroke reached first from the straight state
             orb = br.orbits[-1]
             if isinstance(params, Parameters):
                 from .orbits.periodic import PeriodicOrbit  # noqa: F401

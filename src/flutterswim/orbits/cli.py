@@ -17,6 +17,9 @@ def register(subparsers) -> None:
     p.add_argument("--points", type=int, default=100, help="orbits along the branch (at least; default 100)")
     p.add_argument("--segments", type=int, default=None, help="segments N (default: the sweeps' resolution, 24)")
     p.add_argument("--steps", type=int, default=None, help="Radau steps per period (default 32)")
+    p.add_argument("--look-beyond", type=float, default=None,
+                   help="follow the branch this fraction of the range past its end, for a fold that turns it "
+                        "back into the range (default 0.2; 0: stop at the end)")
     p.add_argument("--plot", default=None, help="also draw the branch to this PNG")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_branch)
@@ -48,13 +51,15 @@ def _parse_range(text: str) -> tuple[str, float, float]:
 def _cmd_branch(args) -> int:
     from .. import defaults
     from .._paths import check_output_file
-    from .._validate import ParameterError, positive_int
+    from .._validate import ParameterError, non_negative, positive_int
     from ..params import preset
     from .continuation import BRANCH_STEPS, continue_orbits
     from .linear import hopf_bracket, hopf_point
     from .parameter import Axis
 
     name, lo, hi = _parse_range(args.range)
+    if args.look_beyond is not None:
+        non_negative("--look-beyond", args.look_beyond)
     params = preset(args.preset)
     axis = Axis(params, name)  # validates the name before any work
     for v in (lo, hi):  # and both ends (tau=-1:1 was continued from the Hopf point to 1)
@@ -82,8 +87,9 @@ def _cmd_branch(args) -> int:
     nf = normal_form(hp)
     side = nf.direction if nf.supercritical else -nf.direction
     to = hi if side > 0 else lo
+    extra = {} if args.look_beyond is None else {"look_beyond": args.look_beyond}
     br = continue_orbits(params, name, to, n_points=args.points, n_segments=n, steps=steps,
-                         progress=not args.quiet)
+                         progress=not args.quiet, **extra)
     ds = br.to_dataset()
     ds.attrs["range_start" if side > 0 else "range_end"] = lo if side > 0 else hi
     from .._paths import atomic_path

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import defaults
-from .._validate import ParameterError, finite, positive, positive_int
+from .._validate import ParameterError, finite, non_negative, positive, positive_int
 from .linear import hopf_bracket, hopf_point
 from .normal_form import normal_form
 from .parameter import Axis
@@ -42,6 +42,10 @@ BRANCH_STEPS = 32
 #: below 1e-8 up to kappa_E ratio 2 but reaches 6e-6..1.8e-4 on strongly bent strokes (ratio
 #: 1.95 upper branch, ratio 3; period errors 1.6e-5..4.6e-5 against 128 steps)
 ACCURACY_GAUGE = 1e-6
+#: the fraction of a branch's range it is followed past its end for a fold back into the range:
+#: along kappa_E_ratio (N = 24 and 48) the branch folds at 2.108 and back at 1.899, so the range
+#: to 2 holds a second stable stroke that stopping at 2 missed
+LOOK_BEYOND = 0.2
 #: Largest amplitude (along the unit Hopf eigenvector) of the branch's first orbit
 START_AMPLITUDE_CAP = 6.0
 
@@ -172,11 +176,18 @@ def _systems(axis: Axis, value: float, n: int) -> ShapeSystem:
 @one_blas_thread
 def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
                     n_segments: int = defaults.SWEEP_N_SEGMENTS, steps: int = BRANCH_STEPS, tol: float = 1e-10,
-                    max_newton: int = 8, progress: bool = False, max_points: int | None = None) -> Branch:
+                    max_newton: int = 8, progress: bool = False, max_points: int | None = None,
+                    look_beyond: float = LOOK_BEYOND) -> Branch:
     """Continue the stroke from the Hopf point along ``parameter`` up to ``to``, with at least
     ``n_points`` orbits (more where the branch bends). The default resolution is the sweeps'
     (``flutterswim.defaults.SWEEP_N_SEGMENTS``, with its stated accuracy). ``tol``: closing
-    residual max|Phi(u) - u| relative to 1 + max|u| (see :func:`_scaled`)."""
+    residual max|Phi(u) - u| relative to 1 + max|u| (see :func:`_scaled`).
+
+    ``look_beyond``: past ``to`` the branch is followed for this fraction of its range more,
+    for a fold that turns it back into the range (an S-shaped branch: strokes that coexist
+    there). When it turns back it is followed until it leaves the range again (or ends), and
+    the orbits beyond ``to`` stay in the branch; otherwise they are dropped and the branch ends
+    at ``to``. 0: stop at ``to``."""
     t_start = time.perf_counter()
     axis = Axis(params, parameter)
     to = finite("to", to)
@@ -185,6 +196,7 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     steps = positive_int("steps", steps, minimum=8)
     tol = positive("tol", tol)
     max_points = 10 * n_points + 50 if max_points is None else positive_int("max_points", max_points)
+    look_beyond = non_negative("look_beyond", look_beyond)
     base = axis.value()
     lo, hi = sorted((base, to))
     span = hi - lo
@@ -217,9 +229,15 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     ds_max = 3.0 / n_points
     bar = _bar(progress, length_p)
     message = f"reached {parameter}={to:g}"
+    # past ``to`` (look_beyond): the orbits up to ``to``, the outer limit, whether it turned back
+    target, n_at_to, turned = to, None, False
+    limit = to + side * look_beyond * length_p
     while True:
         if len(orbits) >= max_points:
-            message = f"stopped after max_points={max_points} orbits before {parameter}={to:g}"
+            if n_at_to is None:
+                message = f"stopped after max_points={max_points} orbits before {parameter}={to:g}"
+            elif turned:
+                message += f" (stopped after max_points={max_points} orbits at {parameter}={values[-1]:.6g})"
             break
         xk = X[-1]
         if len(X) == 1:
@@ -232,10 +250,10 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
         tangent = tangent / math.sqrt(np.sum((tangent * w) ** 2))
         # at most 1/n_points of the parameter range per step, so that there are n_points or more
         step_ds = min(ds, length_p / (n_points * max(abs(tangent[-1]), 1e-300)))
-        finishing = (xk[-1] + step_ds * tangent[-1] - to) * side >= 0 and tangent[-1] * side > 0
+        finishing = (xk[-1] + step_ds * tangent[-1] - target) * side >= 0 and tangent[-1] * side > 0
         try:
             if finishing:
-                xn, fl, res, it = _newton_natural(axis, n_segments, steps, xk, fls[-1], to, tol, max_newton)
+                xn, fl, res, it = _newton_natural(axis, n_segments, steps, xk, fls[-1], target, tol, max_newton)
             else:
                 xn, fl, res, it = _newton_arclength(axis, n_segments, steps, xk, fls[-1], tangent, w,
                                                     step_ds, tol, max_newton)
@@ -243,7 +261,8 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
             # (ParameterError: the corrector left the parameter's admissible range)
             ds *= 0.5
             if ds < 1e-4 / n_points:
-                message = f"continuation stopped at {parameter}={xk[-1]:.6g}: {exc}"
+                if n_at_to is None or turned:
+                    message = f"continuation stopped at {parameter}={xk[-1]:.6g}: {exc}"
                 break
             continue
         pval = float(xn[-1])
@@ -252,13 +271,26 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
         values.append(pval)
         X.append(xn)
         fls.append(fl)
-        if bar is not None:
+        if bar is not None and n_at_to is None:
             bar.update(abs(values[-1] - values[-2]))
+        if n_at_to is not None and not turned and (values[-1] - values[-2]) * side < 0:
+            # a fold beyond ``to`` turns the branch back: follow it until it leaves the range again
+            turned, target = True, to
+            message = (f"reached {parameter}={to:g}; the branch folds back at {parameter}={values[-2]:.6g} "
+                       "beyond it and was followed until it leaves the range again")
+        if turned and (values[-1] - hopf.value) * side <= 0:
+            message += f" (it returned to the Hopf point's side at {parameter}={values[-1]:.6g})"
+            break
         if finishing:
+            if n_at_to is None and look_beyond > 0:
+                n_at_to, target = len(orbits), limit
+                continue
             break
         ds = min(ds_max, max(ds, step_ds) * (1.5 if it <= 4 else 0.7 if it >= 7 else 1.0))
     if bar is not None:
         bar.close()
+    if n_at_to is not None and not turned:  # no fold back into the range: the branch ends at ``to``
+        del orbits[n_at_to:], values[n_at_to:]
     _warn_inaccurate(parameter, values, orbits, steps)
     return Branch(axis, np.array(values), orbits, hopf.value, hopf.omega, nf.lyapunov_coefficient,
                   nf.amplitude2_slope_rms, n_segments, steps, time.perf_counter() - t_start, message)

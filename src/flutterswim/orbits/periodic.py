@@ -403,7 +403,8 @@ def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = 
             from .continuation import continue_orbits
 
             try:
-                br = continue_orbits(g, "chi", g.chi, n_points=8, n_segments=n_segments, steps=steps, tol=tol)
+                br = continue_orbits(g, "chi", g.chi, n_points=8, n_segments=n_segments, steps=steps, tol=tol,
+                                     look_beyond=0.0)  # the stroke reached first
             except ParameterError as exc:
                 # its inputs are checked above: this point is outside the branch it continues
                 # (past the Hopf point on the side without strokes, or no Hopf point near it)

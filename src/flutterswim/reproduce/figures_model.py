@@ -217,11 +217,16 @@ def build_fig4b(ctx: Context) -> Outcome:
     _close(fig)
     g = PAPER.groups
     linear = critical_chi(g.eta_perp)[0] / g.chi
+    # the strokes reached first from the Hopf point (up to a fold, past which the branch may
+    # turn back into the range: strokes that coexist with these)
     x = ds["kappa_E_ratio"].values
-    adv = ds["advance"].values
-    red = ds["self_intersecting"].values.astype(bool)
+    n = int(np.argmax(np.diff(x) < 0)) + 1 if np.any(np.diff(x) < 0) else x.size
+    x = x[:n]
+    adv = ds["advance"].values[:n]
+    red = ds["self_intersecting"].values[:n].astype(bool)
     best = float(x[int(np.argmax(adv))])
-    at1 = {k: float(np.interp(1.0, x, ds[k].values)) for k in ("lateral_leading", "lateral_trailing", "advance", "period")}
+    at1 = {k: float(np.interp(1.0, x, ds[k].values[:n])) for k in ("lateral_leading", "lateral_trailing", "advance",
+                                                                     "period")}
     rows = [
         compare("onset kappa_E,cr / kappa_E,fit (Hopf point of the branch)", PAPER_ONSET_RATIO, br.hopf_value,
                 rtol=0.02, paper_text="~ 0.65"),
@@ -241,7 +246,7 @@ def build_fig4b(ctx: Context) -> Outcome:
     if np.any(red):
         rows.append(compare("self-intersecting strokes from kappa_E / kappa_E,fit", None, float(x[red].min()),
                             paper_text="red parts of the curves"))
-    notes = (f"{x.size} periodic orbits, N = {prm['n_segments']}; {br.message}. The paper's ~0.65 is the full-width "
+    notes = (f"{br.values.size} periodic orbits, N = {prm['n_segments']}; {br.message}. The paper's ~0.65 is the full-width "
              "reading of b (see 'Two readings of b'); the preset (semi-axis) gives the onset above.",)
     return Outcome("ok", tuple(rows), notes, {"hopf": br.hopf_value, "linear_onset": linear, "best_ratio": best,
                                               "at_fit": at1})

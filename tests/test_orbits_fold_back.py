@@ -1,0 +1,62 @@
+"""Continuation past the end of the range: an S-shaped branch that folds back into it."""
+
+import numpy as np
+import pytest
+
+import flutterswim as fs
+from flutterswim.initial import InitialState
+from flutterswim.orbits import continue_orbits, periodic_orbit
+from flutterswim.simulate import simulate
+
+N = 12
+
+
+def _at(br, value):
+    """The branch's stable orbits on either side of ``value`` (pairs of neighbours bracketing it)."""
+    v = br.values
+    return [br.orbits[i] for i in range(len(v) - 1)
+            if (v[i] - value) * (v[i + 1] - value) <= 0 and br.orbits[i].stable and br.orbits[i + 1].stable]
+
+
+@pytest.fixture(scope="module")
+def branch():
+    return continue_orbits(fs.PAPER, "kappa_E_ratio", 2.0, n_segments=N)
+
+
+def test_fold_back_into_the_range_is_followed_and_reported(branch):
+    """The kappa_E_ratio branch folds at ~2.03 and back at ~1.89 (N = 12; 2.108 and 1.899 at
+    N = 24): stopping at 2 reported no crossing and one stroke where two coexist."""
+    cross = branch.multiplier_crossings()
+    assert any(c > 2.0 for c in cross) and any(1.0 < c < 2.0 for c in cross), cross
+    assert branch.values[-1] == pytest.approx(2.0) and "folds back" in branch.message
+    assert len(_at(branch, 1.95)) == 2  # two stable strokes at 1.95
+
+
+def test_the_second_stroke_is_an_attractor_of_the_time_stepper(branch):
+    """Independent check: the stroke after the folds, perturbed by 2 % and simulated for 8
+    periods, returns to itself, not to the stroke reached first (their periods differ)."""
+    lower, upper = sorted(_at(branch, 1.95), key=lambda o: o.period)
+    g = fs.PAPER.groups.replace(chi=1.95 * fs.PAPER.groups.chi)  # (dimensionless: kappa l, t / tau)
+    lo = periodic_orbit(g, lower)
+    up = periodic_orbit(g, upper)
+    assert up.stable and lo.stable and up.period > 1.1 * lo.period
+    u0 = up.u0
+    T = up.period
+    run = simulate(g, 8 * T, initial=InitialState.from_state(np.r_[0.0, 0.0, 1.02 * u0], N), n_segments=N,
+                   n_frames=8 * 64 + 1, rtol=1e-8, atol=1e-10)
+    last = np.concatenate((run.theta, run.kappa), axis=1)[-64:]
+    orbit_states = np.concatenate((up.theta, up.kappa), axis=1)
+    lower_states = np.concatenate((lo.theta, lo.kappa), axis=1)
+
+    def dist(states, ref):
+        return max(np.min(np.max(np.abs(ref - s), axis=1)) for s in states)
+
+    assert dist(last, orbit_states) < 0.05 * np.max(np.abs(u0)) < dist(last, lower_states)
+
+
+def test_without_a_fold_back_the_branch_ends_where_it_did():
+    """Past the end, a branch that does not turn back is dropped: the same orbits as stopping at the end."""
+    a = continue_orbits(fs.PAPER, "kappa_E_ratio", 1.0, n_segments=N, n_points=20)
+    b = continue_orbits(fs.PAPER, "kappa_E_ratio", 1.0, n_segments=N, n_points=20, look_beyond=0.0)
+    assert np.array_equal(a.values, b.values) and a.message == b.message
+    assert [o.period for o in a.orbits] == [o.period for o in b.orbits]
