@@ -276,3 +276,25 @@ def test_a_link_to_an_own_store_is_never_replaced_through(tmp_path):
     CALLS.clear()
     sweep({"chi": [1.0, 2.0]}, out=str(link), backend="serial", point_fn=point, progress=False)
     assert CALLS == []
+
+
+def test_an_unreachable_scheduler_leaves_no_store_behind(tmp_path, monkeypatch):
+    """'sweep ... --scheduler tcp://127.0.0.1:1' said no scheduler answered (exit 2) but left the
+    empty store it had created; a store that existed before is kept."""
+    pytest.importorskip("distributed")
+    from flutterswim import defaults
+    from flutterswim.sweep.backends import SchedulerUnreachable
+
+    monkeypatch.setattr(defaults, "SCHEDULER_TIMEOUT_S", 1.0)
+    out = tmp_path / "s.zarr"
+    with pytest.raises(SchedulerUnreachable, match="no Dask scheduler answered"):
+        sweep({"chi": [1.0, 2.0]}, out=str(out), backend="dask", scheduler="tcp://127.0.0.1:1", point_fn=point,
+              progress=False)
+    assert list(tmp_path.iterdir()) == []  # no store, no lock file, no remnant
+    # an existing store (points saved) is resumed, so it stays as it was
+    sweep({"chi": [1.0, 2.0, 3.0]}, out=str(out), backend="serial", point_fn=point, progress=False, max_points=1)
+    before = _tree(out)
+    with pytest.raises(SchedulerUnreachable):
+        sweep({"chi": [1.0, 2.0, 3.0]}, out=str(out), backend="dask", scheduler="tcp://127.0.0.1:1",
+              point_fn=point, progress=False)
+    assert _tree(out) == before

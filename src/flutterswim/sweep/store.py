@@ -279,6 +279,7 @@ class SweepStore:
     def __init__(self, path: str | Path, group, spec: SweepSpec, variables: list[str]):
         self.path, self.group, self.spec, self.variables = Path(path), group, spec, list(variables)
         self._lock = None
+        self.created = False  # True: this run created (or replaced) the store at path
         self._dims, self._shape, _ = store_dims(spec)
         # flat position of point k in the row-major dataset (continuation: the down branch
         # runs back along the axis)
@@ -419,7 +420,9 @@ class SweepStore:
             shutil.rmtree(tmp, ignore_errors=True)
             raise
         assert (path / MARKER).is_file()
-        return cls(path, zarr.open_group(str(path), mode="r+"), spec, variables)
+        store = cls(path, zarr.open_group(str(path), mode="r+"), spec, variables)
+        store.created = True
+        return store
 
     # ------------------------------------------------------------------ points
     def index(self, k: int) -> tuple[int, ...]:
