@@ -193,3 +193,108 @@ def test_done_is_written_last(tmp_path):
         np.testing.assert_array_equal(st.done_mask(), [False, True])
     finally:
         st.close()
+
+
+def _tree(d):
+    return {str(p.relative_to(d)): (p.read_bytes() if p.is_file() else None) for p in sorted(d.rglob("*"))}
+
+
+@pytest.mark.parametrize("continuation", [False, True])
+def test_overwrite_refuses_an_own_store_holding_user_files(tmp_path, continuation):
+    """--overwrite deleted the whole store folder once the marker was there, with the notes and
+    figures the user had put into it; now it is refused, and nothing is touched."""
+    out = tmp_path / "s.zarr"
+    sweep({"chi": [1.0, 2.0]}, out=str(out), backend="serial", point_fn=point, progress=False,
+          continuation=continuation)
+    from flutterswim.sweep.store import foreign_entries
+
+    assert foreign_entries(out) == []  # everything a finished store holds is its own
+    (out / "NOTES.txt").write_text("my notes")
+    (out / "myfigs").mkdir()
+    (out / "myfigs" / "f.png").write_bytes(b"png")
+    (out / "a" / "mine.txt").write_text("inside an array folder")
+    before = _tree(out)
+    CALLS.clear()
+    with pytest.raises(fs.ParameterError, match=r"NOTES\.txt.*never deletes"):
+        sweep({"chi": [1.0, 2.0, 3.0]}, out=str(out), overwrite=True, backend="serial", point_fn=point,
+              progress=False, continuation=continuation)
+    assert CALLS == [] and _tree(out) == before
+    assert foreign_entries(out) == ["NOTES.txt", "a/mine.txt", "myfigs"]
+    # without the user's files the store is replaced as before
+    for f in ("NOTES.txt", "myfigs/f.png", "a/mine.txt"):
+        (out / f).unlink()
+    (out / "myfigs").rmdir()
+    ds = sweep({"chi": [1.0, 2.0, 3.0]}, out=str(out), overwrite=True, backend="serial", point_fn=point,
+               progress=False, continuation=continuation)
+    assert ds["done"].all() and ds.sizes["chi"] == 3
+
+
+def test_a_store_left_by_a_killed_write_is_still_ours(tmp_path):
+    """zarr writes each file under a temporary '<name>.<hex>.partial' name: a leftover is the store's own."""
+    out = tmp_path / "s.zarr"
+    sweep({"chi": [1.0, 2.0]}, out=str(out), backend="serial", point_fn=point, progress=False)
+    (out / "a" / "c" / ("0." + "ab" * 16 + ".partial")).write_bytes(b"half")
+    from flutterswim.sweep.store import foreign_entries
+
+    assert foreign_entries(out) == []
+    (out / "a" / "c" / "notes.txt").write_text("mine")
+    assert foreign_entries(out) == ["a/c/notes.txt"]
+
+
+def test_cli_overwrite_of_an_own_store_with_user_files_exits_2_and_keeps_them(tmp_path):
+    out = tmp_path / "s.zarr"
+    sweep({"chi": [1.0, 2.0]}, out=str(out), backend="serial", point_fn=point, progress=False)
+    (out / "NOTES.txt").write_text("my notes")
+    before = _tree(out)
+    r = subprocess.run([sys.executable, "-m", "flutterswim", "sweep", "chi=60,70", "--out", str(out), "--overwrite",
+                        "--backend", "serial", "--no-progress"], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and "--out=" in lines[0] and "NOTES.txt" in lines[0]
+    assert _tree(out) == before
+
+
+def test_a_link_to_an_own_store_is_never_replaced_through(tmp_path):
+    """--overwrite through a symbolic link renamed the user's link and then failed in rmtree."""
+    target = tmp_path / "t.zarr"
+    sweep({"chi": [1.0, 2.0]}, out=str(target), backend="serial", point_fn=point, progress=False)
+    link = tmp_path / "l.zarr"
+    link.symlink_to(target.name)
+    before = _tree(target)
+    with pytest.raises(fs.ParameterError, match="symbolic link"):
+        sweep({"chi": [1.0, 2.0, 3.0]}, out=str(link), overwrite=True, backend="serial", point_fn=point,
+              progress=False)
+    assert link.is_symlink() and link.resolve() == target.resolve() and _tree(target) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["l.zarr", "t.zarr"]  # nothing renamed, no remnant
+    # a dangling link is not replaced by a new store either
+    dangling = tmp_path / "d.zarr"
+    dangling.symlink_to("nowhere.zarr")
+    with pytest.raises(fs.ParameterError, match="symbolic link"):
+        sweep({"chi": [1.0]}, out=str(dangling), backend="serial", point_fn=point, progress=False)
+    assert dangling.is_symlink() and not (tmp_path / "nowhere.zarr").exists()
+    # resuming through a link to an own store still works
+    CALLS.clear()
+    sweep({"chi": [1.0, 2.0]}, out=str(link), backend="serial", point_fn=point, progress=False)
+    assert CALLS == []
+
+
+def test_an_unreachable_scheduler_leaves_no_store_behind(tmp_path, monkeypatch):
+    """'sweep ... --scheduler tcp://127.0.0.1:1' said no scheduler answered (exit 2) but left the
+    empty store it had created; a store that existed before is kept."""
+    pytest.importorskip("distributed")
+    from flutterswim import defaults
+    from flutterswim.sweep.backends import SchedulerUnreachable
+
+    monkeypatch.setattr(defaults, "SCHEDULER_TIMEOUT_S", 1.0)
+    out = tmp_path / "s.zarr"
+    with pytest.raises(SchedulerUnreachable, match="no Dask scheduler answered"):
+        sweep({"chi": [1.0, 2.0]}, out=str(out), backend="dask", scheduler="tcp://127.0.0.1:1", point_fn=point,
+              progress=False)
+    assert list(tmp_path.iterdir()) == []  # no store, no lock file, no remnant
+    # an existing store (points saved) is resumed, so it stays as it was
+    sweep({"chi": [1.0, 2.0, 3.0]}, out=str(out), backend="serial", point_fn=point, progress=False, max_points=1)
+    before = _tree(out)
+    with pytest.raises(SchedulerUnreachable):
+        sweep({"chi": [1.0, 2.0, 3.0]}, out=str(out), backend="dask", scheduler="tcp://127.0.0.1:1",
+              point_fn=point, progress=False)
+    assert _tree(out) == before

@@ -2,6 +2,7 @@
 closed-loop path following with tracking noise and delay."""
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -259,8 +260,13 @@ def fast_steer(monkeypatch):
                                           "corner_overshoot_bl": 0.0, "trapped": False,
                                           "waypoint_arrival_s": [math.nan]}, True, 0.0)
 
+    def orbit(*a, **kw):  # the CLI checks the path's duration at the orbit's speed before identify
+        calls.append("orbit")
+        return SimpleNamespace(speed=model.U, period=model.period)
+
     monkeypatch.setattr(red, "identify", identify)
     monkeypatch.setattr(st, "steer", fake)
+    monkeypatch.setattr(importlib.import_module("flutterswim.orbits"), "periodic_orbit", orbit)
     return calls
 
 
@@ -275,7 +281,7 @@ def test_steer_cli_rerun_replaces_its_own_metrics(tmp_path, fast_steer):
     assert main(args) == 0
     assert is_ours(tmp_path / "s.json")
     assert main(args) == 0
-    assert fast_steer == ["identify", "steer"] * 2
+    assert fast_steer == ["orbit", "identify", "steer"] * 2
 
 
 @pytest.mark.parametrize("option, value", [("--noise-px", "nan"), ("--noise-px", "-1"), ("--noise-px", "inf"),

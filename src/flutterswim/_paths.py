@@ -318,6 +318,11 @@ def check_store_path(path: str | os.PathLike, *, overwrite: bool, what: str = "o
         raise ParameterError(f"{what}={str(path)!r} is the current directory; give {new_name}")
     if _is_cwd_or_parent(p):
         raise ParameterError(f"{what}={str(p)!r} is the current directory or one of its parents; give {new_name}")
+    if p.is_symlink() and (overwrite or not p.exists()):
+        # replacing or creating through a link would rename or delete the user's link itself
+        raise ParameterError(f"{what}={str(p)!r} is a symbolic link (to {os.readlink(p)!r}); a store is never "
+                             f"{'replaced' if p.exists() else 'created'} through a link, and the link is left as it "
+                             f"is. Give the store's own path, or {new_name}")
     if p.exists() and not p.is_dir():
         raise ParameterError(f"{what}={str(p)!r} is an existing file, not "
                              f"{'a sweep store' if store else 'an output folder'}; nothing was changed. Give {new_name}")
@@ -339,6 +344,8 @@ def remove_own_store(path: str | os.PathLike, kind: str | None = None) -> None:
     """Delete a store that carries our marker (checked again here, with its ``kind`` if
     given); anything else raises."""
     p = Path(os.fspath(path))
+    if p.is_symlink():
+        raise ParameterError(f"{str(p)!r} is a symbolic link; a store is never deleted through a link")
     if not p.exists():
         return
     if not (p.is_dir() and has_marker(p)) or _is_cwd_or_parent(p):

@@ -36,6 +36,20 @@ def positive(name: str, value: Any, *, strict: bool = False) -> float:
     return v
 
 
+#: Largest relative or absolute tolerance of the time integrator accepted: beyond it the error
+#: control no longer controls anything (the state is O(1): angles in rad, positions in units of l).
+MAX_TOLERANCE = 0.1
+
+
+def tolerance(name: str, value: Any, *, strict: bool = False) -> float:
+    """An integrator tolerance (rtol, atol): finite, > 0 and at most :data:`MAX_TOLERANCE`."""
+    v = positive(name, value, strict=strict)
+    if v > MAX_TOLERANCE:
+        raise ParameterError(f"{name}={value!r} is too large; a tolerance in (0, {MAX_TOLERANCE:g}] is required "
+                             "(default rtol 1e-4, atol 1e-6)")
+    return v
+
+
 def non_negative(name: str, value: Any) -> float:
     v = finite(name, value)
     if v < 0.0:

@@ -72,6 +72,22 @@ def _simulate(args: argparse.Namespace) -> int:
         from ._validate import finite
 
         params = params.replace(kappa_E=params.kappa_E * finite("kappa_E_ratio", args.kappa_E_ratio))
+    from ._validate import tolerance
+
+    tolerance("--rtol", args.rtol)
+    tolerance("--atol", args.atol)
+    if args.t_end is not None:
+        from ._validate import finite
+        from .simulate import frame_count
+
+        t_end = finite("--t-end", args.t_end)
+        frames = frame_count(t_end / params.tau) if t_end > 0 else 0.0
+        if frames > defaults.MAX_FRAMES:  # before anything is allocated (1e7 s grew to 6.6 GB in 15 s)
+            rate = defaults.FRAMES_PER_TAU / params.tau
+            raise ParameterError(
+                f"--t-end={args.t_end!r} implies {frames:.3g} saved frames ({rate:.6g} per s, "
+                f"{defaults.FRAMES_PER_TAU} per tau = {params.tau:g} s); at most {defaults.MAX_FRAMES} are saved: "
+                f"give --t-end at most {(defaults.MAX_FRAMES - 1) / rate:.6g} s")
     opts = dict(n_segments=args.segments, rtol=args.rtol, atol=args.atol, progress=not args.quiet)
     from .steering.schedules import field_from_args
 
@@ -95,9 +111,13 @@ def _simulate(args: argparse.Namespace) -> int:
         if orb:
             note += (f"; periodic orbit: period {orb['period']:.6g} s, advance {orb['advance'] * 1e3:.6g} mm "
                      f"per cycle, {'stable' if orb['stable'] else 'UNSTABLE'}")
-    print(f"{run.status}: {run.message}; {run.t[-1]:.3f} s simulated, "
-          f"{run.stats.n_steps} steps in {run.stats.wall_time:.2f} s; wrote {path}{note}")
-    return 0 if run.ok else 1
+    line = (f"{run.status}: {run.message}; {run.t[-1]:.3f} s simulated, "
+            f"{run.stats.n_steps} steps in {run.stats.wall_time:.2f} s; wrote {path}{note}")
+    if not run.ok:  # a failure goes to stderr, with the command's name, as every error does
+        print(f"flutterswim simulate: {line}", file=sys.stderr)
+        return 1
+    print(line)
+    return 0
 
 
 def _load_run_or_track(path: str):
@@ -291,7 +311,7 @@ _EXTRA_OF = {"xarray": "io", "h5netcdf": "io", "h5py": "io", "zarr": "io", "matp
 
 #: Python API parameters whose option is not spelt --name-with-dashes
 _OPTION_OF = {"n_segments": "--segments", "n_cycles": "--cycles", "n_last": "--last", "n_points": "--points",
-              "targets": "--only"}
+              "targets": "--only", "out_dir": "--out"}
 
 
 def _as_typed(message: str, parser: argparse.ArgumentParser | None) -> str:

@@ -37,10 +37,13 @@ SWEEP_ADVANCE_ERROR = 2e-2
 MAX_SWEEP_POINTS = 100_000
 #: Largest stability-map grid accepted (eta_perp x chi values).
 MAX_MAP_POINTS = 20_000_000
+#: Most frames a simulation saves (t_end x frame rate; 10,000 tau at FRAMES_PER_TAU), checked
+#: before anything is allocated: about 1 GB in memory at N_SEGMENTS.
+MAX_FRAMES = 500_000
 #: Seconds to wait for a Dask scheduler before giving up.
 SCHEDULER_TIMEOUT_S = 10.0
 
 __all__ = [
     "N_SEGMENTS", "RTOL", "ATOL", "FRAMES_PER_TAU", "N_CYCLES", "N_CYCLES_MOVIE", "SWEEP_N_SEGMENTS", "SWEEP_FRAMES_PER_TAU",
-    "SWEEP_PERIOD_ERROR", "SWEEP_ADVANCE_ERROR", "MAX_SWEEP_POINTS", "MAX_MAP_POINTS", "SCHEDULER_TIMEOUT_S",
+    "SWEEP_PERIOD_ERROR", "SWEEP_ADVANCE_ERROR", "MAX_SWEEP_POINTS", "MAX_MAP_POINTS", "MAX_FRAMES", "SCHEDULER_TIMEOUT_S",
 ]

@@ -7,12 +7,13 @@ units at the edge, drives the integrator and packages a :class:`SimulationResult
 from __future__ import annotations
 
 import functools
+import math
 from typing import Callable
 
 import numpy as np
 
 from . import defaults
-from ._validate import ParameterError, angle as _angle, finite, positive, positive_int
+from ._validate import ParameterError, angle as _angle, finite, positive, positive_int, tolerance
 from .field import Constant, Field
 from .filament import Filament, centreline
 from .initial import InitialState
@@ -63,7 +64,7 @@ def simulate(
     if not t_end > t_start:
         raise ParameterError(f"t_end={t_end!r} must be greater than t_start={t_start!r}")
     n_segments = positive_int("n_segments", n_segments, minimum=4)
-    rtol, atol = positive("rtol", rtol, strict=True), positive("atol", atol, strict=True)
+    rtol, atol = tolerance("rtol", rtol, strict=True), tolerance("atol", atol, strict=True)
     frame_dt = None if frame_dt is None else positive("frame_dt", frame_dt, strict=True)
     max_step = None if max_step is None else positive("max_step", max_step, strict=True)
     if method not in METHODS:
@@ -82,7 +83,7 @@ def simulate(
     fld = field.scaled(tau)
     fil = Filament(n_segments, groups.eta_par, groups.eta_perp, groups.chi)
     y0 = initial.state(n_segments)
-    t_eval = _frames(t0, t1, n_frames, None if frame_dt is None else frame_dt / tau)
+    t_eval = _frames(t0, t1, n_frames, None if frame_dt is None else frame_dt / tau, tau)
     direction, strength = fld.direction, fld.strength
 
     def fun(t: float, y: np.ndarray) -> np.ndarray:
@@ -129,9 +130,29 @@ def simulate(
     })
 
 
-def _frames(t0: float, t1: float, n_frames: int | None, dt: float | None) -> np.ndarray:
+def frame_count(t_span: float, n_frames: int | None = None, dt: float | None = None) -> float:
+    """Frames a run over ``t_span`` (in tau) saves: ``n_frames``, one every ``dt`` (in tau), or
+    :data:`defaults.FRAMES_PER_TAU` per tau (a float: it may be far beyond any array)."""
+    if n_frames is not None:
+        return float(n_frames)
+    if dt is not None:
+        return max(2.0, math.floor(t_span / dt + 1e-9) + 1.0)
+    return math.ceil(defaults.FRAMES_PER_TAU * t_span) + 1.0
+
+
+def _frames(t0: float, t1: float, n_frames: int | None, dt: float | None, tau: float = 1.0) -> np.ndarray:
     if n_frames is not None and dt is not None:
         raise ParameterError("give n_frames or frame_dt, not both")
+    count = frame_count(t1 - t0, n_frames, dt)
+    if count > defaults.MAX_FRAMES:  # before anything is allocated (t_end=1e7 s grew to 6.6 GB in 15 s)
+        if n_frames is not None:
+            raise ParameterError(f"n_frames={n_frames!r} is too many; at most {defaults.MAX_FRAMES} frames are saved")
+        rate = 1.0 / (dt * tau) if dt is not None else defaults.FRAMES_PER_TAU / tau
+        longest = (defaults.MAX_FRAMES - 1) / rate
+        raise ParameterError(
+            f"t_end={t1 * tau:.6g} implies {count:.3g} saved frames ({rate:.6g} per time unit from t_start="
+            f"{t0 * tau:.6g}); at most {defaults.MAX_FRAMES} are saved: simulate at most {longest:.6g} time units "
+            "at this frame rate (frame_dt sets a slower one), or continue from the end state in several runs")
     if dt is not None:
         t = np.arange(t0, t1 + 0.5 * dt, dt)[: int(np.floor((t1 - t0) / dt + 1e-9)) + 1]
         # a run shorter than one frame interval still saves its end (it saved only its start)

@@ -17,7 +17,13 @@ from ..analysis.cycles import tip_index
 from ..analysis.track import as_track
 from ._common import SWIM_COLOR, TIP_COLOR, field_arrow, mm_factor, new_figure, set_field_arrow
 
-__all__ = ["animate", "frame_times"]
+__all__ = ["animate", "frame_times", "MAX_FPS", "MAX_VIDEO_FRAMES"]
+
+#: Highest frame rate of a video (a GIF's frame delays are whole hundredths of a second:
+#: at most 100 frames per second).
+MAX_FPS = {".mp4": 240.0, ".gif": 100.0}
+#: Most video frames (duration / speed x fps), checked before anything is allocated.
+MAX_VIDEO_FRAMES = 1_000_000
 
 
 def frame_times(t: np.ndarray, fps: float, speed: float, max_frames: int | None) -> np.ndarray:
@@ -65,8 +71,16 @@ def animate(
         raise ParameterError(f"path={str(path)!r} has an unsupported suffix; use .mp4 or .gif")
     if not (fps > 0 and math.isfinite(fps)):
         raise ParameterError(f"fps={fps!r} must be a finite number > 0")
+    if fps > MAX_FPS[fmt]:  # fps=1e9 ran out of memory building the frame list
+        raise ParameterError(f"fps={fps!r} is too high for {fmt[1:].upper()}; a frame rate in (0, {MAX_FPS[fmt]:g}] "
+                             "frames per second is required")
     if not (speed > 0 and math.isfinite(speed)):
         raise ParameterError(f"speed={speed!r} must be a finite number > 0")
+    n_video = (tr.t[-1] - tr.t[0]) / speed * fps
+    if n_video > MAX_VIDEO_FRAMES and (max_frames is None or max_frames > MAX_VIDEO_FRAMES):
+        raise ParameterError(f"speed={speed!r} and fps={fps!r} make a video of {n_video:.3g} frames "
+                             f"({tr.t[-1] - tr.t[0]:.6g} simulated s); at most {MAX_VIDEO_FRAMES} are written: "
+                             "raise speed, lower fps, or give max_frames")
     w, h = (int(size[0]), int(size[1]))
     if w < 64 or h < 64:
         raise ParameterError(f"size={size!r} must be at least (64, 64) pixels")

@@ -15,9 +15,9 @@ def register(subparsers) -> None:
                                           "delay (or by a pre-planned schedule with --open-loop).")
     p.add_argument("--preset", default="paper")
     p.add_argument("--path", choices=("square", "circle", "figure8", "waypoints"), default="square")
-    p.add_argument("--side", default="10", help="square side: body lengths, or with a unit (37mm, 3.7cm, 2bl); default 10")
-    p.add_argument("--radius", default="2", help="circle radius: body lengths or with a unit (default 2)")
-    p.add_argument("--size", default="10", help="figure-eight length: body lengths or with a unit (default 10)")
+    p.add_argument("--side", default=None, help="square side: body lengths, or with a unit (37mm, 3.7cm, 2bl); default 10")
+    p.add_argument("--radius", default=None, help="circle radius: body lengths or with a unit (default 2)")
+    p.add_argument("--size", default=None, help="figure-eight length: body lengths or with a unit (default 10)")
     p.add_argument("--waypoints", default=None, help="CSV of x, y [body lengths, or the unit a header names: x_mm,y_mm] for --path waypoints")
     p.add_argument("--open-loop", action="store_true", help="pre-planned field schedule instead of feedback")
     p.add_argument("--noise-px", type=float, default=0.2)
@@ -60,6 +60,23 @@ def length(name: str, text, body_length: float) -> float:
     return value * (body_length if units[unit] is None else units[unit])
 
 
+#: the option that sets the size of each path, and its default
+SIZE_OPTION = {"square": ("side", "10"), "circle": ("radius", "2"), "figure8": ("size", "10"),
+               "waypoints": ("waypoints", None)}
+
+
+def _check_path_options(args) -> None:
+    """Refuse a size option of another path (``--path square --radius 2`` ignored --radius)."""
+    from .._validate import ParameterError
+
+    own = SIZE_OPTION[args.path][0]
+    for path, (opt, _) in SIZE_OPTION.items():
+        value = getattr(args, opt)
+        if opt != own and value is not None:
+            size = f"--{own} sets the {args.path}'s size" if args.path != "waypoints" else "--waypoints gives its points"
+            raise ParameterError(f"--{opt}={value!r} is for --path {path}, not --path {args.path}: {size}")
+
+
 def _cmd_steer(args) -> int:
     import json
 
@@ -71,6 +88,7 @@ def _cmd_steer(args) -> int:
     from .reduced import identify
     from .steer import steer
 
+    _check_path_options(args)
     out = check_output_file(args.out, (".nc",))
     met = check_output_file(args.metrics, (".json",), what="--metrics")
     if args.plot:
@@ -86,20 +104,27 @@ def _cmd_steer(args) -> int:
     params = preset(args.preset)
     L = params.l
     if args.path == "square":
-        side = length("--side", args.side, L)
+        side = length("--side", SIZE_OPTION[args.path][1] if args.side is None else args.side, L)
         factory = lambda p, h: paths.square(side, p, h)  # noqa: E731
     elif args.path == "circle":
-        r = length("--radius", args.radius, L)
+        r = length("--radius", SIZE_OPTION[args.path][1] if args.radius is None else args.radius, L)
         factory = lambda p, h: paths.circle(r, p, h)  # noqa: E731
     elif args.path == "figure8":
-        size = length("--size", args.size, L)
+        size = length("--size", SIZE_OPTION[args.path][1] if args.size is None else args.size, L)
         factory = lambda p, h: paths.figure8(size, p, h)  # noqa: E731
     else:
         if not args.waypoints:
             raise ParameterError("--path waypoints needs --waypoints FILE.csv")
         factory = lambda p, h: paths.waypoints_csv(args.waypoints, L, p)  # noqa: E731
-    factory((0.0, 0.0), 0.0)  # a bad path (e.g. a waypoints CSV) is refused before computing
-    reduced = identify(params, n_segments=args.segments)
+    probe = factory((0.0, 0.0), 0.0)  # a bad path (e.g. a waypoints CSV) is refused before computing
+    # too long a path is refused after the periodic orbit (~5 s: the swimmer's speed), not after
+    # the reduced model's identification (--radius 1e9 was refused after ~50 s)
+    from ..orbits import periodic_orbit
+    from .steer import check_duration
+
+    orbit = periodic_orbit(params, n_segments=args.segments)
+    check_duration(probe, orbit.speed, orbit.period, what=f"--path {args.path}")
+    reduced = identify(params, n_segments=args.segments, orbit=orbit)
     res = steer(params, factory, reduced, closed_loop=not args.open_loop, noise_px=args.noise_px,
                 um_per_px=args.um_per_px, n_segments=args.segments, seed=args.seed, progress=not args.quiet)
     res.run.save(out)

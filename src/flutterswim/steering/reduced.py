@@ -61,12 +61,14 @@ def follows(run, omega: float, U: float, period: float, onset: float) -> tuple[b
     return bool(d.following and d.speed_turning > 0.5 * U), d
 
 
-def identify(params: Parameters, *, n_segments: int = 24, onset: float = 12.0, rel_tol: float = 0.02) -> ReducedModel:
-    """U and the period from the periodic orbit; k from the heading lag at a slow rotation;
-    Omega_max by bisection on the rotation rate to ``rel_tol``."""
+def identify(params: Parameters, *, n_segments: int = 24, onset: float = 12.0, rel_tol: float = 0.02,
+             orbit=None) -> ReducedModel:
+    """U and the period from the periodic orbit (``orbit``: one already found for these
+    ``params`` and ``n_segments``); k from the heading lag at a slow rotation; Omega_max by
+    bisection on the rotation rate to ``rel_tol``."""
     from ..orbits import periodic_orbit
 
-    orb = periodic_orbit(params, n_segments=n_segments)
+    orb = periodic_orbit(params, n_segments=n_segments) if orbit is None else orbit
     U, T = orb.speed, orb.period
     slow = 0.05 / T  # rad/s: about a hundredth of a turn per stroke
     ok, d = follows(rotating_run(params, slow, turns=0.3, onset=onset, n_segments=n_segments, period=T), slow, U, T, onset)

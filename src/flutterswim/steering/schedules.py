@@ -188,9 +188,13 @@ def field_from_args(args) -> Field | None:
         # (degrees here: Constant, so that Field does not warn about a large angle in radians)
         return Field(direction=Constant(math.radians(finite("--field-angle", args.field_angle))))
     if k == "field_rotate":
+        if finite("--field-rotate", args.field_rotate) == 0:  # named as the option, not rotation()'s argument
+            raise ParameterError("--field-rotate=0 is not allowed: seconds per turn of a rotating field, a "
+                                 "non-zero number (negative: clockwise)")
         return rotation(args.field_rotate, start)
     if k == "field_step":
         return _step(math.radians(finite("--field-step", args.field_step)), start, 0.0)
     if k == "field_ramp":
-        return _ramp(math.radians(finite("--field-ramp angle", args.field_ramp[0])), start, args.field_ramp[1], 0.0)
+        return _ramp(math.radians(finite("--field-ramp angle", args.field_ramp[0])), start,
+                     positive("--field-ramp duration", args.field_ramp[1]), 0.0)
     return from_csv(args.field_csv)

@@ -44,6 +44,17 @@ def _centroid(run) -> tuple[np.ndarray, np.ndarray]:
 _MAX_DURATION_S = 3600.0
 
 
+def check_duration(path: RefPath, U: float, period: float, laps: float = 1.0, what: str = "path") -> float:
+    """The time ``laps`` of ``path`` take at the speed ``U`` [m/s] (ParameterError beyond an hour):
+    needs only the swimmer's periodic orbit, so that a command line checks it before identifying
+    the reduced model (about 50 s)."""
+    est = 1.1 * laps * path.length / U + 3 * period
+    if not est <= _MAX_DURATION_S:
+        raise ParameterError(f"{what}: {laps:g} lap(s) at the swimmer's {U * 1e3:.3g} mm/s take {est:.3g} s; at "
+                             f"most {_MAX_DURATION_S:g} s is simulated (a shorter path, or fewer laps)")
+    return est
+
+
 def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loop: bool = True,
           noise_px: float = 0.2, um_per_px: float = 14.0, fps: float = 50.0, delay_frames: int = 1,
           n_segments: int = 24, onset: float = 10.0, laps: float = 1.0, seed: int = 0,
@@ -70,10 +81,7 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     sigma = noise_px * um_per_px * 1e-6
     # the path's length does not depend on where it starts: too long a path is refused first
     probe = path_factory((0.0, 0.0), 0.0)  # the path's shape and length (not where it starts)
-    est = 1.1 * laps * probe.length / reduced.U + 3 * reduced.period
-    if not est <= _MAX_DURATION_S:
-        raise ParameterError(f"path: {laps:g} lap(s) at the swimmer's {reduced.U * 1e3:.3g} mm/s take {est:.3g} s; at "
-                             f"most {_MAX_DURATION_S:g} s is simulated (a shorter path, or fewer laps)")
+    check_duration(probe, reduced.U, reduced.period, laps)
     # the tightest turn the controller commands, U / (rate_fraction Omega_max), above the
     # swimmer's own U / Omega_max (a circle between the two was called feasible, and followed
     # at the controller's radius: 0.36 body lengths RMS off a circle of 1.1); checked on the

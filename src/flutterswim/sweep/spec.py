@@ -18,7 +18,7 @@ from typing import Any, Iterable, Mapping
 
 import numpy as np
 
-from .._validate import ParameterError, finite, positive, positive_int
+from .._validate import ParameterError, finite, positive, positive_int, tolerance
 from ..defaults import ATOL, MAX_SWEEP_POINTS, N_CYCLES, RTOL, SWEEP_FRAMES_PER_TAU, SWEEP_N_SEGMENTS
 from ..params import Groups, Parameters, preset
 
@@ -117,7 +117,7 @@ class PointSettings:
     def __post_init__(self) -> None:
         # the checks of flutterswim.simulate, up front (not at every point)
         for k in ("t_cap", "chunk", "rtol", "atol", "straight_tol", "swim_tol", "damped_tol", "rate_tol"):
-            object.__setattr__(self, k, positive(k, getattr(self, k)))
+            object.__setattr__(self, k, (tolerance if k in ("rtol", "atol") else positive)(k, getattr(self, k)))
         for k in ("n_cycles", "n_segments", "frames_per_tau", "saturated_chunks"):
             v = getattr(self, k)
             if isinstance(v, float) and v.is_integer():

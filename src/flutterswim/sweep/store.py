@@ -27,6 +27,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import warnings
 from pathlib import Path
 from typing import Any, Sequence
@@ -53,6 +54,70 @@ AXIS_NAMES = {"l": "filament length", "a": "ribbon half thickness", "b": "ribbon
               "mu": "fluid viscosity", "eta_par": "tangential drag group eta_par",
               "eta_perp": "normal drag group eta_perp", "chi": "activity group chi = kappa_E l",
               "kappa_E_ratio": "kappa_E over the base kappa_E"}
+
+
+# a file zarr writes under a temporary name and renames into place ("0.<uuid hex>.partial");
+# a kill between the two leaves it behind
+_PARTIAL = re.compile(r"^[^/]+\.[0-9a-f]{32}\.partial$")
+_CHUNK = re.compile(r"^[0-9]+$")
+
+
+def _store_arrays(path: Path) -> set[str] | None:
+    """The arrays the store's root metadata lists (its consolidated listing), None if unreadable."""
+    try:
+        meta = json.loads((path / "zarr.json").read_text())
+        names = meta["consolidated_metadata"]["metadata"]
+        return {k for k in names if "/" not in k}
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+
+
+def foreign_entries(path: str | os.PathLike) -> list[str]:
+    """Entries inside one of our stores that the store itself does not write (relative paths,
+    sorted): a sweep store holds its root ``zarr.json``, the marker, and one folder per array
+    (those the root metadata lists; if unreadable, folders holding a ``zarr.json``), each with
+    its ``zarr.json`` and a ``c/`` tree of chunk files named by their integer indices; zarr's
+    temporary ``*.<hex>.partial`` files are its own too. Anything else, or any symbolic link,
+    is the user's (notes, figures put into the folder) and is never deleted."""
+    root = Path(os.fspath(path))
+    arrays = _store_arrays(root)
+    foreign: list[str] = []
+
+    def own_file(e: os.DirEntry, names: tuple[str, ...]) -> bool:
+        return e.is_file(follow_symlinks=False) and (e.name in names or _PARTIAL.match(e.name) is not None)
+
+    def chunks(d: Path) -> None:
+        for e in os.scandir(d):
+            if e.is_symlink() or not (_CHUNK.match(e.name) or (e.is_file() and _PARTIAL.match(e.name))):
+                foreign.append(os.path.relpath(e.path, root))
+            elif e.is_dir(follow_symlinks=False):
+                chunks(Path(e.path))
+
+    for e in os.scandir(root):
+        if own_file(e, ("zarr.json", MARKER)):
+            continue
+        is_array = e.is_dir(follow_symlinks=False) and (
+            e.name in arrays if arrays is not None else (Path(e.path) / "zarr.json").is_file())
+        if not is_array:
+            foreign.append(e.name)
+            continue
+        for a in os.scandir(e.path):
+            if own_file(a, ("zarr.json",)):
+                continue
+            if a.name == "c" and a.is_dir(follow_symlinks=False):
+                chunks(Path(a.path))
+            else:
+                foreign.append(os.path.relpath(a.path, root))
+    return sorted(foreign)
+
+
+def _refuse_foreign(path: Path) -> None:
+    foreign = foreign_entries(path)
+    if foreign:
+        shown = ", ".join(repr(f) for f in foreign[:3]) + (f" and {len(foreign) - 3} more" if len(foreign) > 3 else "")
+        raise ParameterError(f"out={str(path)!r} is a flutterswim sweep store that also holds files it did not "
+                             f"write ({shown}); --overwrite never deletes them: move them out of the store, or give "
+                             "a new store name")
 
 
 class SweepDefinitionError(ParameterError):
@@ -214,6 +279,7 @@ class SweepStore:
     def __init__(self, path: str | Path, group, spec: SweepSpec, variables: list[str]):
         self.path, self.group, self.spec, self.variables = Path(path), group, spec, list(variables)
         self._lock = None
+        self.created = False  # True: this run created (or replaced) the store at path
         self._dims, self._shape, _ = store_dims(spec)
         # flat position of point k in the row-major dataset (continuation: the down branch
         # runs back along the axis)
@@ -229,6 +295,8 @@ class SweepStore:
         """Open (resume) or create the store and take its writer lock (released by
         :meth:`close` or when the process ends, SIGKILL included)."""
         path = check_store_path(path, overwrite=overwrite, kind="sweep")
+        if overwrite and path.is_dir() and has_marker(path):
+            _refuse_foreign(path)  # before anything is computed or deleted
         lock = _acquire(path)
         try:
             store = cls._open(path, spec, list(variables), n_state, overwrite=overwrite)
@@ -247,6 +315,7 @@ class SweepStore:
     def _open(cls, path: Path, spec, variables, n_state, *, overwrite):
         if path.exists() and has_marker(path):
             if overwrite:
+                _refuse_foreign(path)  # again, under the lock
                 remove_own_store(path, kind="sweep")
             else:
                 return cls._resume(path, spec, variables)
@@ -351,7 +420,9 @@ class SweepStore:
             shutil.rmtree(tmp, ignore_errors=True)
             raise
         assert (path / MARKER).is_file()
-        return cls(path, zarr.open_group(str(path), mode="r+"), spec, variables)
+        store = cls(path, zarr.open_group(str(path), mode="r+"), spec, variables)
+        store.created = True
+        return store
 
     # ------------------------------------------------------------------ points
     def index(self, k: int) -> tuple[int, ...]:
