@@ -60,3 +60,21 @@ def test_without_a_fold_back_the_branch_ends_where_it_did():
     b = continue_orbits(fs.PAPER, "kappa_E_ratio", 1.0, n_segments=N, n_points=20, look_beyond=0.0)
     assert np.array_equal(a.values, b.values) and a.message == b.message
     assert [o.period for o in a.orbits] == [o.period for o in b.orbits]
+
+
+def test_branch_size_is_bounded_before_any_work(tmp_path):
+    """--points 100000000 grew to 11 GB before it was stopped; now one line, exit 2, at once
+    (the limit read from the module, not copied)."""
+    import subprocess
+    import sys
+    import time
+
+    from flutterswim.orbits.continuation import MAX_POINTS
+
+    with pytest.raises(fs.ParameterError, match=rf"n_points={MAX_POINTS + 1}.*at most {MAX_POINTS}"):
+        continue_orbits(fs.PAPER, "kappa_E_ratio", 1.0, n_points=MAX_POINTS + 1)
+    t0 = time.perf_counter()
+    r = subprocess.run([sys.executable, "-m", "flutterswim", "branch", "kappa_E_ratio=0.6:1", "--points", "100000000",
+                        "--out", str(tmp_path / "b.nc")], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and "--points=100000000" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert time.perf_counter() - t0 < 60 and not (tmp_path / "b.nc").exists()

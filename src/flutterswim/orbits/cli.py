@@ -53,13 +53,15 @@ def _cmd_branch(args) -> int:
     from .._paths import check_output_file
     from .._validate import ParameterError, non_negative, positive_int
     from ..params import preset
-    from .continuation import BRANCH_STEPS, continue_orbits
+    from .continuation import BRANCH_STEPS, MAX_POINTS, continue_orbits
     from .linear import hopf_bracket, hopf_point
     from .parameter import Axis
 
     name, lo, hi = _parse_range(args.range)
     if args.look_beyond is not None:
         non_negative("--look-beyond", args.look_beyond)
+    if positive_int("--points", args.points, minimum=2) > MAX_POINTS:
+        raise ParameterError(f"--points={args.points} is too many; at most {MAX_POINTS} orbits along a branch")
     params = preset(args.preset)
     axis = Axis(params, name)  # validates the name before any work
     for v in (lo, hi):  # and both ends (tau=-1:1 was continued from the Hopf point to 1)

@@ -42,6 +42,8 @@ BRANCH_STEPS = 32
 #: below 1e-8 up to kappa_E ratio 2 but reaches 6e-6..1.8e-4 on strongly bent strokes (ratio
 #: 1.95 upper branch, ratio 3; period errors 1.6e-5..4.6e-5 against 128 steps)
 ACCURACY_GAUGE = 1e-6
+#: most orbits a branch is asked for (each keeps its shape on its phase grid, ~50 kB at N = 24)
+MAX_POINTS = 20000
 #: the fraction of a branch's range it is followed past its end for a fold back into the range:
 #: along kappa_E_ratio (N = 24 and 48) the branch folds at 2.108 and back at 1.899, so the range
 #: to 2 holds a second stable stroke that stopping at 2 missed
@@ -192,6 +194,8 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     axis = Axis(params, parameter)
     to = finite("to", to)
     n_points = positive_int("n_points", n_points, minimum=2)
+    if n_points > MAX_POINTS:
+        raise ParameterError(f"n_points={n_points} is too many; at most {MAX_POINTS} orbits along a branch")
     n_segments = positive_int("n_segments", n_segments, minimum=4)
     steps = positive_int("steps", steps, minimum=8)
     tol = positive("tol", tol)
@@ -223,7 +227,7 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     values: list[float] = [p1]
     orbits.append(orbit_from_flow(axis.at(p1), sysm, fl, res, it, steps))
     X = [np.concatenate((u, [T, values[-1]]))]
-    fls = [fl]
+    last_flow = fl  # (only the last is a warm start: each holds its step matrices, MBs)
     w = _weights(u.size, length_u, length_p)
     ds = 0.7 / n_points
     ds_max = 3.0 / n_points
@@ -253,9 +257,9 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
         finishing = (xk[-1] + step_ds * tangent[-1] - target) * side >= 0 and tangent[-1] * side > 0
         try:
             if finishing:
-                xn, fl, res, it = _newton_natural(axis, n_segments, steps, xk, fls[-1], target, tol, max_newton)
+                xn, fl, res, it = _newton_natural(axis, n_segments, steps, xk, last_flow, target, tol, max_newton)
             else:
-                xn, fl, res, it = _newton_arclength(axis, n_segments, steps, xk, fls[-1], tangent, w,
+                xn, fl, res, it = _newton_arclength(axis, n_segments, steps, xk, last_flow, tangent, w,
                                                     step_ds, tol, max_newton)
         except (OrbitNotFound, StepFailure, np.linalg.LinAlgError, ParameterError) as exc:
             # (ParameterError: the corrector left the parameter's admissible range)
@@ -270,7 +274,7 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
         orbits.append(orbit_from_flow(axis.at(pval), sysn, fl, res, it, steps))
         values.append(pval)
         X.append(xn)
-        fls.append(fl)
+        last_flow = fl
         if bar is not None and n_at_to is None:
             bar.update(abs(values[-1] - values[-2]))
         if n_at_to is not None and not turned and (values[-1] - values[-2]) * side < 0:
