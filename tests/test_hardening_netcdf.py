@@ -65,3 +65,30 @@ def test_dimensionless_run_is_labelled_in_scaled_units(tmp_path):
         assert "parameter_l" not in ds.attrs and ds.attrs["group_chi"] == pytest.approx(fs.PAPER.groups.chi)
     back = fs.load(p)
     np.testing.assert_array_equal(back.x, r.x)
+
+
+def test_output_through_a_link_replaces_its_target_and_keeps_the_link(run, tmp_path):
+    """A link to one of our files at --out was replaced by a regular file (its target left
+    stale); a link to nothing, or a pipe, at the output path are refused, not replaced."""
+    import os
+
+    from flutterswim._paths import check_output_file
+
+    target = tmp_path / "data" / "run.nc"
+    target.parent.mkdir()
+    run.save(target)
+    link = tmp_path / "latest.nc"
+    link.symlink_to(target)
+    before = target.stat().st_ino
+    assert check_output_file(link, (".nc",)) == target.resolve()
+    run.save(link)
+    assert link.is_symlink() and target.stat().st_ino != before  # the target replaced (atomically)
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".latest")]  # no temporary left
+    dangling = tmp_path / "gone.nc"
+    dangling.symlink_to(tmp_path / "nowhere" / "x.nc")
+    with pytest.raises(fs.ParameterError, match="symbolic link.*does not exist"):
+        check_output_file(dangling, (".nc",))
+    fifo = tmp_path / "pipe.nc"
+    os.mkfifo(fifo)
+    with pytest.raises(fs.ParameterError, match="not a regular file"):
+        check_output_file(fifo, (".nc",))

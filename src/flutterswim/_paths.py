@@ -209,14 +209,25 @@ def _writable_dir(folder: Path, what: str, path: Path) -> None:
 def check_output_file(path: str | os.PathLike, suffixes: Sequence[str], *, what: str = "out") -> Path:
     """Check an output file path before computing; return it as a Path.
 
-    Raises ParameterError naming the path if it is a directory, an existing read-only file,
-    has a suffix not in ``suffixes`` (lower case, with the dot), or its folder is not writable."""
+    Raises ParameterError naming the path if it is a directory, an existing read-only file, a
+    pipe, socket or device, has a suffix not in ``suffixes`` (lower case, with the dot), or its
+    folder is not writable. A symbolic link to a file is followed: the path returned is its
+    target's, so the file is replaced there and the link kept."""
     try:
         p = Path(os.fspath(path))
     except TypeError:
         raise ParameterError(f"{what}={path!r} is not a path") from None
     if str(p) in ("", "."):
         raise ParameterError(f"{what}={str(path)!r} is not a file name")
+    if p.is_symlink():
+        if not p.exists():
+            raise ParameterError(f"{what}={str(p)!r} is a symbolic link to {os.readlink(p)!r}, which does not exist; "
+                                 "give the file's own path")
+        # written through the link: the rename would replace the link, and leave its target stale
+        p = Path(os.path.realpath(p))
+    if p.exists() and not p.is_file() and not p.is_dir():
+        raise ParameterError(f"{what}={str(p)!r} exists and is not a regular file (a pipe, socket or device); "
+                             "it is never replaced. Choose another name")
     if p.is_dir():
         raise ParameterError(f"{what}={str(p)!r} is a directory; give a file name ending in "
                              f"{' or '.join(suffixes)}")
@@ -246,6 +257,8 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     """Yield a temporary path next to ``path`` (same suffix); on success rename it onto
     ``path`` atomically, on any error remove it and leave ``path`` untouched."""
     p = Path(os.fspath(path))
+    if p.is_symlink():  # a link to a file: replace the file, keep the link (check_output_file)
+        p = Path(os.path.realpath(p))
     p.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{p.stem}.", suffix=f".part{p.suffix}", dir=p.parent)
     os.close(fd)
