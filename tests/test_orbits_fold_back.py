@@ -78,3 +78,19 @@ def test_branch_size_is_bounded_before_any_work(tmp_path):
                         "--out", str(tmp_path / "b.nc")], capture_output=True, text=True, timeout=120)
     assert r.returncode == 2 and "--points=100000000" in r.stderr and len(r.stderr.strip().splitlines()) == 1
     assert time.perf_counter() - t0 < 60 and not (tmp_path / "b.nc").exists()
+
+
+def test_branch_figure_breaks_the_lateral_curves_where_the_other_end_leads(branch):
+    """The swimmer reverses on the middle branch and the other end leads: the figure drew a
+    vertical line from one end's excursion to the other's; now the curves break there."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from flutterswim.orbits.plot import plot_branch
+
+    ds = branch.to_dataset()
+    assert np.any(np.diff(ds["leading_end"].values) != 0)
+    fig = plot_branch(ds)
+    ys = [ln.get_ydata() for ln in fig.axes[2].lines if len(ln.get_ydata()) > 10 and ln.get_linestyle() != "None"]
+    span = np.nanmax(np.concatenate(ys)) - np.nanmin(np.concatenate(ys))
+    assert max(np.nanmax(np.abs(np.diff(y))) for y in ys) < 0.15 * span

@@ -72,10 +72,12 @@ def plot_branch(ds, path=None, *, x_range: tuple[float, float] | None = None):
     ax2.plot(hopf, ds.attrs["hopf_period"], "o", color="k", ms=4)
     ax2.set_ylabel(f"period [{tunit}]")
     ax3 = axes[2]
-    _segments(ax3, xs, np.r_[0.0, ds.lateral_leading.values * lscale], np.r_[False, red], un, lw=1.8,
-              label="leading end")
-    _segments(ax3, xs, np.r_[0.0, ds.lateral_trailing.values * lscale], np.r_[False, red], un, lw=1.8,
-              ls="--", label="trailing end")
+    # where the swimmer reverses the other end leads: the curves break there (no line from one
+    # end's excursion to the other's)
+    cut = np.nonzero(np.diff(ds["leading_end"].values))[0] + 2 if "leading_end" in ds else np.array([], int)
+    xl, rl, ul = np.insert(xs, cut, np.nan), np.insert(np.r_[False, red], cut, False), np.insert(un, cut, False)
+    for var, kw in (("lateral_leading", {"label": "leading end"}), ("lateral_trailing", {"ls": "--", "label": "trailing end"})):
+        _segments(ax3, xl, np.insert(np.r_[0.0, ds[var].values * lscale], cut, np.nan), rl, ul, lw=1.8, **kw)
     ax3.set_ylabel(f"lateral peak-to-peak [{lunit}]")
     ax3.set_xlabel(f"{name} [{ds[name].attrs.get('units', '1')}]")
     for a in axes:
