@@ -133,7 +133,7 @@ def parse_number(text: str) -> float | None:
 # units a waypoints header may give its columns (x_mm, y [um], ...), in metres
 _UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6}
 # the default, named: body lengths
-_BODY_LENGTHS = ("bl", "l", "body_lengths")
+_BODY_LENGTHS = ("bl", "l", "body_lengths", "body lengths", "body length")
 
 
 def header_unit(field: str) -> str | None:
