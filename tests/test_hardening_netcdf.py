@@ -92,3 +92,18 @@ def test_output_through_a_link_replaces_its_target_and_keeps_the_link(run, tmp_p
     os.mkfifo(fifo)
     with pytest.raises(fs.ParameterError, match="not a regular file"):
         check_output_file(fifo, (".nc",))
+
+
+def test_output_link_named_by_its_format_may_point_to_any_name(tmp_path):
+    """The name given decides the format: a link a.nc to a blob without a suffix (a
+    content-addressed store) is not refused for its target's suffix; an empty target is written."""
+    from flutterswim._paths import check_output_file
+
+    blob = tmp_path / "b" / "blob"
+    blob.parent.mkdir()
+    blob.write_bytes(b"")
+    link = tmp_path / "hashed.nc"
+    link.symlink_to(blob)
+    assert check_output_file(link, (".nc",)) == blob.resolve()
+    with pytest.raises(fs.ParameterError, match="suffix"):
+        check_output_file(tmp_path / "x.txt", (".nc",))

@@ -159,7 +159,10 @@ def test_waypoints_header_units(tmp_path):
     p = tmp_path / "w.csv"
     L = 3.7e-3
     for header, metres in (("x,y", L), ("x_mm,y_mm", 1e-3), ("x [um],y [um]", 1e-6), ("x (mm),y (mm)", 1e-3),
-                           ("X_m,Y_m", 1.0), ("item,xm", L), ("x_cm,y_cm", 1e-2), ("x_bl,y_bl", L)):
+                           ("X_m,Y_m", 1.0), ("item,xm", L), ("x_cm,y_cm", 1e-2), ("x_bl,y_bl", L),
+                           # words of the name, not units (refused for a while this stop)
+                           ("pos_x,pos_y", L), ("x_pos,y_pos", L), ("x position,y position", L), ("X (-),Y (-)", L),
+                           ("x (body lengths),y (body lengths)", L)):
         p.write_text(f"{header}\n0,0\n3,4\n")
         assert waypoints_csv(p, L).length == pytest.approx(5 * metres, rel=1e-6), header
     p.write_text("x_mm,y_um\n0,0\n3,4\n")

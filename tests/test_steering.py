@@ -57,7 +57,10 @@ def test_csv_schedule_units_comments_and_inconsistent_rows(tmp_path):
 
     f = tmp_path / "field.csv"
     same = ["t,angle\n0,0\n10,90\n", "t_ms,angle_rad\n0,0\n10000,1.5707963267948966\n",
-            "# by hand\ntime [s], angle (deg)\n0,0\n10,90\n", "t (ms),field_angle_deg\n0,0\n10000,90\n"]
+            "# by hand\ntime [s], angle (deg)\n0,0\n10,90\n", "t (ms),field_angle_deg\n0,0\n10000,90\n",
+            # names, not units; and other spellings of the units taken
+            "time,field_angle\n0,0\n10,90\n", "t_start,angle_field\n0,0\n10,90\n",
+            "t (sec),angle (°)\n0,0\n10,90\n", "time (seconds),angle_degree\n0,0\n10,90\n"]
     for text in same:
         f.write_text(text)
         fld = from_csv(f)

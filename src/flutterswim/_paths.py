@@ -219,19 +219,27 @@ def check_output_file(path: str | os.PathLike, suffixes: Sequence[str], *, what:
         raise ParameterError(f"{what}={path!r} is not a path") from None
     if str(p) in ("", "."):
         raise ParameterError(f"{what}={str(path)!r} is not a file name")
+    if p.suffix.lower() not in tuple(s.lower() for s in suffixes) and not p.is_dir():
+        raise ParameterError(f"{what}={str(p)!r} has the suffix {p.suffix or '(none)'!r}; use "
+                             f"{' or '.join(suffixes)}")
     if p.is_symlink():
         if not p.exists():
             raise ParameterError(f"{what}={str(p)!r} is a symbolic link to {os.readlink(p)!r}, which does not exist; "
                                  "give the file's own path")
         # written through the link: the rename would replace the link, and leave its target stale
-        p = Path(os.path.realpath(p))
+        # (the name given decides the format, the target's may be anything)
+        return _check_output_target(Path(os.path.realpath(p)), what, suffixes, check_suffix=False)
+    return _check_output_target(p, what, suffixes)
+
+
+def _check_output_target(p: Path, what: str, suffixes: Sequence[str], check_suffix: bool = True) -> Path:
     if p.exists() and not p.is_file() and not p.is_dir():
         raise ParameterError(f"{what}={str(p)!r} exists and is not a regular file (a pipe, socket or device); "
                              "it is never replaced. Choose another name")
     if p.is_dir():
         raise ParameterError(f"{what}={str(p)!r} is a directory; give a file name ending in "
                              f"{' or '.join(suffixes)}")
-    if p.suffix.lower() not in tuple(s.lower() for s in suffixes):
+    if check_suffix and p.suffix.lower() not in tuple(s.lower() for s in suffixes):
         raise ParameterError(f"{what}={str(p)!r} has the suffix {p.suffix or '(none)'!r}; use "
                              f"{' or '.join(suffixes)}")
     if p.exists() and not os.access(p, os.W_OK):

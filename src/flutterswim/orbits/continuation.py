@@ -277,10 +277,12 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
         last_flow = fl
         if bar is not None and n_at_to is None:
             bar.update(abs(values[-1] - values[-2]))
-        if n_at_to is not None and not turned and (values[-1] - values[-2]) * side < 0:
-            # a fold beyond ``to`` turns the branch back: follow it until it leaves the range again
+        if n_at_to is not None and not turned and (values[-1] - to) * side < 0:
+            # a fold beyond ``to`` has turned the branch back into the range: follow it until it
+            # leaves the range again
             turned, target = True, to
-            message = (f"reached {parameter}={to:g}; the branch folds back at {parameter}={values[-2]:.6g} "
+            fold = max(values[n_at_to:], key=lambda v: v * side)
+            message = (f"reached {parameter}={to:g}; the branch folds back at {parameter}={fold:.6g} "
                        "beyond it and was followed until it leaves the range again")
         if turned and (values[-1] - hopf.value) * side <= 0:
             message += f" (it returned to the Hopf point's side at {parameter}={values[-1]:.6g})"

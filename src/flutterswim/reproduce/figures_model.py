@@ -220,7 +220,8 @@ def build_fig4b(ctx: Context) -> Outcome:
     # the strokes reached first from the Hopf point (up to a fold, past which the branch may
     # turn back into the range: strokes that coexist with these)
     x = ds["kappa_E_ratio"].values
-    n = int(np.argmax(np.diff(x) < 0)) + 1 if np.any(np.diff(x) < 0) else x.size
+    stop = (np.diff(x) < 0) | (x[1:] > prm["to"])
+    n = int(np.argmax(stop)) + 1 if np.any(stop) else x.size
     x = x[:n]
     adv = ds["advance"].values[:n]
     red = ds["self_intersecting"].values[:n].astype(bool)

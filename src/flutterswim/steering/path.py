@@ -136,15 +136,28 @@ _UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6
 _BODY_LENGTHS = ("bl", "l", "body_lengths", "body lengths", "body length")
 
 
+# words that name a unit of length, time or angle (or none): a header's word after the name
+# that is one of these is read or refused; any other word (x_pos, field_angle) is part of the name
+UNIT_WORDS = frozenset(
+    "m cm mm um µm μm nm km in inch inches ft feet foot yd mi furlong furlongs px pixel pixels "
+    "bl l s sec secs second seconds ms msec us min mins minute minutes h hr hrs hour hours tau frame "
+    "frames deg degree degrees ° rad radian radians grad gon turn turns rev revs - 1".split()
+    + ["body lengths", "body length", "body_lengths"])
+
+
 def header_unit(field: str) -> str | None:
     """The unit a CSV header field names after its name (``x_mm``, ``x [um]``, ``t (ms)``,
     ``angle deg``), as written, or None for a bare name (``x``; a name merely ending in a
     unit, ``xm``, names none). Any word after the name counts, so a unit the reader does not
-    know (``x_cm`` where cm is not taken, ``t_hours``) is refused by the reader, not misread."""
+    know (``t_hours``, ``x_furlong``) is refused by the reader, not misread; a word that names no
+    unit (``x_pos``, ``field_angle``, ``t_start``) is part of the name."""
     m = re.fullmatch(r"\s*[A-Za-z][\w ]*?\s*[\[(]\s*([^\])]+?)\s*[\])]\s*", field)
     if m is None:
         m = re.fullmatch(r"\s*[A-Za-z]\w*?(?:_|\s+)([A-Za-zµμ]+)\s*", field)
-    return m.group(1) if m else None
+    unit = m.group(1) if m else None
+    if unit is None or unit.lower() in ("-", "1") or unit.lower() not in UNIT_WORDS:
+        return None  # a name (x_pos, field_angle, t_start) or explicitly no unit
+    return unit
 
 
 def _header_scale(row: list[str], where: str) -> float | None:

@@ -86,8 +86,9 @@ def _ramp(angle: float, start: float, duration: float, phi0: float) -> Field:
 
 # units a field CSV's header may give its first two columns (t_ms, "angle [rad]"): factors to
 # seconds and to degrees; any other unit (t_min, t_hours) is refused, not misread
-_TIME_UNITS = {"s": 1.0, "ms": 1e-3}
-_ANGLE_UNITS = {"deg": 1.0, "degrees": 1.0, "rad": math.degrees(1.0)}
+_TIME_UNITS = {"s": 1.0, "ms": 1e-3, "sec": 1.0, "secs": 1.0, "second": 1.0, "seconds": 1.0, "msec": 1e-3}
+_ANGLE_UNITS = {"deg": 1.0, "degree": 1.0, "degrees": 1.0, "°": 1.0, "rad": math.degrees(1.0),
+                "radian": math.degrees(1.0), "radians": math.degrees(1.0)}
 
 
 def _header_unit(field: str, allowed: dict, what: str, where: str) -> float:
