@@ -228,19 +228,12 @@ def check_output_file(path: str | os.PathLike, suffixes: Sequence[str], *, what:
                                  "give the file's own path")
         # written through the link: the rename would replace the link, and leave its target stale
         # (the name given decides the format, the target's may be anything)
-        return _check_output_target(Path(os.path.realpath(p)), what, suffixes, check_suffix=False)
-    return _check_output_target(p, what, suffixes)
-
-
-def _check_output_target(p: Path, what: str, suffixes: Sequence[str], check_suffix: bool = True) -> Path:
+        p = Path(os.path.realpath(p))
     if p.exists() and not p.is_file() and not p.is_dir():
         raise ParameterError(f"{what}={str(p)!r} exists and is not a regular file (a pipe, socket or device); "
                              "it is never replaced. Choose another name")
     if p.is_dir():
         raise ParameterError(f"{what}={str(p)!r} is a directory; give a file name ending in "
-                             f"{' or '.join(suffixes)}")
-    if check_suffix and p.suffix.lower() not in tuple(s.lower() for s in suffixes):
-        raise ParameterError(f"{what}={str(p)!r} has the suffix {p.suffix or '(none)'!r}; use "
                              f"{' or '.join(suffixes)}")
     if p.exists() and not os.access(p, os.W_OK):
         raise ParameterError(f"{what}={str(p)!r} exists and is not writable")
