@@ -61,7 +61,8 @@ def test_dimensionless_run_is_labelled_in_scaled_units(tmp_path):
     r = fs.simulate(fs.PAPER.groups, 0.5, n_segments=8)
     p = r.save(tmp_path / "g.nc")
     with xr.open_dataset(p, engine="h5netcdf") as ds:
-        assert ds["x"].attrs["units"] == "l" and ds["t"].attrs["units"] == "tau"
+        assert ds["x"].attrs["units"] == ds["t"].attrs["units"] == "1"  # CF: "l" is the litre, "tau" unknown
+        assert ds["x"].attrs["scaled_units"] == "l" and ds["t"].attrs["scaled_units"] == "tau"
         assert "parameter_l" not in ds.attrs and ds.attrs["group_chi"] == pytest.approx(fs.PAPER.groups.chi)
     back = fs.load(p)
     np.testing.assert_array_equal(back.x, r.x)

@@ -45,7 +45,7 @@ def _check_outputs(d: Path, stdout: str) -> None:
     m = load_map(d / "map.nc")
     assert m.omega.shape == (36, 27) and np.isfinite(m.omega[1:]).all()
     with xr.open_dataset(d / "map.nc", engine="h5netcdf") as ds:
-        assert ds["re_omega"].encoding["dtype"] == np.float32 and ds["re_omega"].attrs["units"] == "1/tau"
+        assert ds["re_omega"].encoding["dtype"] == np.float32 and ds["re_omega"].attrs["scaled_units"] == "1/tau"
     ds = xr.open_zarr(str(d / "sweep.zarr"))
     assert list(ds["period_s"].dims) == ["kappa_E_ratio"]
     assert ds["done"].values.all()

@@ -63,9 +63,10 @@ def test_hopf_period_is_that_of_the_hopf_points_own_time_scale():
     assert ds.attrs["hopf_period"] == pytest.approx(2 * math.pi / ds.attrs["hopf_omega_per_tau"] * ds.attrs["hopf_tau"],
                                                     rel=1e-12)
     assert ds.attrs["hopf_period_units"] == ds.period.attrs["units"] == "s"
-    # groups: tau units
+    # groups: tau units (CF: a pure number, its scale in scaled_units)
     g = continue_orbits(fs.PAPER.groups, "chi", 60.0, n_points=3, n_segments=8, steps=16).to_dataset()
-    assert g.attrs["hopf_period_units"] == g.period.attrs["units"] == "tau"
+    assert g.attrs["hopf_period_units"] == g.period.attrs["units"] == "1"
+    assert g.attrs["hopf_period_scaled_units"] == g.period.attrs["scaled_units"] == "tau"
     assert g.attrs["hopf_period"] == pytest.approx(2 * math.pi / g.attrs["hopf_omega_per_tau"], rel=1e-12)
 
 

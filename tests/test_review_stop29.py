@@ -30,12 +30,13 @@ fake.variables = ["swimming", "straight", "self_intersecting", "limit_cycle_reac
 def test_speed_units_are_length_per_time():
     assert variable_attrs("speed_mm_s", "s")["units"] == "mm/s"
     assert variable_attrs("speed_bl_s", "s")["units"] == "1/s"
-    assert variable_attrs("speed_bl_s", "tau")["units"] == "1/tau"
-    assert variable_attrs("speed_mm_s", "tau")["units"] == "1e-3 l/tau"
-    # only true times carry a time unit
+    assert variable_attrs("speed_bl_s", "tau")["scaled_units"] == "1/tau"
+    assert variable_attrs("speed_mm_s", "tau")["scaled_units"] == "1e-3 l/tau"
+    # only true times carry a time unit (in tau: units "1", the scale in scaled_units)
     times = {"t_simulated", "time_to_limit_cycle_s", "period_s", "wall_time_s"}
     for v in VARIABLES:
-        u = variable_attrs(v, "s")["units"]
+        a = variable_attrs(v, "s")
+        u = a.get("scaled_units", a["units"])
         assert (u in ("s", "tau")) == (v in times), (v, u)
 
 

@@ -101,6 +101,7 @@ class SimulationResult:
         xr = _xarray()
 
         from . import __version__
+        from ._cf import cf_dataset
 
         si = self.units == "SI"
         lu = "m" if si else "l"
@@ -159,7 +160,7 @@ class SimulationResult:
                 attrs[f"parameter_{k}"] = float(v)
                 attrs[f"parameter_{k}_units"] = PARAMETER_UNITS.get(k, "")
         ds.attrs.update(attrs)
-        return ds
+        return cf_dataset(ds)
 
     def save(self, path: str | Path) -> Path:
         """Write the run to NetCDF (h5netcdf engine), atomically (a temporary file in the same

@@ -118,6 +118,7 @@ class Branch:
         ds = ds.assign_coords(multiplier=("multiplier", np.arange(N_MULTIPLIERS), {"units": "1", "long_name": "rank by modulus"}))
         crossings = self.multiplier_crossings()
         from .. import __version__
+        from .._cf import cf_dataset
 
         ds.attrs.update({
             "Conventions": "CF-1.10",
@@ -126,6 +127,7 @@ class Branch:
             "parameter": name,
             f"hopf_{name}": self.hopf_value,
             "hopf_omega_per_tau": self.hopf_omega,
+            "hopf_omega_per_tau_units": "1/tau",
             "hopf_period": (2 * math.pi / self.hopf_omega) * tau_hopf,
             "hopf_period_units": tu,
             "lyapunov_coefficient": self.lyapunov_coefficient,
@@ -149,7 +151,7 @@ class Branch:
                 "period (steps=) checks them"),
             "message": self.message,
         })
-        return ds
+        return cf_dataset(ds)
 
     def multiplier_crossings(self) -> list[float]:
         """Parameter values (linearly interpolated) where the largest non-trivial multiplier

@@ -68,13 +68,14 @@ def write_netcdf(path: str | os.PathLike, ds) -> Path:
     """CF-style NetCDF through h5netcdf (HDF5 object times are not tracked, so the bytes depend
     only on the data), atomic. Every variable must carry ``units`` and ``long_name``."""
     from .. import __version__
+    from .._cf import cf_dataset
     from .._paths import atomic_path
 
     for name, var in {**ds.data_vars, **ds.coords}.items():
         missing = [a for a in ("units", "long_name") if a not in var.attrs]
         if missing:
             raise ValueError(f"variable {name!r} lacks the attributes {missing}")
-    ds = ds.copy()
+    ds = cf_dataset(ds.copy())
     ds.attrs = {"Conventions": "CF-1.10", "source": f"flutterswim {__version__} reproduce", **ds.attrs}
     p = Path(path)
     with atomic_path(p) as tmp:

@@ -33,11 +33,16 @@ class NeutralCurve:
     def to_dataset(self):
         import xarray as xr
 
-        return xr.Dataset(
-            {"chi_cr": ("eta_perp", self.chi_cr, {"long_name": "critical chi (Hopf)"}),
-             "beta": ("eta_perp", self.beta, {"long_name": "onset angular frequency", "units": "1/tau"})},
-            coords={"eta_perp": self.eta_perp},
-        )
+        from .._cf import cf_dataset
+
+        return cf_dataset(xr.Dataset(
+            {"chi_cr": ("eta_perp", self.chi_cr, {"long_name": "critical chi (Hopf)", "units": "1"}),
+             "beta": ("eta_perp", self.beta, {"long_name": "onset angular frequency", "units": "1/tau"}),
+             "iterations": ("eta_perp", self.iterations, {"long_name": "Newton iterations (-1: none)",
+                                                          "units": "1"})},
+            coords={"eta_perp": ("eta_perp", self.eta_perp,
+                                 {"long_name": "normal drag group eta_perp = mu_perp l^4/(B tau)", "units": "1"})},
+        ))
 
 
 def _seed(eta: float, chi_max: float, tol: float) -> tuple[float, float]:

@@ -51,8 +51,9 @@ class StabilityMap:
         import xarray as xr
 
         from .. import __version__
+        from .._cf import cf_dataset
 
-        return xr.Dataset(
+        return cf_dataset(xr.Dataset(
             {
                 "re_omega": (("eta_perp", "chi"), self.omega.real,
                              {"long_name": "growth rate Re omega_max of the leading eigenvalue", "units": "1/tau"}),
@@ -68,7 +69,7 @@ class StabilityMap:
             attrs={"Conventions": "CF-1.10", "source": f"flutterswim {__version__}",
                    "description": "leading eigenvalue of the straight filament (flutterswim.stability)",
                    "check_points": self.check_points, "check_max_rel_diff": self.check_max_rel_diff},
-        )
+        ))
 
     def save(self, path, *, dtype: str = "float64", complevel: int = 4):
         """Write NetCDF (h5netcdf engine), zlib-compressed, atomically (temporary file in the same

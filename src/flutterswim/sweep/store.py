@@ -34,6 +34,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from .._cf import cf_attrs
 from .._paths import MARKER, check_store_path, has_marker, remove_own_store, write_marker
 from .._validate import ParameterError
 from .spec import SweepSpec
@@ -133,7 +134,12 @@ class SweepLockedError(SweepDefinitionError):
 
 
 def variable_attrs(name: str, time_unit: str) -> dict[str, str]:
-    """CF-style ``units`` and ``long_name`` of a sweep variable (by name convention)."""
+    """CF-style ``units`` and ``long_name`` of a sweep variable (by name convention); a
+    quantity in tau or l gets units "1" and its scale in ``scaled_units`` (:mod:`flutterswim._cf`)."""
+    return cf_attrs(_variable_attrs(name, time_unit))
+
+
+def _variable_attrs(name: str, time_unit: str) -> dict[str, str]:
     tu = time_unit
     phys = tu == "s"
     words = name.replace("_", " ")
