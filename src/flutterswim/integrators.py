@@ -366,6 +366,9 @@ def _integrate_scipy(fun, jac, t_span, y0, t_eval, scheme, rtol, atol, max_step,
 REUSE = 0.25
 MAX_AGE = 20
 RTOL_NO_REUSE = 1e-8
+#: The compiled NDF returns to Python after this many steps (about 10 ms), where a Ctrl-C is
+#: seen (a signal waits until compiled code returns); the integration is unchanged.
+YIELD_STEPS = 400
 
 _STATUS = {1: "step size collapsed", 2: "non-finite state", 3: "singular iteration matrix",
            4: "maximum number of steps reached"}
@@ -520,7 +523,8 @@ def _integrate_ndf(fil, pieces, t_end, y0, t_eval, tab, rtol, atol, max_step, fi
             t, i_out, code = k.run(y, t, tb, d, istate, fstate, t_eval, out, i_out, rtol, atol, cap, max_step,
                                    fixed_step, avg, diff, w, fil.eta_par, fil.eta_perp, chi_sigma, phi, max_steps,
                                    ndf.MAX_ORDER if order is None else int(order),
-                                   20 if fixed_step > 0.0 else ndf.NEWTON_MAXITER, every_frame, lu, piv, g0, s0,
+                                   20 if fixed_step > 0.0 else ndf.NEWTON_MAXITER, every_frame, YIELD_STEPS,
+                                   lu, piv, g0, s0,
                                    yj, alpha, gamma, econst, stats)
             if code not in (0, 5):
                 break

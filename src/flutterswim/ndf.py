@@ -86,11 +86,13 @@ def norm(x, y, rtol, atol, cap):
 
 def run(y, t, t_stop, d, istate, fstate, t_eval, out, i_out, rtol, atol, cap, max_step, fixed, avg, diff,
         weights, eta_par, eta_perp, chi_sigma, phi, max_steps, max_order, newton_maxiter, yield_frames,
-        lu, piv, g0, s0, yj, alpha, gamma, error_const, stats):
+        yield_steps, lu, piv, g0, s0, yj, alpha, gamma, error_const, stats):
     """Integrate from t to t_stop (the last step cut to end there); y is the state at the end.
     Frames at t_eval[i_out:] <= t are written to out by the interpolant. Returns (t, i_out,
     status): 0 reached t_stop, 1 step size collapsed, 2 non-finite state, 3 singular matrix,
-    4 too many steps, 5 (``yield_frames``) returned after a step that wrote frames.
+    4 too many steps, 5 returned early: after a step that wrote frames (``yield_frames``) or
+    after ``yield_steps`` steps (> 0), so that the caller regains control (a Ctrl-C is seen
+    only between compiled calls); calling again continues exactly as without the return.
     ``fixed`` > 0: steps of that size at the order in istate, Newton to convergence, no error
     control (order tests, with D prepared from exact back values).
     ``stats`` (int64) += [steps, rejected, rhs, jacobians, LUs]."""
@@ -110,6 +112,7 @@ def run(y, t, t_stop, d, istate, fstate, t_eval, out, i_out, rtol, atol, cap, ma
     dy = np.empty(n)
     scale = np.empty(n)
     status = 0
+    steps = 0
     while t < t_stop - 1e-12 * max(1.0, abs(t_stop)):
         if stats[0] + stats[1] >= max_steps:
             status = 4
@@ -282,7 +285,8 @@ def run(y, t, t_stop, d, istate, fstate, t_eval, out, i_out, rtol, atol, cap, ma
             change_d(d, order, factor)
             n_equal = 0
             istate[2] = 0
-        if yield_frames and wrote:
+        steps += 1
+        if (yield_frames and wrote) or steps == yield_steps:
             status = 5
             break
     istate[0] = order
