@@ -146,3 +146,35 @@ def test_plot_of_a_subcritical_branch_folding_back_past_the_hopf_point():
     assert grey and max(grey[0].get_xdata()) == pytest.approx(hopf) and min(grey[0].get_xdata()) < hopf
     rings = [ln for ln in ax.lines if ln.get_marker() == "o" and ln.get_color() == "tab:orange"]
     assert rings and np.allclose(np.sort(rings[0].get_xdata()), np.sort(x[~stable]))
+
+
+def test_hopf_search_stays_within_the_values_the_model_takes(tmp_path, capsys, recwarn):
+    """Along b the straight state is unstable down to tiny widths and the search scanned up to
+    50 b: `branch b=0.0001:0.0002` was refused for b = 0.00185 m (>= l/2), a value nobody
+    typed, with slenderness warnings for it. Now the search ends where the model does, and says
+    there is no Hopf point, naming the parameter and the valid values scanned."""
+    from flutterswim import PAPER
+
+    code = main(["branch", "b=0.0001:0.0002", "--out", str(tmp_path / "b.nc"), "--segments", "8", "--quiet"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1, err
+    assert "no Hopf point found for b between" in err[0] and "unstable throughout" in err[0]
+    hi = float(err[0].split(" and ")[1].split()[0])
+    assert hi < PAPER.l / 2  # only values the model takes
+    assert not [w for w in recwarn if "not slender" in str(w.message)]
+    assert not (tmp_path / "b.nc").exists()
+
+
+def test_a_hopf_point_outside_the_range_is_named(tmp_path, capsys):
+    """No Hopf point in the range typed: the branch starts at the nearest one, and says so."""
+    code = main(["branch", "kappa_E_ratio=0.9:1", "--out", str(tmp_path / "k.nc"), "--points", "4",
+                 "--segments", "8", "--steps", "16", "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 0
+    assert "note: no Hopf point in kappa_E_ratio=0.9:1; the branch starts at the nearest one" in err
+    hopf = float(err.split("kappa_E_ratio=")[2].split(",")[0])
+    assert hopf < 0.9
+    capsys.readouterr()
+    assert main(["branch", "kappa_E_ratio=0.6:1", "--out", str(tmp_path / "k2.nc"), "--points", "4",
+                 "--segments", "8", "--steps", "16", "--quiet"]) == 0
+    assert "note:" not in capsys.readouterr().err  # inside the range: no note

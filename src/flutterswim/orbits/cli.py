@@ -84,6 +84,11 @@ def _cmd_branch(args) -> int:
     bracket = (hopf_bracket(axis, n, lo, hi, prefer=base)
                or (None if near == base else hopf_bracket(axis, n, base, near)))
     hp = hopf_point(params, name, n_segments=n, bracket=bracket)
+    if not min(lo, hi) <= hp.value <= max(lo, hi):
+        import sys
+
+        print(f"flutterswim branch: note: no Hopf point in {name}={lo:g}:{hi:g}; the branch starts at the "
+              f"nearest one, {name}={hp.value:.6g}, outside the range", file=sys.stderr)
     from .normal_form import normal_form
 
     nf = normal_form(hp)

@@ -46,8 +46,9 @@ def leading_pair(params, n_segments: int) -> complex:
 def flutter_growth(axis: Axis, value: float, n_segments: int) -> float:
     """Re of the leading complex pair at ``value`` of ``axis`` [1/tau]; -1 where there is no
     oscillatory mode at all (chi = 0: the passive relaxation's real eigenvalues), no flutter."""
+    params = axis.at(value)  # a value the model refuses is an error, not "no flutter"
     try:
-        return leading_pair(axis.at(value), n_segments).real
+        return leading_pair(params, n_segments).real
     except ParameterError:
         return -1.0
 
@@ -111,7 +112,7 @@ def hopf_point(params, parameter: str = "kappa_E_ratio", *, n_segments: int = 48
         return flutter_growth(axis, v, n_segments)
 
     if bracket is None:
-        bracket = _bracket(growth, axis.value())
+        bracket = _bracket(growth, axis.value(), parameter)
     lo, hi = bracket
     glo, ghi = growth(lo), growth(hi)
     if glo * ghi > 0:
@@ -134,19 +135,39 @@ def hopf_point(params, parameter: str = "kappa_E_ratio", *, n_segments: int = 48
     return HopfPoint(axis, float(v), omega, float(slope), q, p, a, n_segments)
 
 
-def _bracket(growth, v0: float) -> tuple[float, float]:
-    """Bracket the sign change of the growth rate by scanning geometrically below and above v0."""
+def _bracket(growth, v0: float, name: str = "the parameter") -> tuple[float, float]:
+    """Bracket the sign change of the growth rate by scanning geometrically below and above v0.
+    A direction ends at the first value the model refuses (b beyond l/2, a above b ...): the
+    scan never reports on values nobody asked for; nor does it warn about them."""
+    import warnings
+
+    from ..params import SlendernessWarning
+
+    def sign_change(v: float) -> bool | None:  # None: v is not a valid value of the parameter
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", SlendernessWarning)
+                return growth(v) * g0 <= 0
+        except ParameterError:
+            return None
+
     g0 = growth(v0)
     below = v0 * np.array([0.8, 0.6, 0.45, 0.3, 0.2, 0.1, 0.05, 0.02])
     above = v0 * np.array([1.25, 1.6, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0])
-    prev_b, prev_a = v0, v0
+    last = {"below": v0, "above": v0}  # the last valid value scanned on each side
+    open_ = {"below": True, "above": True}
     for vb, va in zip(below, above):
-        if growth(vb) * g0 <= 0:
-            return float(vb), float(prev_b)
-        if growth(va) * g0 <= 0:
-            return float(prev_a), float(va)
-        prev_b, prev_a = vb, va
-    raise ParameterError(f"no Hopf point found between {below[-1]:g} and {above[-1]:g} "
+        for side, v in (("below", vb), ("above", va)):
+            if not open_[side]:
+                continue
+            change = sign_change(v)
+            if change is None:
+                open_[side] = False
+            elif change:
+                return (float(v), float(last[side])) if side == "below" else (float(last[side]), float(v))
+            else:
+                last[side] = v
+    raise ParameterError(f"no Hopf point found for {name} between {last['below']:g} and {last['above']:g} "
                          f"(the straight state is {'un' if g0 > 0 else ''}stable throughout)")
 
 
