@@ -123,3 +123,23 @@ def test_orbits_limited_by_the_time_discretisation_are_called_out():
             assert ours[0].filename == __file__  # points at the caller
             assert f"{np.count_nonzero(err > gauge)} of {err.size} orbits" in str(ours[0].message)
         assert steps == 32 or ours  # 8 steps per period do not resolve this stroke to the gauge
+
+
+def test_to_result_of_a_turned_orbit_carries_its_field_direction():
+    """to_result() built the field at 0 whatever the orbit's phi: describe then read a stroke
+    turned by phi as swimming across its field. Rotation invariance: the turned orbit's run
+    describes as the original's, with the field and the swim direction turned together."""
+    from flutterswim.analysis import describe
+
+    o0 = periodic_orbit(fs.PAPER, n_segments=12, steps=16)
+    phi = 2.0
+    turned = periodic_orbit(fs.PAPER, guess=o0, phi=phi)
+    r0, r1 = o0.to_result(n_cycles=4), turned.to_result(n_cycles=4)
+    assert np.all(r1.field_angle == pytest.approx(phi)) and np.all(r0.field_angle == 0.0)
+    d0, d1 = describe(r0), describe(r1)
+    assert d1.period_s == pytest.approx(d0.period_s, rel=1e-7)
+    assert d1.advance_per_cycle_mm == pytest.approx(d0.advance_per_cycle_mm, rel=1e-6)
+    for end in ("leading_lateral_p2p_mm", "trailing_lateral_p2p_mm"):
+        assert getattr(d1, end) == pytest.approx(getattr(d0, end), rel=1e-6), end
+    assert d1.leading_end == d0.leading_end and d1.towards_field == d0.towards_field
+    assert d1.direction_to_field_deg == pytest.approx(d0.direction_to_field_deg, abs=1e-4)

@@ -150,7 +150,7 @@ class PeriodicOrbit:
         stats = SolverStats("periodic_orbit", 5, self.steps, 0, 0, 0, 0, 0.0)
         sol = Solution(t, y, "completed", "periodic orbit", float(t[-1]), y[-1], stats)
         fil = Filament(self.n_segments, g.eta_par, g.eta_perp, g.chi)
-        return _package(sol, fil, Field().scaled(tau), g, self.params, tau, False,
+        return _package(sol, fil, Field(direction=self.phi).scaled(tau), g, self.params, tau, False,
                         {"n_segments": self.n_segments, "source": "periodic_orbit",
                          "limit_cycle": True, "limit_cycle_time": 0.0})
 
