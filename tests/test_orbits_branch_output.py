@@ -31,6 +31,8 @@ def test_swim_direction_turns_by_half_a_turn_in_the_mirrored_field(mirrored):
     np.testing.assert_allclose(neg.advance.values[-1], pos.advance.values[-1], rtol=1e-3)
     turn = np.remainder(neg.swim_direction.values - pos.swim_direction.values[-1], 360.0)
     np.testing.assert_allclose(turn, 180.0, atol=1e-6)
+    # in (-180, 180] as the attribute says, without flipping to -180 on a round-off (it did)
+    np.testing.assert_allclose(neg.swim_direction.values, 180.0, atol=1e-6)
 
 
 def _end_ahead(orb, direction_deg):

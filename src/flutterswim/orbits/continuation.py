@@ -86,7 +86,7 @@ class Branch:
         data = {
             "period": (col("period"), tu, "period of the stroke"),
             "advance": (col("advance"), lu, "net advance per cycle (its magnitude; its direction: swim_direction)"),
-            "swim_direction": (np.degrees(col("swim_direction")), "degree",
+            "swim_direction": (_half_open_degrees(col("swim_direction")), "degree",
                                "direction of the net advance per cycle, anticlockwise from the field (x axis), "
                                "in (-180, 180]"),
             "leading_end": (np.array([o.leading_end == "s=l" for o in orbs], dtype="i1"), "1",
@@ -178,6 +178,13 @@ def _systems(axis: Axis, value: float, n: int) -> ShapeSystem:
 
 
 @one_blas_thread
+def _half_open_degrees(radians: np.ndarray) -> np.ndarray:
+    """Degrees in (-180, 180]: a stroke swimming against the field (along -x up to round-off)
+    reads 180, not -180 or 180 by the sign of a round-off in its lateral drift."""
+    d = np.degrees(radians)
+    return np.where(d <= -180.0 + 1e-6, d + 360.0, d)
+
+
 def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
                     n_segments: int = defaults.SWEEP_N_SEGMENTS, steps: int = BRANCH_STEPS, tol: float = 1e-10,
                     max_newton: int = 8, progress: bool = False, max_points: int | None = None,
