@@ -177,7 +177,6 @@ def _systems(axis: Axis, value: float, n: int) -> ShapeSystem:
     return ShapeSystem.of(axis.at(value), n)
 
 
-@one_blas_thread
 def _half_open_degrees(radians: np.ndarray) -> np.ndarray:
     """Degrees in (-180, 180]: a stroke swimming against the field (along -x up to round-off)
     reads 180, not -180 or 180 by the sign of a round-off in its lateral drift."""
@@ -185,6 +184,7 @@ def _half_open_degrees(radians: np.ndarray) -> np.ndarray:
     return np.where(d <= -180.0 + 1e-6, d + 360.0, d)
 
 
+@one_blas_thread
 def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
                     n_segments: int = defaults.SWEEP_N_SEGMENTS, steps: int = BRANCH_STEPS, tol: float = 1e-10,
                     max_newton: int = 8, progress: bool = False, max_points: int | None = None,
