@@ -211,8 +211,9 @@ def build_fig4b(ctx: Context) -> Outcome:
     fig.axes[-1].set_xlabel(r"$\kappa_E / \kappa_{E,fit}$ (dimensionless)")
     for ax in fig.axes:
         ax.axvline(PAPER_ONSET_RATIO, color="tab:red", ls="--", lw=0.8)
-    fig.axes[0].text(PAPER_ONSET_RATIO, 0.5, "paper: ~0.65 ", transform=fig.axes[0].get_xaxis_transform(),
-                     fontsize=7, color="tab:red", ha="right")
+    # at the top, level with the Hopf label (at mid-height the legend hid it)
+    fig.axes[0].text(PAPER_ONSET_RATIO, 0.97, "paper: ~0.65 ", transform=fig.axes[0].get_xaxis_transform(),
+                     fontsize=8, color="tab:red", ha="right", va="top")
     save_figure(fig, ctx.path("fig4b.png"))
     _close(fig)
     g = PAPER.groups
