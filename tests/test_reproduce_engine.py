@@ -166,10 +166,12 @@ def test_cli_exit_codes(tmp_path, capsys):
     from flutterswim.cli import main
 
     assert main(["reproduce", "--out", str(tmp_path / "r"), "--only", "table1", "--quiet"]) == 0
-    assert "1 of 1 targets ok" in capsys.readouterr().out
+    assert "1 of 1 targets ok (1 built, 0 up to date)" in capsys.readouterr().out
     t0 = time.perf_counter()
     assert main(["reproduce", "--out", str(tmp_path / "r"), "--only", "table1", "--quiet"]) == 0
     assert time.perf_counter() - t0 < 30
+    # the summary says what the rerun did (it said "ok, 0 skipped" either way)
+    assert "1 of 1 targets ok (0 built, 1 up to date)" in capsys.readouterr().out
     assert main(["reproduce", "--out", str(tmp_path / "r"), "--trials", str(tmp_path / "none.csv")]) == 2
     (tmp_path / "file").write_text("x")
     assert main(["reproduce", "--out", str(tmp_path / "file")]) == 2

@@ -35,7 +35,9 @@ def _cmd(args) -> int:
                     log=None if args.quiet else log)
     n = len(res.records)
     skipped = [k for k, r in res.records.items() if r.status == "skipped"]
-    print(f"{n - len(res.failed) - len(skipped)} of {n} targets ok, {len(skipped)} skipped"
+    built = sum(r.reran and r.status == "ok" for r in res.records.values())
+    ok = n - len(res.failed) - len(skipped)
+    print(f"{ok} of {n} targets ok ({built} built, {ok - built} up to date), {len(skipped)} skipped"
           + (f", FAILED: {', '.join(res.failed)}" if res.failed else "")
           + f"; {res.wall_time:.1f} s; report: {res.report}")
     return 0 if res.ok else 1
