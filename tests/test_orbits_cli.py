@@ -178,3 +178,11 @@ def test_a_hopf_point_outside_the_range_is_named(tmp_path, capsys):
     assert main(["branch", "kappa_E_ratio=0.6:1", "--out", str(tmp_path / "k2.nc"), "--points", "4",
                  "--segments", "8", "--steps", "16", "--quiet"]) == 0
     assert "note:" not in capsys.readouterr().err  # inside the range: no note
+
+
+def test_an_error_stands_alone_without_the_note(tmp_path, capsys):
+    """kappa_E_ratio=0.1:0.3 has no Hopf point and no stroke: one line, the error (the note about
+    the Hopf point outside the range came first, two lines)."""
+    code = main(["branch", "kappa_E_ratio=0.1:0.3", "--out", str(tmp_path / "k.nc"), "--segments", "8", "--quiet"])
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert code == 2 and len(err) == 1 and "note" not in err[0], err

@@ -84,11 +84,6 @@ def _cmd_branch(args) -> int:
     bracket = (hopf_bracket(axis, n, lo, hi, prefer=base)
                or (None if near == base else hopf_bracket(axis, n, base, near)))
     hp = hopf_point(params, name, n_segments=n, bracket=bracket)
-    if not min(lo, hi) <= hp.value <= max(lo, hi):
-        import sys
-
-        print(f"flutterswim branch: note: no Hopf point in {name}={lo:g}:{hi:g}; the branch starts at the "
-              f"nearest one, {name}={hp.value:.6g}, outside the range", file=sys.stderr)
     from .normal_form import normal_form
 
     nf = normal_form(hp)
@@ -103,6 +98,11 @@ def _cmd_branch(args) -> int:
 
     with atomic_path(out) as tmp:
         ds.to_netcdf(tmp, engine="h5netcdf")
+    if not min(lo, hi) <= hp.value <= max(lo, hi):  # (after the run: an error stands alone)
+        import sys
+
+        print(f"flutterswim branch: note: no Hopf point in {name}={lo:g}:{hi:g}; the branch starts at the "
+              f"nearest one, {name}={hp.value:.6g}, outside the range", file=sys.stderr)
     print(f"{out}: {len(br.values)} orbits from the Hopf point {name}={br.hopf_value:.6g} to {br.values[-1]:.6g} "
           f"({ds.attrs['bifurcation']}, l1={br.lyapunov_coefficient:.3g}) in {br.wall_time:.1f} s; {br.message}")
     if args.plot:
