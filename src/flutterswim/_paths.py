@@ -181,7 +181,15 @@ def mark_gif(path: str | os.PathLike) -> None:
     p.write_bytes(data[:-1] + b"\x21\xfe" + bytes([len(note)]) + note + b"\x00\x3b")
 
 
-def _writable_dir(folder: Path, what: str, path: Path) -> None:
+def _writable_dir(folder: Path, what: str, path: Path, *, may_create: bool = False) -> None:
+    """Refuse a folder that does not exist (a typo must not create folders anywhere; only an
+    output folder itself, ``may_create``, is made, inside an existing one) or is not writable."""
+    if not folder.exists() and not (may_create and folder.parent.is_dir()):
+        missing = folder
+        while not missing.parent.exists() and missing.parent != missing:
+            missing = missing.parent
+        raise ParameterError(f"{what}={str(path)!r}: the folder {str(missing)!r} does not exist; create it first "
+                             "or give an existing folder")
     probe = folder
     while not probe.exists():
         if probe.parent == probe:
@@ -249,7 +257,7 @@ def check_output_dir(path: str | os.PathLike, *, what: str = "out") -> Path:
     p = Path(os.fspath(path))
     if p.exists() and not p.is_dir():
         raise ParameterError(f"{what}={str(p)!r} exists and is not a directory; give a folder")
-    _writable_dir(p, what, p)
+    _writable_dir(p, what, p, may_create=True)
     return p
 
 

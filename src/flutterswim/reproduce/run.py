@@ -41,7 +41,7 @@ def check_out(out: str | os.PathLike, targets) -> Path:
 
     p = check_store_path(out, overwrite=False, what="--out", kind=STORE_KIND)
     names = ["report.html", "manifest.json"] + [f for t in targets for f in t.outputs]
-    for f in names:
+    for f in names if p.is_dir() else ():  # (a new folder replaces nothing)
         check_output_file(p / f, (Path(f).suffix,), what="--out")
     del MARKER
     return p
