@@ -1,7 +1,7 @@
 """Safe output paths: checks before computing, atomic writes, and the store marker.
 
-- :func:`check_output_file`: the path is not a directory, its folder exists or can be created
-  and is writable, its suffix is one of those allowed. Call it before any computation.
+- :func:`check_output_file`: the path is not a directory, its folder exists (none is created
+  for a file) and is writable, its suffix is one of those allowed. Call it before any computation.
 - :func:`atomic_path`: write to a temporary name in the same folder, then ``os.replace``:
   an interrupted save leaves the old file or the new one, never a truncated one.
 - :func:`check_store_path` / :func:`remove_own_store`: a store directory is replaced only if
@@ -181,7 +181,15 @@ def mark_gif(path: str | os.PathLike) -> None:
     p.write_bytes(data[:-1] + b"\x21\xfe" + bytes([len(note)]) + note + b"\x00\x3b")
 
 
-def _writable_dir(folder: Path, what: str, path: Path) -> None:
+def _writable_dir(folder: Path, what: str, path: Path, *, may_create: bool = False) -> None:
+    """Refuse a folder that does not exist (a typo must not create folders anywhere; only an
+    output folder itself, ``may_create``, is made, inside an existing one) or is not writable."""
+    if not folder.exists() and not (may_create and folder.parent.is_dir()):
+        missing = folder
+        while not missing.parent.exists() and missing.parent != missing:
+            missing = missing.parent
+        raise ParameterError(f"{what}={str(path)!r}: the folder {str(missing)!r} does not exist; create it first "
+                             "or give an existing folder")
     probe = folder
     while not probe.exists():
         if probe.parent == probe:
@@ -245,11 +253,11 @@ def check_output_file(path: str | os.PathLike, suffixes: Sequence[str], *, what:
 
 
 def check_output_dir(path: str | os.PathLike, *, what: str = "out") -> Path:
-    """An output folder: an existing directory or one that can be created, and writable."""
+    """An output folder: an existing directory, or a new one whose parent exists; writable."""
     p = Path(os.fspath(path))
     if p.exists() and not p.is_dir():
         raise ParameterError(f"{what}={str(p)!r} exists and is not a directory; give a folder")
-    _writable_dir(p, what, p)
+    _writable_dir(p, what, p, may_create=True)
     return p
 
 
@@ -260,7 +268,6 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     p = Path(os.fspath(path))
     if p.is_symlink():  # a link to a file: replace the file, keep the link (check_output_file)
         p = Path(os.path.realpath(p))
-    p.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{p.stem}.", suffix=f".part{p.suffix}", dir=p.parent)
     os.close(fd)
     tmp_p = Path(tmp)

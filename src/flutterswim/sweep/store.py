@@ -254,8 +254,7 @@ def _acquire(path: Path) -> _Lock:
     """Exclusive advisory lock next to the store: one writer at a time (close-on-exec)."""
     import fcntl
 
-    lock_path = path.parent / f".{path.name}.lock"
-    path.parent.mkdir(parents=True, exist_ok=True)
+    lock_path = path.parent / f".{path.name}.lock"  # (its folder exists: check_store_path)
     for _ in range(100):
         created = True
         try:
@@ -414,7 +413,7 @@ class SweepStore:
         tmp = path.parent / f".{path.name}.creating-{os.getpid()}"
         if tmp.exists():
             shutil.rmtree(tmp)
-        tmp.mkdir(parents=True)
+        tmp.mkdir()
         try:
             with warnings.catch_warnings():
                 # consolidated metadata lets plain xarray.open_zarr(path) read it without a warning

@@ -1,0 +1,70 @@
+"""Review findings on the command line (branch cli-fixes); each section names its finding."""
+
+import importlib
+import os
+
+import pytest
+
+import flutterswim as fs
+from flutterswim import cli
+
+
+def _error(argv, capsys):
+    status = cli.main([str(a) for a in argv])
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert status == 2 and len(err) == 1, (status, err)
+    return err[0]
+
+
+@pytest.fixture()
+def no_computing(monkeypatch):
+    """The commands below must stop at their checks: a simulation fails the test."""
+    def computed(*a, **kw):
+        raise AssertionError("computed before the output path was checked")
+
+    for module, name in (("flutterswim.simulate", "simulate"), ("flutterswim.limit_cycle", "run_to_limit_cycle"),
+                         ("flutterswim.demo", "run_to_limit_cycle"), ("flutterswim.sweep.run", "_run"),
+                         ("flutterswim.stability.figures", "_figures")):
+        monkeypatch.setattr(importlib.import_module(module), name, computed)
+
+
+# ------------------------------------------------------------ 1. no missing folder is created
+@pytest.mark.parametrize("argv, option", [
+    (["simulate", "--t-end", "1", "--quiet", "--out", "{new}/dir/a.nc"], "--out"),
+    (["simulate", "--quiet", "--out", "{new}/a.nc"], "--out"),
+    (["plot", "{tmp}/run.nc", "--out", "{new}/y/fig.png"], "--out"),
+    (["sweep", "chi=60", "--out", "{new}/s.zarr", "--no-progress"], "--out"),
+    (["reproduce", "--out", "{new}/rp"], "--out"),
+    (["stability", "--out", "{new}/st", "--quiet"], "--out"),
+])
+def test_an_output_in_a_missing_folder_is_refused_and_nothing_is_created(tmp_path, capsys, no_computing, argv,
+                                                                         option):
+    new = tmp_path / "newdir"
+    line = _error([a.format(tmp=tmp_path, new=new) for a in argv], capsys)
+    assert f"{option}=" in line and f"the folder {str(new)!r} does not exist" in line, line
+    assert not new.exists() and os.listdir(tmp_path) == []
+
+
+def test_the_api_creates_no_folder_for_a_file(tmp_path):
+    from flutterswim._paths import atomic_path
+
+    run = fs.simulate(fs.PAPER, 0.05, n_segments=6)
+    with pytest.raises(fs.ParameterError, match="does not exist"):
+        run.save(tmp_path / "a" / "b" / "run.nc")
+    with pytest.raises(FileNotFoundError):
+        with atomic_path(tmp_path / "a" / "x.txt") as tmp:
+            tmp.write_text("x")
+    assert os.listdir(tmp_path) == []
+
+
+def test_demo_creates_its_folder_only_inside_an_existing_one(tmp_path, capsys, no_computing):
+    from flutterswim import demo
+
+    assert demo.main(["--out", str(tmp_path / "x" / "out")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--out=" in err[0] and f"{str(tmp_path / 'x')!r} does not exist" in err[0], err
+    assert os.listdir(tmp_path) == []
+    (tmp_path / "x").mkdir()
+    with pytest.raises(AssertionError, match="computed"):  # past the checks, the folder made
+        demo.main(["--out", str(tmp_path / "x" / "out")])
+    assert (tmp_path / "x" / "out").is_dir()
