@@ -127,6 +127,22 @@ def test_batch_trial_without_a_voltage_fails_alone(movie, tmp_path, capsys, side
     assert "tracked 1 of 2 trials" in cap.out and "trialA.tif" in cap.err and reason in cap.err
 
 
+def test_readme_track_batch_command_runs_on_tiff_stacks(movie, tmp_path, monkeypatch, capsys):
+    """The README's track-batch line, run on a folder of TIFF stacks (which record no frame
+    rate), tracks them: without --px-per-mm and --fps it exited 2 and tracked nothing."""
+    import shlex
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    line = next(ln for ln in readme.splitlines() if ln.startswith("flutterswim track-batch "))
+    argv = shlex.split(line.split("#")[0])[1:]
+    _trials(tmp_path / "trials", movie, ("80V_sample1.tif", "85V_sample2.tif"))
+    monkeypatch.chdir(tmp_path)
+    assert main(argv + ["--quiet"]) == 0, capsys.readouterr().err
+    rows = _rows(tmp_path / "trials.csv")
+    assert [r["voltage_V"] for r in rows] == ["80", "85"]
+    assert float(rows[0]["period_s"]) == pytest.approx(0.2, rel=0.02)  # the wave's 5 Hz
+
+
 def test_batch_bad_pattern_is_still_bad_input(movie, tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(trk, "track", lambda *a, **k: pytest.fail("a trial was tracked"))
     folder = _trials(tmp_path / "t", movie, ("85V_sample1.tif", "trialA.tif"))
