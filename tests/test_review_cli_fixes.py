@@ -68,3 +68,32 @@ def test_demo_creates_its_folder_only_inside_an_existing_one(tmp_path, capsys, n
     with pytest.raises(AssertionError, match="computed"):  # past the checks, the folder made
         demo.main(["--out", str(tmp_path / "x" / "out")])
     assert (tmp_path / "x" / "out").is_dir()
+
+
+# ------------------------------------------------------------ 4. a new sweep store is *.zarr
+def _double(task):
+    return {"a": 2.0 * task["values"]["chi"]}
+
+
+_double.variables = ["a"]
+
+
+def test_a_new_sweep_store_must_be_named_zarr(tmp_path, capsys, no_computing):
+    line = _error(["sweep", "chi=60", "--out", tmp_path / "s.txt", "--no-progress"], capsys)
+    assert line.startswith("flutterswim sweep: --out=") and "*.zarr" in line and "s.zarr" in line, line
+    empty = tmp_path / "empty"
+    empty.mkdir()  # an empty folder is no store either
+    assert "*.zarr" in _error(["sweep", "chi=60", "--out", empty, "--no-progress"], capsys)
+    assert sorted(os.listdir(tmp_path)) == ["empty"] and os.listdir(empty) == []
+
+
+def test_our_sweep_store_resumes_whatever_its_name(tmp_path):
+    from flutterswim.sweep import sweep
+
+    first = sweep({"chi": [1.0, 2.0]}, out=str(tmp_path / "s.zarr"), backend="serial", point_fn=_double,
+                  progress=False, max_points=1)
+    assert int(first.attrs["n_done"]) == 1
+    os.rename(tmp_path / "s.zarr", tmp_path / "renamed")  # ours (marker): resumed under any name
+    ds = sweep({"chi": [1.0, 2.0]}, out=str(tmp_path / "renamed"), backend="serial", point_fn=_double,
+               progress=False)
+    assert ds["a"].values.tolist() == [2.0, 4.0]

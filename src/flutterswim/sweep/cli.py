@@ -17,7 +17,7 @@ def register(subparsers) -> None:
                               description="Run a parameter sweep; rerunning the same command resumes it.")
     p.add_argument("axes", nargs="+", help="axes like kappa_E_ratio=0:2:101, chi=60,70,80, tau=0.3")
     p.add_argument("--preset", default="paper", help="base parameter preset (default: paper)")
-    p.add_argument("--out", required=True, help="Zarr store (created, or resumed if it exists)")
+    p.add_argument("--out", required=True, help="Zarr store: a new one named *.zarr, or one of ours to resume")
     p.add_argument("--backend", default=None, help="processes (default), serial, dask, dask-local")
     p.add_argument("--scheduler", default=None, help="dask scheduler address tcp://host:port (implies --backend dask)")
     p.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")

@@ -300,6 +300,9 @@ class SweepStore:
         """Open (resume) or create the store and take its writer lock (released by
         :meth:`close` or when the process ends, SIGKILL included)."""
         path = check_store_path(path, overwrite=overwrite, kind="sweep")
+        if not has_marker(path) and path.suffix.lower() != ".zarr":  # ours is resumed whatever its name
+            raise ParameterError(f"out={str(path)!r}: a new sweep store is a Zarr folder named *.zarr; give a name "
+                                 f"such as {path.stem or 'sweep'}.zarr")
         if overwrite and path.is_dir() and has_marker(path):
             _refuse_foreign(path)  # before anything is computed or deleted
         lock = _acquire(path)
