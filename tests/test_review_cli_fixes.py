@@ -97,3 +97,25 @@ def test_our_sweep_store_resumes_whatever_its_name(tmp_path):
     ds = sweep({"chi": [1.0, 2.0]}, out=str(tmp_path / "renamed"), backend="serial", point_fn=_double,
                progress=False)
     assert ds["a"].values.tolist() == [2.0, 4.0]
+
+
+# ------------------------------------------------- 5. plot-sweep draws each store to its own figure
+def test_plot_sweep_default_figure_is_named_after_the_store(tmp_path, capsys, monkeypatch):
+    """Two stores in one folder: each figure beside its store, named after it (it was sweep.png
+    in the current folder for both, the second replacing the first)."""
+    from test_sweep_plot_cli import fake  # swims above kappa_E_ratio 0.7
+
+    from flutterswim.sweep import sweep
+
+    pytest.importorskip("matplotlib")
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "runs").mkdir()
+    figures = []
+    for name, values in (("resume3.zarr", [0.8, 1.0, 1.2]), ("other.zarr", [0.5, 1.0, 1.6, 2.0])):
+        store = tmp_path / "runs" / name
+        sweep({"kappa_E_ratio": values}, out=str(store), backend="serial", point_fn=fake, progress=False)
+        assert cli.main(["plot-sweep", str(store)]) == 0
+        figures.append(tmp_path / "runs" / name.replace(".zarr", ".png"))
+        assert f"figure: {figures[-1]}" in capsys.readouterr().out
+    assert all(f.stat().st_size > 1000 for f in figures) and not (tmp_path / "sweep.png").exists()
+    assert figures[0].read_bytes() != figures[1].read_bytes()

@@ -39,7 +39,8 @@ def register(subparsers) -> None:
 
     q = subparsers.add_parser("plot-sweep", help="figure of a sweep store (advancement and period)")
     q.add_argument("store")
-    q.add_argument("--out", default="sweep.png")
+    q.add_argument("--out", default=None, help="figure (.png, .pdf, .svg; default: the store's name with .png, "
+                                                "next to it)")
     q.add_argument("--branch", default=None, help="up or down (continuation sweeps)")
     q.set_defaults(func=_cmd_plot)
 
@@ -79,10 +80,12 @@ def _cmd_plot(args) -> int:
     from .plot import plot_sweep
     from .run import open_sweep
 
-    check_output_file(args.out, (".png", ".pdf", ".svg"), what="--out")
+    from pathlib import Path
 
-    plot_sweep(open_sweep(args.store), args.out, branch=args.branch)
-    print(f"figure: {args.out}")
+    out = check_output_file(args.out or Path(args.store).with_suffix(".png"), (".png", ".pdf", ".svg"),
+                            what="--out")  # (two stores in one folder: two figures)
+    plot_sweep(open_sweep(args.store), out, branch=args.branch)
+    print(f"figure: {out}")
     return 0
 
 
