@@ -119,3 +119,12 @@ def test_plot_sweep_default_figure_is_named_after_the_store(tmp_path, capsys, mo
         assert f"figure: {figures[-1]}" in capsys.readouterr().out
     assert all(f.stat().st_size > 1000 for f in figures) and not (tmp_path / "sweep.png").exists()
     assert figures[0].read_bytes() != figures[1].read_bytes()
+
+
+def test_stability_default_folder_works_in_a_fresh_folder(tmp_path, monkeypatch, capsys, no_computing):
+    """Its default was out/stability: with no folder made for a missing parent, it failed
+    wherever out/ did not exist."""
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["stability", "--quiet"]) == 1
+    assert "AssertionError: computed" in capsys.readouterr().err  # past the checks
+    assert os.listdir(tmp_path) == ["stability"]
