@@ -1,6 +1,7 @@
 """Review findings on the command line (branch cli-fixes); each section names its finding."""
 
 import importlib
+import json
 import os
 
 import pytest
@@ -128,3 +129,32 @@ def test_stability_default_folder_works_in_a_fresh_folder(tmp_path, monkeypatch,
     assert cli.main(["stability", "--quiet"]) == 1
     assert "AssertionError: computed" in capsys.readouterr().err  # past the checks
     assert os.listdir(tmp_path) == ["stability"]
+
+
+# ------------------------------------------------------------------- 6. one line, once
+@pytest.fixture(scope="module")
+def short_run(tmp_path_factory):
+    p = tmp_path_factory.mktemp("runs") / "short.nc"
+    fs.simulate(fs.PAPER, 0.3, n_segments=8).save(p)
+    return p
+
+
+@pytest.mark.parametrize("value", ["0", "0.0", "-0", "nan"])
+def test_describe_bad_period_is_the_only_line(short_run, capsys, value):
+    """--period 0 printed numpy's 'invalid value encountered in divide' warning first."""
+    line = _error(["describe", short_run, "--period", value], capsys)
+    assert line.startswith("flutterswim describe: --period=") and "warning" not in line, line
+
+
+def test_describe_note_is_printed_once_on_stderr_in_both_modes(tmp_path, capsys):
+    """The table printed the note on stdout and again on stderr; JSON mode has it in the JSON
+    and once on stderr."""
+    run = fs.simulate(fs.PAPER, 3.0, n_segments=8)  # still growing: not settled
+    run.save(tmp_path / "mid.nc")
+    note = fs.describe(run, n_last=2).note
+    assert note
+    for mode in ([], ["--json"]):
+        assert cli.main(["describe", str(tmp_path / "mid.nc"), "--last", "2", *mode]) == 0
+        out, err = capsys.readouterr()
+        assert err.splitlines() == [f"flutterswim describe: note: {note}"]
+        assert note not in out if not mode else json.loads(out)["note"] == note

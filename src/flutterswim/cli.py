@@ -141,7 +141,10 @@ def _load_run_or_track(path: str):
 def _describe(args: argparse.Namespace) -> int:
     from .analysis.descriptors import describe
 
-    kw = {} if args.period is None else {"period": args.period}
+    from ._validate import positive
+
+    # checked before computing: --period 0 printed numpy's "invalid value" warning before the error
+    kw = {} if args.period is None else {"period": positive("--period", args.period)}
     obj = _load_run_or_track(args.run)
     n_last = args.last
     if n_last is None:
@@ -157,9 +160,7 @@ def _describe(args: argparse.Namespace) -> int:
     d = desc.to_dict()
     if args.json:
         print(json.dumps(d, indent=2))
-    else:
-        if desc.note:
-            print(f"note: {desc.note}")
+    else:  # the note once, on stderr below, as in JSON mode (it printed twice, on stdout and stderr)
         width = max(len(k) for k in d)
         for k, v in d.items():
             if k == "note":
