@@ -158,3 +158,56 @@ def test_describe_note_is_printed_once_on_stderr_in_both_modes(tmp_path, capsys)
         out, err = capsys.readouterr()
         assert err.splitlines() == [f"flutterswim describe: note: {note}"]
         assert note not in out if not mode else json.loads(out)["note"] == note
+
+
+# --------------------------------------------------- 7. the CLI names options, not API arguments
+def test_branch_warning_names_the_steps_option(tmp_path, capsys):
+    """8 steps per period are too few for the gauge: the API warns "(steps=)", the CLI "--steps"."""
+    rc = cli.main(["branch", "kappa_E_ratio=0.7:0.8", "--points", "3", "--segments", "8", "--steps", "8",
+                   "--out", str(tmp_path / "b.nc"), "--quiet"])
+    err = capsys.readouterr().err
+    warned = [ln for ln in err.splitlines() if "warning" in ln]
+    assert rc == 0 and len(warned) == 1 and "8 steps per period" in warned[0], err
+    assert "(--steps)" in warned[0] and "steps=" not in warned[0]
+
+
+def test_fit_names_segments_once(tmp_path, capsys):
+    trials = tmp_path / "t.csv"
+    trials.write_text("voltage_V,sample,period_s,advance_mm,lateral_mm\n85,1,0.5,0.4,1.1\n85,2,0.52,0.41,1.12\n")
+    line = _error(["fit", trials, "--segments", "1", "--out", tmp_path / "f.json"], capsys)
+    assert "--segments=1 must be an integer >= 8" in line and line.count("--segments") == 1, line
+
+
+def test_reproduce_into_a_folder_of_other_files_names_a_reproduce_folder(tmp_path, capsys):
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "notes.txt").write_text("mine")
+    line = _error(["reproduce", "--out", tmp_path / "mine", "--only", "table1"], capsys)
+    assert "not a flutterswim reproduce folder" in line and "flutterswim store" not in line, line
+    assert "store name" not in line, line
+    assert "the name of a new reproduce folder" in line and os.listdir(tmp_path / "mine") == ["notes.txt"]
+
+
+def test_track_and_track_batch_say_fps_and_pattern_as_options(tmp_path, capsys):
+    """A TIFF stack records no frame rate: track said "give fps", track-batch's failure too; a
+    trial whose name the pattern misses said "or give a pattern"."""
+    pytest.importorskip("skimage")
+    tifffile = pytest.importorskip("tifffile")
+    import csv
+
+    import numpy as np
+
+    frames = np.random.default_rng(0).poisson(100, (6, 24, 24)).astype(np.uint16)
+    (tmp_path / "trials").mkdir()
+    for name in ("85V_sample1.tif", "trialA.tif"):
+        tifffile.imwrite(tmp_path / "trials" / name, frames, photometric="minisblack")
+    line = _error(["track", tmp_path / "trials" / "trialA.tif", "--px-per-mm", "70", "--out", tmp_path / "t.nc",
+                   "--quiet"], capsys)
+    assert "give --fps (frames per second)" in line, line
+    out = tmp_path / "trials.csv"
+    assert cli.main(["track-batch", str(tmp_path / "trials"), "--px-per-mm", "70", "--out", str(out), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    with open(tmp_path / "trials_failed.csv") as f:
+        reasons = {os.path.basename(r["trial"]): r["reason"] for r in csv.DictReader(f)}
+    assert "give --fps, or fps or times in the trial's sidecar" in reasons["85V_sample1.tif"]
+    assert "or give --pattern" in reasons["trialA.tif"]
+    assert all(r in err for r in reasons.values()) and "give fps" not in err and "a pattern;" not in err

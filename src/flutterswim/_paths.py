@@ -350,8 +350,9 @@ def check_store_path(path: str | os.PathLike, *, overwrite: bool, what: str = "o
     if p.is_dir() and not has_marker(p) and any(p.iterdir()):
         zarrish = any((p / f).exists() for f in ("zarr.json", ".zgroup", ".zattrs", ".zarray"))
         why = "a Zarr store written by another tool" if zarrish else "a directory holding other files"
-        raise ParameterError(f"{what}={str(p)!r} is {why}, not a flutterswim store (no {MARKER} marker); "
-                             "it is never overwritten. Give a new store name")
+        ours = "a flutterswim store" if store else f"a flutterswim {kind} folder"
+        raise ParameterError(f"{what}={str(p)!r} is {why}, not {ours} (no {MARKER} marker); "
+                             f"it is never overwritten. Give {new_name}")
     if p.is_dir():
         _check_kind(p, kind, what)
     if p.is_dir() and not os.access(p, os.W_OK | os.X_OK):

@@ -315,18 +315,28 @@ _OPTION_OF = {"n_segments": "--segments", "n_cycles": "--cycles", "n_last": "--l
               "targets": "--only", "out_dir": "--out"}
 
 
-def _as_typed(message: str, parser: argparse.ArgumentParser | None) -> str:
-    """The message with its leading ``name=`` (a Python API parameter) spelt as the option of
-    ``parser`` the user typed: ``px_per_mm=-3.0 must be > 0`` -> ``--px-per-mm=-3.0 must be > 0``;
-    unchanged where the command has no such option."""
-    m = re.match(r"([A-Za-z_]\w*)=", message)
-    if m is None or parser is None:
-        return message
-    name = m.group(1)
+def _option(name: str, parser: argparse.ArgumentParser) -> str | None:
+    """The option of ``parser`` for the Python API parameter ``name``, or None."""
     for option in ("--" + name.replace("_", "-"), _OPTION_OF.get(name)):
         if option in parser._option_string_actions:
-            return option + message[len(name):]
-    return message
+            return option
+    return None
+
+
+def _as_typed(message: str, parser: argparse.ArgumentParser | None) -> str:
+    """The message with its leading ``name=`` (a Python API parameter) spelt as the option of
+    ``parser`` the user typed: ``px_per_mm=-3.0 must be > 0`` -> ``--px-per-mm=-3.0 must be > 0``
+    (an option the API message names after it is not said twice), and its advice "give name"
+    as "give --name"; unchanged where the command has no such option."""
+    if parser is None:
+        return message
+    message = re.sub(r"\bgive ([A-Za-z_]\w*)\b",
+                     lambda g: f"give {_option(g.group(1), parser) or g.group(1)}", message)
+    m = re.match(r"([A-Za-z_]\w*)=", message)
+    option = None if m is None else _option(m.group(1), parser)
+    if option is None:
+        return message
+    return option + message[len(m.group(1)):].replace(f" ({option})", "", 1)
 
 
 def _describe_error(exc: BaseException, parser: argparse.ArgumentParser | None = None) -> tuple[int, str]:

@@ -188,7 +188,7 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
     from .. import __version__
     from .._paths import atomic_write_text, check_output_file, is_ours
     from ..analysis.descriptors import _ALONG_FIELD_COS, describe
-    from .track import check_options, track
+    from .track import NO_FRAME_RATE, check_options, track
 
     # every input checked before the first trial is tracked
     out_p = check_output_file(out, (".csv",), what="out")
@@ -223,7 +223,7 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
             tk = track(tr_.path, px_per_mm=ppm, fps=f, **kw)
             d = describe(tk, n_last=n_last)
         except Exception as exc:  # noqa: BLE001 - one trial's failure, with its reason; the batch goes on
-            why = " ".join(str(exc).split())
+            why = " ".join(str(exc).split()).replace(NO_FRAME_RATE, "give --fps, or fps or times in the trial's sidecar")
             failed.append((str(tr_.path), why if isinstance(exc, ParameterError) else
                            f"{type(exc).__name__}: {why}" if why else type(exc).__name__))
             continue
