@@ -211,3 +211,40 @@ def test_track_and_track_batch_say_fps_and_pattern_as_options(tmp_path, capsys):
     assert "give --fps, or fps or times in the trial's sidecar" in reasons["85V_sample1.tif"]
     assert "or give --pattern" in reasons["trialA.tif"]
     assert all(r in err for r in reasons.values()) and "give fps" not in err and "a pattern;" not in err
+
+
+# ------------------------------------------------------------ 8. subpackages without an import
+def test_subpackages_resolve_lazily_and_sweep_keeps_its_meaning():
+    """``import flutterswim as fs; fs.tracking.render`` raised AttributeError until
+    ``import flutterswim.tracking``; fs.sweep stays what it was (no attribute until the
+    subpackage is imported; the function is fs.run_sweep)."""
+    import subprocess
+    import sys
+
+    code = """
+import sys
+import flutterswim as fs
+assert "flutterswim.tracking" not in sys.modules
+got = fs.tracking.render
+from flutterswim.tracking.render import render
+assert got is render
+assert fs.steering.steer.__module__.startswith("flutterswim.steering")
+assert callable(fs.fitting.read_trials) and callable(fs.orbits.hopf_point) and callable(fs.plotting.plot_ghosts)
+assert fs.stability.__name__ == "flutterswim.stability" and fs.analysis.describe is fs.describe
+try:
+    fs.sweep
+except AttributeError:
+    pass
+else:
+    raise AssertionError("fs.sweep resolved before flutterswim.sweep was imported")
+import flutterswim.sweep
+assert fs.sweep is sys.modules["flutterswim.sweep"] and fs.run_sweep is flutterswim.sweep.sweep
+try:
+    fs.nonexistent
+except AttributeError as exc:
+    assert "nonexistent" in str(exc)
+print("ok")
+"""
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300,
+                       env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert r.returncode == 0 and r.stdout.strip() == "ok", r.stderr
