@@ -104,7 +104,7 @@ def test_debug_shows_the_traceback(files):
 def test_describe_without_limit_cycle_says_so(tmp_path):
     fs.simulate(fs.PAPER, 4.0, n_segments=12).save(tmp_path / "onset.nc")  # still in onset at 4 s
     r = _cli("describe", tmp_path / "onset.nc")
-    assert r.returncode == 0 and "note: no limit cycle" in r.stdout.splitlines()[0]
+    assert r.returncode == 0 and "describe: note: no limit cycle" in r.stderr  # once, on stderr (as --json)
     j = _cli("describe", tmp_path / "onset.nc", "--json")
     import json
 

@@ -7,6 +7,7 @@ import csv
 import importlib
 import json
 import math
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -88,7 +89,6 @@ def test_batch_any_error_of_one_trial_is_recorded(movie, tmp_path, monkeypatch):
     ({"voltage_V": 85, "sample": "s2", "field_angle_deg": "abc"}, "field_angle_deg='abc'"),
     ({"voltage_V": 85, "sample": "s2", "fps": -3}, "fps=-3"),
     ({"voltage_V": 85, "sample": "s2", "px_per_mm": "nan"}, "px_per_mm='nan'"),
-    ({"voltage_V": "inf", "sample": "s2"}, "voltage"),
     ({"voltage_V": 85, "sample": "s2", "start_end": "up"}, "start_end='up'"),
     ({"voltage_V": 85, "sample": "s2", "dark_line": "yes"}, "dark_line='yes'"),
     ({"voltage_V": 85, "sample": "s2", "roi": "0,0,inf,100"}, "roi="),
@@ -101,6 +101,57 @@ def test_batch_bad_sidecar_is_bad_input_before_any_trial_is_tracked(movie, tmp_p
     with pytest.raises(fs.ParameterError, match=match) as exc:
         track_batch(folder, tmp_path / "o.csv", px_per_mm=70.0, fps=FPS)
     assert "b.json" in str(exc.value)
+    assert not (tmp_path / "o.csv").exists()
+
+
+@pytest.mark.parametrize("sidecar, reason", [
+    (None, "no sidecar JSON and the name does not match the pattern"),
+    ({"voltage_V": "lots", "sample": "s2"}, "voltage 'lots' is not a number"),
+    ({"voltage_V": "inf", "sample": "s2"}, "voltage inf is not finite"),
+    ({"sample": "s2"}, "needs the keys voltage_V and sample"),
+])
+def test_batch_trial_without_a_voltage_fails_alone(movie, tmp_path, capsys, sidecar, reason):
+    """README: a trial that fails ("no voltage") is listed with its reason in trials_failed.csv,
+    the others are kept, exit 1; it stopped the whole batch (exit 2, nothing tracked)."""
+    folder = _trials(tmp_path / "t", movie, ("85V_sample1.tif", "trialA.tif"))
+    if sidecar is not None:
+        (folder / "trialA.json").write_text(json.dumps(sidecar))
+    out = tmp_path / "trials.csv"
+    rc = main(["track-batch", str(folder), "--px-per-mm", str(movie.px_per_mm), "--fps", "50", "--out", str(out),
+               "--quiet"])
+    cap = capsys.readouterr()
+    assert rc == 1, cap.err
+    assert [(r["voltage_V"], r["sample"]) for r in _rows(out)] == [("85", "1")]
+    failed = _rows(tmp_path / "trials_failed.csv")
+    assert [Path(f["trial"]).name for f in failed] == ["trialA.tif"] and reason in failed[0]["reason"], failed
+    assert "tracked 1 of 2 trials" in cap.out and "trialA.tif" in cap.err and reason in cap.err
+
+
+def test_readme_track_batch_command_runs_on_tiff_stacks(movie, tmp_path, monkeypatch, capsys):
+    """The README's track-batch line, run on a folder of TIFF stacks (which record no frame
+    rate), tracks them: without --px-per-mm and --fps it exited 2 and tracked nothing."""
+    import shlex
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    line = next(ln for ln in readme.splitlines() if ln.startswith("flutterswim track-batch "))
+    argv = shlex.split(line.split("#")[0])[1:]
+    _trials(tmp_path / "trials", movie, ("80V_sample1.tif", "85V_sample2.tif"))
+    monkeypatch.chdir(tmp_path)
+    assert main(argv + ["--quiet"]) == 0, capsys.readouterr().err
+    rows = _rows(tmp_path / "trials.csv")
+    assert [r["voltage_V"] for r in rows] == ["80", "85"]
+    assert float(rows[0]["period_s"]) == pytest.approx(0.2, rel=0.02)  # the wave's 5 Hz
+
+
+def test_batch_bad_pattern_is_still_bad_input(movie, tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(trk, "track", lambda *a, **k: pytest.fail("a trial was tracked"))
+    folder = _trials(tmp_path / "t", movie, ("85V_sample1.tif", "trialA.tif"))
+    for pattern, words in (("(?P<voltage>[", "--pattern='(?P<voltage>[' is not a regular expression"),
+                           (r"(\d+)V", "must have the named groups")):
+        rc = main(["track-batch", str(folder), "--px-per-mm", "70", "--fps", "50", "--pattern", pattern,
+                   "--out", str(tmp_path / "o.csv"), "--quiet"])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert rc == 2 and len(err) == 1 and words in err[0], err
     assert not (tmp_path / "o.csv").exists()
 
 

@@ -26,12 +26,16 @@ _LAZY = {  # imported on first use: the stability package loads numba, plotting 
     "run_sweep": ("flutterswim.sweep", "sweep"),
     "open_sweep": "flutterswim.sweep",
 }
+#: Subpackages reached as ``fs.tracking.render`` without importing them first (not "sweep": see above)
+_SUBPACKAGES = ("tracking", "steering", "fitting", "orbits", "stability", "analysis", "plotting")
 
 
 def __getattr__(name: str):
-    if name in _LAZY:
+    if name in _LAZY or name in _SUBPACKAGES:
         import importlib
 
+        if name in _SUBPACKAGES:
+            return importlib.import_module(f"{__name__}.{name}")
         module, attr = _LAZY[name] if isinstance(_LAZY[name], tuple) else (_LAZY[name], name)
         return getattr(importlib.import_module(module), attr)
     raise AttributeError(f"module 'flutterswim' has no attribute {name!r}")

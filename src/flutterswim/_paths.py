@@ -1,7 +1,7 @@
 """Safe output paths: checks before computing, atomic writes, and the store marker.
 
-- :func:`check_output_file`: the path is not a directory, its folder exists or can be created
-  and is writable, its suffix is one of those allowed. Call it before any computation.
+- :func:`check_output_file`: the path is not a directory, its folder exists (none is created
+  for a file) and is writable, its suffix is one of those allowed. Call it before any computation.
 - :func:`atomic_path`: write to a temporary name in the same folder, then ``os.replace``:
   an interrupted save leaves the old file or the new one, never a truncated one.
 - :func:`check_store_path` / :func:`remove_own_store`: a store directory is replaced only if
@@ -253,7 +253,7 @@ def check_output_file(path: str | os.PathLike, suffixes: Sequence[str], *, what:
 
 
 def check_output_dir(path: str | os.PathLike, *, what: str = "out") -> Path:
-    """An output folder: an existing directory or one that can be created, and writable."""
+    """An output folder: an existing directory, or a new one whose parent exists; writable."""
     p = Path(os.fspath(path))
     if p.exists() and not p.is_dir():
         raise ParameterError(f"{what}={str(p)!r} exists and is not a directory; give a folder")
@@ -268,7 +268,6 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     p = Path(os.fspath(path))
     if p.is_symlink():  # a link to a file: replace the file, keep the link (check_output_file)
         p = Path(os.path.realpath(p))
-    p.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{p.stem}.", suffix=f".part{p.suffix}", dir=p.parent)
     os.close(fd)
     tmp_p = Path(tmp)
@@ -351,8 +350,9 @@ def check_store_path(path: str | os.PathLike, *, overwrite: bool, what: str = "o
     if p.is_dir() and not has_marker(p) and any(p.iterdir()):
         zarrish = any((p / f).exists() for f in ("zarr.json", ".zgroup", ".zattrs", ".zarray"))
         why = "a Zarr store written by another tool" if zarrish else "a directory holding other files"
-        raise ParameterError(f"{what}={str(p)!r} is {why}, not a flutterswim store (no {MARKER} marker); "
-                             "it is never overwritten. Give a new store name")
+        ours = "a flutterswim store" if store else f"a flutterswim {kind} folder"
+        raise ParameterError(f"{what}={str(p)!r} is {why}, not {ours} (no {MARKER} marker); "
+                             f"it is never overwritten. Give {new_name}")
     if p.is_dir():
         _check_kind(p, kind, what)
     if p.is_dir() and not os.access(p, os.W_OK | os.X_OK):

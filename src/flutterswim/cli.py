@@ -141,7 +141,10 @@ def _load_run_or_track(path: str):
 def _describe(args: argparse.Namespace) -> int:
     from .analysis.descriptors import describe
 
-    kw = {} if args.period is None else {"period": args.period}
+    from ._validate import positive
+
+    # checked before computing: --period 0 printed numpy's "invalid value" warning before the error
+    kw = {} if args.period is None else {"period": positive("--period", args.period)}
     obj = _load_run_or_track(args.run)
     n_last = args.last
     if n_last is None:
@@ -157,9 +160,7 @@ def _describe(args: argparse.Namespace) -> int:
     d = desc.to_dict()
     if args.json:
         print(json.dumps(d, indent=2))
-    else:
-        if desc.note:
-            print(f"note: {desc.note}")
+    else:  # the note once, on stderr below, as in JSON mode (it printed twice, on stdout and stderr)
         width = max(len(k) for k in d)
         for k, v in d.items():
             if k == "note":
@@ -261,7 +262,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_animate)
 
     p = sub.add_parser("stability", help="stability map, neutral curve, bifurcation plots and eigenmodes")
-    p.add_argument("--out", default="out/stability", help="output folder")
+    p.add_argument("--out", default="stability", help="output folder (made in an existing one; default stability)")
     p.add_argument("--step", type=float, default=0.1, help="map grid step in eta_perp and chi")
     p.add_argument("--float32", action="store_true", help="store the map in single precision (half the size)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -314,18 +315,28 @@ _OPTION_OF = {"n_segments": "--segments", "n_cycles": "--cycles", "n_last": "--l
               "targets": "--only", "out_dir": "--out"}
 
 
-def _as_typed(message: str, parser: argparse.ArgumentParser | None) -> str:
-    """The message with its leading ``name=`` (a Python API parameter) spelt as the option of
-    ``parser`` the user typed: ``px_per_mm=-3.0 must be > 0`` -> ``--px-per-mm=-3.0 must be > 0``;
-    unchanged where the command has no such option."""
-    m = re.match(r"([A-Za-z_]\w*)=", message)
-    if m is None or parser is None:
-        return message
-    name = m.group(1)
+def _option(name: str, parser: argparse.ArgumentParser) -> str | None:
+    """The option of ``parser`` for the Python API parameter ``name``, or None."""
     for option in ("--" + name.replace("_", "-"), _OPTION_OF.get(name)):
         if option in parser._option_string_actions:
-            return option + message[len(name):]
-    return message
+            return option
+    return None
+
+
+def _as_typed(message: str, parser: argparse.ArgumentParser | None) -> str:
+    """The message with its leading ``name=`` (a Python API parameter) spelt as the option of
+    ``parser`` the user typed: ``px_per_mm=-3.0 must be > 0`` -> ``--px-per-mm=-3.0 must be > 0``
+    (an option the API message names after it is not said twice), and its advice "give name"
+    as "give --name"; unchanged where the command has no such option."""
+    if parser is None:
+        return message
+    message = re.sub(r"\bgive ([A-Za-z_]\w*)\b",
+                     lambda g: f"give {_option(g.group(1), parser) or g.group(1)}", message)
+    m = re.match(r"([A-Za-z_]\w*)=", message)
+    option = None if m is None else _option(m.group(1), parser)
+    if option is None:
+        return message
+    return option + message[len(m.group(1)):].replace(f" ({option})", "", 1)
 
 
 def _describe_error(exc: BaseException, parser: argparse.ArgumentParser | None = None) -> tuple[int, str]:

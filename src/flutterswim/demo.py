@@ -35,12 +35,12 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         out = check_output_dir(args.out, what="--out")  # before computing
-        for name in ("paper_run.nc", "paper_swimmer.png", "paper_descriptors.json"):
+        for name in ("paper_run.nc", "paper_swimmer.png", "paper_descriptors.json") if out.is_dir() else ():
             check_output_file(out / name, (Path(name).suffix,), what="--out")
     except ParameterError as exc:
         print(f"python -m flutterswim.demo: {exc}", file=sys.stderr)
         return 2
-    out.mkdir(parents=True, exist_ok=True)
+    out.mkdir(exist_ok=True)  # (its parent exists: check_output_dir)
     params = preset("paper")
     g = params.groups
     print(f"paper preset: eta_par={g.eta_par:.2f}, eta_perp={g.eta_perp:.2f}, chi={g.chi:.2f}")

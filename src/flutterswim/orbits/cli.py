@@ -90,8 +90,13 @@ def _cmd_branch(args) -> int:
     side = nf.direction if nf.supercritical else -nf.direction
     to = hi if side > 0 else lo
     extra = {} if args.look_beyond is None else {"look_beyond": args.look_beyond}
-    br = continue_orbits(params, name, to, n_points=args.points, n_segments=n, steps=steps,
-                         progress=not args.quiet, **extra)
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:  # the API's words, "(steps=)", said as typed
+        br = continue_orbits(params, name, to, n_points=args.points, n_segments=n, steps=steps,
+                             progress=not args.quiet, **extra)
+    for w in caught:
+        warnings.warn(str(w.message).replace("(steps=)", "(--steps)"), w.category, stacklevel=1)
     ds = br.to_dataset()
     ds.attrs["range_start" if side > 0 else "range_end"] = lo if side > 0 else hi
     from .._paths import atomic_path

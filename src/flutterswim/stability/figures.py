@@ -47,9 +47,10 @@ def stability_figures(out_dir, *, params: Parameters = PAPER, step: float = 0.1,
     if dtype not in ("float64", "float32"):
         raise ParameterError(f"dtype={dtype!r} is not allowed; use 'float64' or 'float32'")
     out = check_output_dir(out_dir, what="out_dir")
-    for name in ("stability_map.nc", "stability_map.png", "bifurcation.png", "eigenmodes.png", "mode1.gif"):
+    names = ("stability_map.nc", "stability_map.png", "bifurcation.png", "eigenmodes.png", "mode1.gif")
+    for name in names if out.is_dir() else ():  # (a new folder replaces nothing)
         check_output_file(out / name, (Path(name).suffix,), what="out_dir")  # before computing
-    out.mkdir(parents=True, exist_ok=True)
+    out.mkdir(exist_ok=True)  # (its parent exists: check_output_dir)
     from ..simulate import single_blas_thread
 
     with single_blas_thread():  # small dense eigenproblems: BLAS threads only add overhead

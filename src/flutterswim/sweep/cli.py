@@ -17,7 +17,7 @@ def register(subparsers) -> None:
                               description="Run a parameter sweep; rerunning the same command resumes it.")
     p.add_argument("axes", nargs="+", help="axes like kappa_E_ratio=0:2:101, chi=60,70,80, tau=0.3")
     p.add_argument("--preset", default="paper", help="base parameter preset (default: paper)")
-    p.add_argument("--out", required=True, help="Zarr store (created, or resumed if it exists)")
+    p.add_argument("--out", required=True, help="Zarr store: a new one named *.zarr, or one of ours to resume")
     p.add_argument("--backend", default=None, help="processes (default), serial, dask, dask-local")
     p.add_argument("--scheduler", default=None, help="dask scheduler address tcp://host:port (implies --backend dask)")
     p.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
@@ -39,7 +39,8 @@ def register(subparsers) -> None:
 
     q = subparsers.add_parser("plot-sweep", help="figure of a sweep store (advancement and period)")
     q.add_argument("store")
-    q.add_argument("--out", default="sweep.png")
+    q.add_argument("--out", default=None, help="figure (.png, .pdf, .svg; default: the store's name with .png, "
+                                                "next to it)")
     q.add_argument("--branch", default=None, help="up or down (continuation sweeps)")
     q.set_defaults(func=_cmd_plot)
 
@@ -79,10 +80,12 @@ def _cmd_plot(args) -> int:
     from .plot import plot_sweep
     from .run import open_sweep
 
-    check_output_file(args.out, (".png", ".pdf", ".svg"), what="--out")
+    from pathlib import Path
 
-    plot_sweep(open_sweep(args.store), args.out, branch=args.branch)
-    print(f"figure: {args.out}")
+    out = check_output_file(args.out or Path(args.store).with_suffix(".png"), (".png", ".pdf", ".svg"),
+                            what="--out")  # (two stores in one folder: two figures)
+    plot_sweep(open_sweep(args.store), out, branch=args.branch)
+    print(f"figure: {out}")
     return 0
 
 

@@ -254,8 +254,7 @@ def _acquire(path: Path) -> _Lock:
     """Exclusive advisory lock next to the store: one writer at a time (close-on-exec)."""
     import fcntl
 
-    lock_path = path.parent / f".{path.name}.lock"
-    path.parent.mkdir(parents=True, exist_ok=True)
+    lock_path = path.parent / f".{path.name}.lock"  # (its folder exists: check_store_path)
     for _ in range(100):
         created = True
         try:
@@ -301,6 +300,9 @@ class SweepStore:
         """Open (resume) or create the store and take its writer lock (released by
         :meth:`close` or when the process ends, SIGKILL included)."""
         path = check_store_path(path, overwrite=overwrite, kind="sweep")
+        if not has_marker(path) and path.suffix.lower() != ".zarr":  # ours is resumed whatever its name
+            raise ParameterError(f"out={str(path)!r}: a new sweep store is a Zarr folder named *.zarr; give a name "
+                                 f"such as {path.stem or 'sweep'}.zarr")
         if overwrite and path.is_dir() and has_marker(path):
             _refuse_foreign(path)  # before anything is computed or deleted
         lock = _acquire(path)
@@ -414,7 +416,7 @@ class SweepStore:
         tmp = path.parent / f".{path.name}.creating-{os.getpid()}"
         if tmp.exists():
             shutil.rmtree(tmp)
-        tmp.mkdir(parents=True)
+        tmp.mkdir()
         try:
             with warnings.catch_warnings():
                 # consolidated metadata lets plain xarray.open_zarr(path) read it without a warning

@@ -13,9 +13,11 @@ the named groups ``voltage`` and ``sample`` (default :data:`DEFAULT_PATTERN`, e.
 
 Columns (the last, tracked_by, signs the file as ours): advance_mm is the advance per cycle along the field (its magnitude); lateral_mm is
 the lateral peak-to-peak of the trailing end (the fitting's default), leading_lateral_mm that
-of the leading end. A trial that cannot be tracked (any error) is left out of the CSV and listed, with
-its reason, in ``<out stem>_failed.csv`` (an old one of ours is removed when none failed); the
-batch goes on. The sidecars, the options and the output files are checked before the first trial.
+of the leading end. A trial that cannot be tracked (any error) or has no voltage and sample
+(no sidecar and a name the pattern does not match, a voltage that is no finite number) is left
+out of the CSV and listed, with its reason, in ``<out stem>_failed.csv`` (an old one of ours is
+removed when none failed); the batch goes on. The sidecars' options, the options and the output
+files are checked before the first trial.
 """
 
 from __future__ import annotations
@@ -50,6 +52,7 @@ class Trial:
     voltage_V: float
     sample: str
     options: dict
+    problem: str = ""  # why the trial has no voltage and sample (then voltage_V is nan): it fails
 
 
 def _is_trial(p: Path) -> bool:
@@ -115,7 +118,8 @@ def _sidecar_times(value: Any, cand: Path):
 
 def find_trials(folder: str | os.PathLike, pattern: str = DEFAULT_PATTERN) -> list[Trial]:
     """Trials of ``folder`` (sorted by name) with their voltage and sample; the sidecars'
-    values are checked here (a bad one is a ParameterError naming its file)."""
+    options are checked here (a bad one is a ParameterError naming its file). A trial without
+    a voltage and sample is returned with its ``problem`` (it fails alone, in track_batch)."""
     root = Path(os.fspath(folder))
     if not root.is_dir():
         raise ParameterError(f"folder={str(root)!r} is not a directory")
@@ -135,22 +139,27 @@ def find_trials(folder: str | os.PathLike, pattern: str = DEFAULT_PATTERN) -> li
             meta, cand = side
             v = meta.get("voltage_V", meta.get("voltage"))
             smp = meta.get("sample")
-            if v is None or smp is None:
-                raise ParameterError(f"the sidecar of trial {str(p)!r} needs the keys voltage_V and sample")
             opts = _sidecar_options(meta, cand)
             where = f"sidecar={str(cand)!r}"
+            if v is None or smp is None:
+                out.append(Trial(p, math.nan, str(smp), opts, f"{where} needs the keys voltage_V and sample"))
+                continue
         else:
             m = rx.search(p.stem if p.is_file() else p.name)
             if m is None:
-                raise ParameterError(f"trial {str(p)!r} has no sidecar JSON and its name does not match "
-                                     f"pattern={pattern!r}; add {p.stem}.json with voltage_V and sample, or give a pattern")
+                out.append(Trial(p, math.nan, "", {}, f"no sidecar JSON and the name does not match the pattern "
+                                 f"{pattern!r}; add {p.stem}.json with voltage_V and sample, or give --pattern"))
+                continue
             v, smp, opts = m.group("voltage").replace("p", ".").replace("P", "."), m.group("sample"), {}
         try:
             v = float(v)
         except (TypeError, ValueError):
-            raise ParameterError(f"{where}: voltage {v!r} is not a number") from None
+            out.append(Trial(p, math.nan, str(smp), opts, f"{where}: voltage {v!r} is not a number"))
+            continue
         if not math.isfinite(v):
-            raise ParameterError(f"{where}: voltage {v!r} is not finite; a finite number of volts is required")
+            out.append(Trial(p, math.nan, str(smp), opts, f"{where}: voltage {v!r} is not finite; a finite number "
+                             "of volts is required"))
+            continue
         out.append(Trial(p, v, str(smp), opts))
     if not out:
         raise ParameterError(f"folder={str(root)!r} holds no trials (TIFF stacks, movies or folders of frames)")
@@ -179,7 +188,7 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
     from .. import __version__
     from .._paths import atomic_write_text, check_output_file, is_ours
     from ..analysis.descriptors import _ALONG_FIELD_COS, describe
-    from .track import check_options, track
+    from .track import NO_FRAME_RATE, check_options, track
 
     # every input checked before the first trial is tracked
     out_p = check_output_file(out, (".csv",), what="out")
@@ -191,11 +200,12 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
     n_last = positive_int("n_last", n_last)
     track_kwargs = check_options(**track_kwargs)
     trials = find_trials(folder, pattern)
+    failed: list[tuple[str, str]] = [(str(tr_.path), tr_.problem) for tr_ in trials if tr_.problem]
+    trials = [tr_ for tr_ in trials if not tr_.problem]  # (those without a voltage fail alone)
     for tr_ in trials:
         if tr_.options.get("px_per_mm", px_per_mm) is None:
             raise ParameterError(f"px_per_mm is needed for trial {str(tr_.path)!r}: give --px-per-mm or put it in the sidecar")
     rows: list[dict] = []
-    failed: list[tuple[str, str]] = []
     it = trials
     if progress:
         from tqdm.auto import tqdm
@@ -213,7 +223,7 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
             tk = track(tr_.path, px_per_mm=ppm, fps=f, **kw)
             d = describe(tk, n_last=n_last)
         except Exception as exc:  # noqa: BLE001 - one trial's failure, with its reason; the batch goes on
-            why = " ".join(str(exc).split())
+            why = " ".join(str(exc).split()).replace(NO_FRAME_RATE, "give --fps, or fps or times in the trial's sidecar")
             failed.append((str(tr_.path), why if isinstance(exc, ParameterError) else
                            f"{type(exc).__name__}: {why}" if why else type(exc).__name__))
             continue
@@ -232,6 +242,7 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
             "body_length_mm": tk.length, "body_length_spread": m["length_spread"], "n_frames": m["n_frames"],
             "n_failed_frames": m["n_failed"], "trial": str(tr_.path), "tracked_by": f"flutterswim {__version__}",
         })
+    failed.sort(key=lambda f: f[0])  # in the trials' order (by name), as the rows
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(CSV_COLUMNS)

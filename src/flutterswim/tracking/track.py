@@ -54,6 +54,9 @@ from .tips import end_span, refine_tips
 
 __all__ = ["track", "track_frame", "track_image", "coarse_box", "static_objects", "orient", "failures", "START_ENDS"]
 
+#: The advice when a movie records no frame rate (track_batch says it in its options' words).
+NO_FRAME_RATE = "give fps (frames per second) or the frames' times"
+
 START_ENDS = ("left", "right", "top", "bottom")
 
 
@@ -513,7 +516,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         fps = frames.fps
         if fps is None:
             raise ParameterError(f"fps was not given and input={frames.source!r} does not record a frame rate; "
-                                 "give fps (frames per second) or the frames' times")
+                                 + NO_FRAME_RATE)
     fps = positive("fps", fps)
     # the frames' times in frame intervals, for the checks and fits in time (None: the indices)
     pos = None if times is None else (times - times[0]) * fps
