@@ -181,7 +181,7 @@ def _half_open_degrees(radians: np.ndarray) -> np.ndarray:
     """Degrees in (-180, 180]: a stroke swimming against the field (along -x up to round-off)
     reads 180, not -180 or 180 by the sign of a round-off in its lateral drift."""
     d = np.degrees(radians)
-    return np.where(d <= -180.0 + 1e-6, d + 360.0, d)
+    return np.where(d <= -180.0 + 1e-6, 180.0, d)  # (exactly 180: -179.9999999 + 360 left the range)
 
 
 @one_blas_thread
