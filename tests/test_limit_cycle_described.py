@@ -20,3 +20,20 @@ def test_the_cycles_asked_for_are_described(ratio):
     assert "fewer than" not in d.note
     # and no more than it needs: the run ends within about two cycles of describe's n-th
     assert run.t_final - d.window_start_s < (n + 2.5) * d.period_s
+
+
+def test_describe_of_a_run_made_with_cycles_uses_them(tmp_path, capsys):
+    """`simulate --cycles 3` then a plain `describe`: described over the 3 cycles the run was made
+    for (it took the default 15 and noted "fewer than the 15 asked for")."""
+    import json
+
+    from flutterswim.cli import main
+
+    out = tmp_path / "r.nc"
+    assert main(["simulate", "--cycles", "3", "--segments", "16", "--quiet", "--out", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["describe", str(out), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["n_cycles_used"] == 3 and "fewer than" not in (d["note"] or "")
+    assert main(["describe", str(out), "--json", "--last", "2"]) == 0  # an explicit --last wins
+    assert json.loads(capsys.readouterr().out)["n_cycles_used"] == 2

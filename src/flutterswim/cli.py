@@ -147,8 +147,10 @@ def _describe(args: argparse.Namespace) -> int:
     kw = {} if args.period is None else {"period": positive("--period", args.period)}
     obj = _load_run_or_track(args.run)
     n_last = args.last
-    if n_last is None:
-        n_last = defaults.N_CYCLES_MOVIE if "px_per_mm" in (getattr(obj, "meta", None) or {}) else defaults.N_CYCLES
+    if n_last is None:  # a run made with --cycles N is described over its N settled cycles
+        asked = (getattr(obj, "settings", None) or {}).get("n_cycles_requested")
+        n_last = (int(asked) if isinstance(asked, (int, float)) and asked >= 1 else
+                  defaults.N_CYCLES_MOVIE if "px_per_mm" in (getattr(obj, "meta", None) or {}) else defaults.N_CYCLES)
     from ._validate import ParameterError
 
     try:
@@ -238,7 +240,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("describe", help="stroke descriptors of a saved run")
     p.add_argument("run")
     p.add_argument("--last", type=int, default=None,
-                   help=f"average over the last N cycles (default {defaults.N_CYCLES} for a run, "
+                   help=f"average over the last N cycles (default: the --cycles a run was made with, else {defaults.N_CYCLES}; "
                         f"{defaults.N_CYCLES_MOVIE} for a tracked movie, as the paper measured)")
     p.add_argument("--max-gap", type=float, default=0.25,
                    help="leave out cycles missing frames over more than this many periods (tracked movies; default 0.25)")
