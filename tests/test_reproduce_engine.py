@@ -148,7 +148,7 @@ def test_out_folder_safety(tmp_path):
     foreign = tmp_path / "mine"
     foreign.mkdir()
     (foreign / "notes.txt").write_text("user data")
-    with pytest.raises(ParameterError, match="not a flutterswim store"):
+    with pytest.raises(ParameterError, match="not a flutterswim (store|reproduce folder)"):
         reproduce(foreign, targets=["table1"])
     assert (foreign / "notes.txt").read_text() == "user data"
     ours = tmp_path / "ours"
