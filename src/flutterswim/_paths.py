@@ -261,6 +261,13 @@ def check_output_dir(path: str | os.PathLike, *, what: str = "out") -> Path:
     return p
 
 
+def check_files_in(folder: Path, names: Sequence[str], *, what: str = "out") -> None:
+    """:func:`check_output_file` for each file ``names`` an output folder would get (each with
+    its own suffix); a folder not made yet replaces nothing."""
+    for name in names if Path(folder).is_dir() else ():
+        check_output_file(Path(folder) / name, (Path(name).suffix,), what=what)
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     """Yield a temporary path next to ``path`` (same suffix); on success rename it onto

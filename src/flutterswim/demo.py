@@ -13,7 +13,6 @@ import argparse
 import json
 import sys
 import time
-from pathlib import Path
 
 from . import defaults
 from .limit_cycle import run_to_limit_cycle
@@ -28,15 +27,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--segments", type=int, default=defaults.N_SEGMENTS,
                     help=f"spatial resolution N (default {defaults.N_SEGMENTS})")
     args = ap.parse_args(argv)
-    from ._paths import atomic_write_text, check_output_dir, check_output_file
+    from ._paths import atomic_write_text, check_files_in, check_output_dir
     from ._validate import ParameterError
     from .analysis.descriptors import describe
     from .plotting.figures import plot_ghosts
 
     try:
         out = check_output_dir(args.out, what="--out")  # before computing
-        for name in ("paper_run.nc", "paper_swimmer.png", "paper_descriptors.json") if out.is_dir() else ():
-            check_output_file(out / name, (Path(name).suffix,), what="--out")
+        check_files_in(out, ("paper_run.nc", "paper_swimmer.png", "paper_descriptors.json"), what="--out")
     except ParameterError as exc:
         print(f"python -m flutterswim.demo: {exc}", file=sys.stderr)
         return 2

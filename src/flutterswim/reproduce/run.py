@@ -37,12 +37,11 @@ class ReproduceResult:
 def check_out(out: str | os.PathLike, targets) -> Path:
     """The output folder: new, empty, or one of ours (marker file); every output file it would
     replace must have been written by flutterswim. Checked before any computation."""
-    from .._paths import MARKER, check_output_file, check_store_path
+    from .._paths import MARKER, check_files_in, check_store_path
 
     p = check_store_path(out, overwrite=False, what="--out", kind=STORE_KIND)
     names = ["report.html", "manifest.json"] + [f for t in targets for f in t.outputs]
-    for f in names if p.is_dir() else ():  # (a new folder replaces nothing)
-        check_output_file(p / f, (Path(f).suffix,), what="--out")
+    check_files_in(p, names, what="--out")
     del MARKER
     return p
 

@@ -37,7 +37,7 @@ def stability_figures(out_dir, *, params: Parameters = PAPER, step: float = 0.1,
     ``params`` (default: the paper's), bifurcation plots and the first two eigenmodes there,
     plus a GIF of mode 1. The map NetCDF is compressed (``dtype="float32"`` halves it); every
     file is written atomically. The output folder and the grid size are checked first."""
-    from .._paths import check_output_dir, check_output_file
+    from .._paths import check_files_in, check_output_dir
 
     step = positive("step", step)
     # the chi bifurcation plot runs over (0, 130] at this step: it needs two values
@@ -48,8 +48,7 @@ def stability_figures(out_dir, *, params: Parameters = PAPER, step: float = 0.1,
         raise ParameterError(f"dtype={dtype!r} is not allowed; use 'float64' or 'float32'")
     out = check_output_dir(out_dir, what="out_dir")
     names = ("stability_map.nc", "stability_map.png", "bifurcation.png", "eigenmodes.png", "mode1.gif")
-    for name in names if out.is_dir() else ():  # (a new folder replaces nothing)
-        check_output_file(out / name, (Path(name).suffix,), what="out_dir")  # before computing
+    check_files_in(out, names, what="out_dir")  # before computing
     out.mkdir(exist_ok=True)  # (its parent exists: check_output_dir)
     from ..simulate import single_blas_thread
 
