@@ -266,6 +266,32 @@ def _chi2_999(p: float) -> float:
     return _chi2_quantile(0.999, p)
 
 
+def _fourier_phase_derivative(n: int, H: int) -> np.ndarray:
+    """d/d(phase) of :func:`_fourier_columns` at the phases i / n, i < n."""
+    h = 2 * np.pi * np.arange(1, H + 1)
+    arg = np.outer(np.arange(n) / n, h)
+    return np.hstack([np.zeros((n, 1)), -np.sin(arg) * h, np.cos(arg) * h])
+
+
+def _phase_free(delta: np.ndarray, shape_phase: np.ndarray) -> np.ndarray:
+    """A change ``delta`` (n_shape, modes) between cycles' shapes at the phases i / n_shape, less
+    its least-squares part a S' + b phase S' (``shape_phase`` = S', the shape's derivative in
+    phase): the change a shift and a uniform stretch of the phase make. Those come from the
+    section's crossing times, whose noise moves a cycle's phase (start and end: shift and
+    stretch) and which the period comparison tests. Left in, they made the settled shape's
+    change from cycle to cycle 3-10 times (in mean square) what the frames' noise explains on
+    movies of the paper's stroke tracked at SNR 5 (1.8-3 times without the periodic template,
+    0.2-0.9 times with it, once removed), so that a movie holding the onset was read as
+    never settling. The noise allowance keeps the two degrees of freedom removed (slightly
+    generous)."""
+    ph = np.arange(delta.shape[0]) / delta.shape[0]
+    B = np.stack([shape_phase.ravel(), (shape_phase * ph[:, None]).ravel()], axis=1)
+    if not np.any(B):
+        return delta
+    coef = np.linalg.lstsq(B, delta.ravel(), rcond=None)[0]
+    return (delta.ravel() - B @ coef).reshape(delta.shape)
+
+
 _LINEAR_ANGLE = 0.1  # rad: a shape within this of straight grows as the linearisation says
 
 
@@ -333,7 +359,9 @@ def detect_cycles(
     harmonics, (frames - 1) / 4). A cycle is *converged* when its period, amplitude (root mean
     square of the fitted lateral waveform) and shape (tangent angle minus its mean along s, at
     ``n_shape`` phases, projected on the ``n_shape_modes`` leading principal modes, 0 for no
-    projection) each change by less than ``tol`` (relative) from the previous cycle, plus what
+    projection; its change less the part a shift and a uniform stretch of the cycle's phase
+    make, which the section's crossing times move and the period tests) each change by less
+    than ``tol`` (relative) from the previous cycle, plus what
     the measurement noise alone makes of that change (``tol_used``): the noise variance, the
     lower quartile of the cycles' residual variances over its chi-square expectation (residuals
     also hold harmonics too fast for a coarse frame rate), propagated to 3.29 standard errors
@@ -425,7 +453,7 @@ def detect_cycles(
         basis = vt[: int(n_shape_modes)].T
     modes = th @ basis if basis is not None else th
     E_grid = {}
-    shapes, shape_cov = [], []
+    shapes, shape_cov, shapes_phase = [], [], []
     fit_amp, amp_gain, slope = np.zeros(K), np.zeros(K), np.zeros(K)
     theta_amp = np.zeros(K)
     # residual sums of squares and degrees of freedom of each cycle's fits: the measurement
@@ -446,9 +474,10 @@ def detect_cycles(
         cm = C @ (A.T @ modes[sl])  # the same design for the shape
         rss_m[k] = np.sum((modes[sl] - A @ cm) ** 2, axis=0)
         if H not in E_grid:
-            E_grid[H] = _fourier_columns(np.arange(n_shape) / n_shape, H)
-        E = E_grid[H]
+            E_grid[H] = _fourier_columns(np.arange(n_shape) / n_shape, H), _fourier_phase_derivative(n_shape, H)
+        E, E_phase = E_grid[H]
         shapes.append(E @ cm)
+        shapes_phase.append(E_phase @ cm)
         shape_cov.append(E @ C @ E.T)
         # the stroke's tangent-angle deflection: the fundamental's amplitude, its largest
         # along s, in the leading shape modes (a static bend is the zeroth harmonic: no stroke;
@@ -476,7 +505,7 @@ def detect_cycles(
         """(change of period, amplitude, shape, their tolerances (3,), converged) from cycle j to k."""
         dp = abs(periods[k] - periods[j]) / max(abs(periods[k]), 1e-300)
         da = abs(fit_amp[k] - fit_amp[j]) / max(fit_amp[k], 1e-300)
-        num = float(np.linalg.norm(shapes[k] - shapes[j]))
+        num = float(np.linalg.norm(_phase_free(shapes[k] - shapes[j], 0.5 * (shapes_phase[k] + shapes_phase[j]))))
         den = max(float(np.linalg.norm(shapes[k])), 1e-300)
         Pc = shape_cov[k] + shape_cov[j]
         tr_s = float(np.sum(v_m)) * float(np.trace(Pc))
