@@ -130,9 +130,15 @@ def hopf_point(params, parameter: str = "kappa_E_ratio", *, n_segments: int = 48
     j = int(np.argmin(np.abs(lam_l - np.conj(lam[i]))))
     p = vl[:, j]
     p = p / np.conj(np.vdot(p, q))  # conj(p).q = 1
+    # d lambda / d value = conj(p) . (dA / d value) q: the difference of the Jacobian, whose
+    # entries are smooth in the value, not of the eigenvalue, which carries the eigensolver's
+    # round-off (2e-9 at N = 48, 7e-8 at N = 96: over a step of 1e-6 relative that made the
+    # slope off by 0.5-6 %, depending on where the search started)
     dv = 1e-6 * abs(v) if v != 0 else 1e-6  # relative: physical parameters may be ~1e-14
-    slope = (growth(v + dv) - growth(v - dv)) / (2 * dv)
-    return HopfPoint(axis, float(v), omega, float(slope), q, p, a, n_segments)
+    jac_at = [ShapeSystem.of(axis.at(x), n_segments) for x in (v + dv, v - dv)]
+    da = (jac_at[0].jac(jac_at[0].straight()) - jac_at[1].jac(jac_at[1].straight())) / (2 * dv)
+    slope = float(np.vdot(p, da @ q).real)
+    return HopfPoint(axis, float(v), omega, slope, q, p, a, n_segments)
 
 
 def _bracket(growth, v0: float, name: str = "the parameter") -> tuple[float, float]:
