@@ -97,7 +97,7 @@ class Branch:
             "lateral_trailing": (col("lateral_trailing"), lu, "lateral peak-to-peak excursion of the trailing end"),
             "amplitude": (col("amplitude"), "1",
                           "2 |first Fourier coefficient of the shape (theta, kappa l)| / sqrt(2N+1): RMS over the "
-                          "2N+1 shape components of the first harmonic's amplitude (resolution independent)"),
+                          "2N+1 shape components of the first harmonic's amplitude (its scale independent of N; its value near the Hopf point converges with N at order 2)"),
             "nonreciprocity": (col("nonreciprocity"), "1", "signed area of the stroke in the first two shape modes"),
             "self_intersecting": (col("self_intersecting").astype("i1"), "1", "filament crosses itself during the stroke (0/1)"),
             "stable": (col("stable").astype("i1"), "1", "orbit stable: all non-trivial Floquet multipliers inside the unit circle (0/1)"),
