@@ -186,3 +186,22 @@ def test_an_error_stands_alone_without_the_note(tmp_path, capsys):
     code = main(["branch", "kappa_E_ratio=0.1:0.3", "--out", str(tmp_path / "k.nc"), "--segments", "8", "--quiet"])
     err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
     assert code == 2 and len(err) == 1 and "note" not in err[0], err
+
+
+def test_a_range_of_negative_fields_without_a_branch_names_the_mirror_hopf_point(tmp_path, capsys):
+    """kappa_E_ratio=-0.3:-0.1 lies between zero and the mirror branch's Hopf point: no stroke.
+    The error named the positive Hopf point (the only one between the range and the base value
+    1) and said the branch exists above it; the branch nearest the range is the mirror one, below
+    minus that value."""
+    import re
+
+    import flutterswim as fs
+    from flutterswim.orbits.linear import hopf_point
+
+    positive = hopf_point(fs.PAPER, "kappa_E_ratio", n_segments=8).value
+    code = main(["branch", "kappa_E_ratio=-0.3:-0.1", "--out", str(tmp_path / "k.nc"), "--segments", "8", "--quiet"])
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert code == 2 and len(err) == 1, err
+    named = float(re.findall(r"-?\d+\.\d+", err[0])[-1])
+    assert named == pytest.approx(-positive, rel=1e-6) and "below" in err[0], err[0]
+    assert "-0.3:-0.1" in err[0] and not (tmp_path / "k.nc").exists()

@@ -79,16 +79,23 @@ def _cmd_branch(args) -> int:
     # the base value; continue towards the end of the range where the straight state is unstable
     n = positive_int("n_segments", n, minimum=4)
     base = axis.value()
-    near = lo if abs(lo - base) <= abs(hi - base) else hi
+    # a range on the other side of zero (negative fields) is looked at from the base value's
+    # mirror: kappa_E_ratio=-0.3:-0.1 lies beyond the mirror branch's Hopf point -0.68, not
+    # beyond +0.68 (the only one between it and the base value)
+    ref = -base if 0.5 * (lo + hi) * base < 0 else base
+    near = lo if abs(lo - ref) <= abs(hi - ref) else hi
     # (of two in the range, -1:1.2 holding the mirror branch's too, the one nearer the base value)
     bracket = (hopf_bracket(axis, n, lo, hi, prefer=base)
-               or (None if near == base else hopf_bracket(axis, n, base, near)))
-    hp = hopf_point(params, name, n_segments=n, bracket=bracket)
+               or (None if near == ref else hopf_bracket(axis, n, ref, near)))
+    hp = hopf_point(params, name, n_segments=n, bracket=bracket, start=ref)
     from .normal_form import normal_form
 
     nf = normal_form(hp)
     side = nf.direction if nf.supercritical else -nf.direction
     to = hi if side > 0 else lo
+    if (to - hp.value) * side <= 0:  # (continue_orbits would name the Hopf point it finds from the base value)
+        raise ParameterError(f"range={args.range!r} holds no stroke branch: it exists for {name} "
+                             f"{'above' if side > 0 else 'below'} the Hopf point {name}={hp.value:.6g}")
     extra = {} if args.look_beyond is None else {"look_beyond": args.look_beyond}
     import warnings
 

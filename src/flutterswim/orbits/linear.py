@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import brentq
 
-from .._validate import ParameterError, positive_int
+from .._validate import ParameterError, finite, positive_int
 from .parameter import Axis
 from ._threads import one_blas_thread
 from .system import ShapeSystem
@@ -100,11 +100,13 @@ class HopfPoint:
 
 @one_blas_thread
 def hopf_point(params, parameter: str = "kappa_E_ratio", *, n_segments: int = 48,
-               bracket: tuple[float, float] | None = None, xtol: float = 1e-13) -> HopfPoint:
+               bracket: tuple[float, float] | None = None, xtol: float = 1e-13,
+               start: float | None = None) -> HopfPoint:
     """The Hopf point of the straight state along ``parameter`` (see :class:`.parameter.Axis`),
     where the leading complex pair crosses the imaginary axis. ``bracket``: values on either
-    side; by default it is searched geometrically below and above the base value. ``xtol``
-    is relative to the parameter's size."""
+    side; by default it is searched geometrically below and above ``start`` (default: the
+    base value; e.g. minus it for the mirror branch of a negative field). ``xtol`` is relative
+    to the parameter's size."""
     n_segments = positive_int("n_segments", n_segments, minimum=4)
     axis = Axis(params, parameter)
 
@@ -112,7 +114,7 @@ def hopf_point(params, parameter: str = "kappa_E_ratio", *, n_segments: int = 48
         return flutter_growth(axis, v, n_segments)
 
     if bracket is None:
-        bracket = _bracket(growth, axis.value(), parameter)
+        bracket = _bracket(growth, axis.value() if start is None else finite("start", start), parameter)
     lo, hi = bracket
     glo, ghi = growth(lo), growth(hi)
     if glo * ghi > 0:
@@ -142,7 +144,8 @@ def hopf_point(params, parameter: str = "kappa_E_ratio", *, n_segments: int = 48
 
 
 def _bracket(growth, v0: float, name: str = "the parameter") -> tuple[float, float]:
-    """Bracket the sign change of the growth rate by scanning geometrically below and above v0.
+    """Bracket (lo, hi) the sign change of the growth rate by scanning geometrically towards and
+    away from zero from v0 (below and above a positive v0).
     A direction ends at the first value the model refuses (b beyond l/2, a above b ...): the
     scan never reports on values nobody asked for; nor does it warn about them."""
     import warnings
@@ -170,10 +173,11 @@ def _bracket(growth, v0: float, name: str = "the parameter") -> tuple[float, flo
             if change is None:
                 open_[side] = False
             elif change:
-                return (float(v), float(last[side])) if side == "below" else (float(last[side]), float(v))
+                return (float(min(v, last[side])), float(max(v, last[side])))
             else:
                 last[side] = v
-    raise ParameterError(f"no Hopf point found for {name} between {last['below']:g} and {last['above']:g} "
+    ends = sorted((last["below"], last["above"]))
+    raise ParameterError(f"no Hopf point found for {name} between {ends[0]:g} and {ends[1]:g} "
                          f"(the straight state is {'un' if g0 > 0 else ''}stable throughout)")
 
 
