@@ -369,11 +369,19 @@ def _describe_error(exc: BaseException, parser: argparse.ArgumentParser | None =
 
 
 def _quiet_warnings() -> None:
-    """Warnings as one line each (no source line)."""
+    """Warnings as one line each (no source line), each said once: Python's registry of the
+    warnings shown is reset whenever the warning filters change (a lazy import of scipy, any
+    catch_warnings), so the same warning came again (branch a=1e-05:5e-05 said twice that a
+    typed end is not slender)."""
     import warnings
 
+    said: set[str] = set()
+
     def show(message, category, filename, lineno, file=None, line=None):
-        print(f"flutterswim: warning: {_one_line(message)}", file=sys.stderr if file is None else file)
+        text = _one_line(message)
+        if text not in said:
+            said.add(text)
+            print(f"flutterswim: warning: {text}", file=sys.stderr if file is None else file)
 
     warnings.showwarning = show
 
