@@ -229,3 +229,28 @@ def test_a_typed_value_that_is_not_slender_is_warned_about_once(tmp_path, capsys
     typed = [ln for ln in err if "warning" in ln and "a=5e-05 m" in ln and "not slender" in ln]
     assert len(typed) == 1, err
     assert len(set(err)) == len(err), err  # no line said twice
+
+
+def test_a_branch_stopped_just_short_of_its_end_says_where_in_digits_that_differ(tmp_path, capsys, monkeypatch):
+    """The corrector at the range's end fails (injected): the arclength steps close in on the
+    end until the step is too small, and the message read "stopped short of kappa_E_ratio=0.7
+    (continuation stopped at kappa_E_ratio=0.7: ...)"."""
+    import re
+
+    from flutterswim.orbits import continuation
+    from flutterswim.orbits.periodic import OrbitNotFound
+
+    def fails(*a, **kw):
+        raise OrbitNotFound("no convergence (injected)")
+
+    monkeypatch.setattr(continuation, "_newton_natural", fails)
+    out = tmp_path / "s.nc"
+    code = main(["branch", "kappa_E_ratio=0.6:0.7", "--segments", "8", "--steps", "16", "--points", "50",
+                 "--look-beyond", "0", "--quiet", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 1 and "stopped short of kappa_E_ratio=0.7 " in err, err
+    for where in re.findall(r"(?:stopped at|up to) kappa_E_ratio=([-\d.e]+)", err):
+        assert float(where) < 0.7, err  # said as it is: short of 0.7
+    xr = pytest.importorskip("xarray")
+    last = float(xr.open_dataset(out, engine="h5netcdf")["kappa_E_ratio"].values[-1])
+    assert float(where) == pytest.approx(last, rel=1e-6)  # the last "up to": the branch's last orbit

@@ -53,7 +53,7 @@ def _cmd_branch(args) -> int:
     from .._paths import check_output_file
     from .._validate import ParameterError, non_negative, positive_int
     from ..params import preset
-    from .continuation import BRANCH_STEPS, MAX_POINTS, continue_orbits
+    from .continuation import BRANCH_STEPS, MAX_POINTS, continue_orbits, short_of
     from .linear import hopf_bracket, hopf_point
     from .parameter import Axis
 
@@ -115,7 +115,7 @@ def _cmd_branch(args) -> int:
 
         print(f"flutterswim branch: note: no Hopf point in {name}={lo:g}:{hi:g}; the branch starts at the "
               f"nearest one, {name}={hp.value:.6g}, outside the range", file=sys.stderr)
-    print(f"{out}: {len(br.values)} orbits from the Hopf point {name}={br.hopf_value:.6g} to {br.values[-1]:.6g} "
+    print(f"{out}: {len(br.values)} orbits from the Hopf point {name}={br.hopf_value:.6g} to {short_of(br.values[-1], to)} "
           f"({ds.attrs['bifurcation']}, l1={br.lyapunov_coefficient:.3g}) in {br.wall_time:.1f} s; {br.message}")
     if args.plot:
         from .plot import plot_branch
@@ -126,7 +126,7 @@ def _cmd_branch(args) -> int:
         import sys
 
         print(f"flutterswim branch: the branch stopped short of {name}={to:g} ({br.message}); the partial "
-              f"branch ({len(br.values)} orbits up to {name}={br.values[-1]:.6g}) is saved in {out}", file=sys.stderr)
+              f"branch ({len(br.values)} orbits up to {name}={short_of(br.values[-1], to)}) is saved in {out}", file=sys.stderr)
         return 1
     return 0
 

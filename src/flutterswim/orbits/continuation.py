@@ -250,7 +250,7 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
             if n_at_to is None:
                 message = f"stopped after max_points={max_points} orbits before {parameter}={to:g}"
             elif turned:
-                message += f" (stopped after max_points={max_points} orbits at {parameter}={values[-1]:.6g})"
+                message += f" (stopped after max_points={max_points} orbits at {parameter}={short_of(values[-1], to)})"
             break
         xk = X[-1]
         if len(X) == 1:
@@ -275,7 +275,7 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
             ds *= 0.5
             if ds < 1e-4 / n_points:
                 if n_at_to is None or turned:
-                    message = f"continuation stopped at {parameter}={xk[-1]:.6g}: {exc}"
+                    message = f"continuation stopped at {parameter}={short_of(xk[-1], to)}: {exc}"
                 break
             continue
         pval = float(xn[-1])
@@ -309,6 +309,16 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     _warn_inaccurate(parameter, values, orbits, steps)
     return Branch(axis, np.array(values), orbits, hopf.value, hopf.omega, nf.lyapunov_coefficient,
                   nf.amplitude2_slope_rms, n_segments, steps, time.perf_counter() - t_start, message)
+
+
+def short_of(value: float, end: float) -> str:
+    """``value`` with 6 significant digits, or as many more as tell it from ``end`` (printed as
+    ``{end:g}``): a branch stopped at 0.69999997 did not stop "at 0.7", short of 0.7."""
+    for digits in range(6, 18):
+        text = f"{value:.{digits}g}"
+        if value == end or text != f"{end:.{digits}g}":
+            return text
+    return repr(float(value))
 
 
 def _warn_inaccurate(parameter, values, orbits, steps) -> None:
