@@ -198,7 +198,11 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     for a fold that turns it back into the range (an S-shaped branch: strokes that coexist
     there). When it turns back it is followed until it leaves the range again (or ends), and
     the orbits beyond ``to`` stay in the branch; otherwise they are dropped and the branch ends
-    at ``to``. 0: stop at ``to``."""
+    at ``to``. 0: stop at ``to``.
+
+    ``max_points``: at most this many orbits in all, the first one included (default
+    ``10 n_points + 50``); a corrector step that fails and is retried shorter adds none, and so
+    does not count."""
     t_start = time.perf_counter()
     axis = Axis(params, parameter)
     to = finite("to", to)
