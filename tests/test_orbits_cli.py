@@ -254,3 +254,23 @@ def test_a_branch_stopped_just_short_of_its_end_says_where_in_digits_that_differ
     xr = pytest.importorskip("xarray")
     last = float(xr.open_dataset(out, engine="h5netcdf")["kappa_E_ratio"].values[-1])
     assert float(where) == pytest.approx(last, rel=1e-6)  # the last "up to": the branch's last orbit
+
+
+def test_the_branch_files_inaccurate_orbits_comment_names_the_steps_option(tmp_path, capsys):
+    """The NetCDF's n_inaccurate_orbits_comment said "(steps=)", the Python parameter, in a file
+    written by the command; it names --steps there, as the command's warning does (the API's
+    own dataset keeps steps=)."""
+    xr = pytest.importorskip("xarray")
+    out = tmp_path / "b.nc"
+    assert main(["branch", "kappa_E_ratio=0.7:0.8", "--points", "3", "--segments", "8", "--steps", "8",
+                 "--out", str(out), "--quiet"]) == 0
+    ds = xr.open_dataset(out, engine="h5netcdf")
+    comment = ds.attrs["n_inaccurate_orbits_comment"]
+    assert ds.attrs["n_inaccurate_orbits"] > 0 and "(--steps)" in comment and "steps=" not in comment, comment
+    warned = [ln for ln in capsys.readouterr().err.splitlines() if "warning" in ln]
+    assert len(warned) == 1 and "(--steps)" in warned[0] and "steps=" not in warned[0], warned
+    from flutterswim import PAPER
+    from flutterswim.orbits import continue_orbits
+
+    api = continue_orbits(PAPER, "kappa_E_ratio", 0.8, n_points=3, n_segments=8, steps=32).to_dataset()
+    assert "(steps=)" in api.attrs["n_inaccurate_orbits_comment"]

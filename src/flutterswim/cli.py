@@ -271,6 +271,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_stability)
 
     _register_extensions(sub)
+    for command in sub.choices.values():  # (as_typed: each command's own options)
+        command.set_defaults(command_parser=command)
     return ap
 
 
@@ -328,17 +330,27 @@ def _option(name: str, parser: argparse.ArgumentParser) -> str | None:
 def _as_typed(message: str, parser: argparse.ArgumentParser | None) -> str:
     """The message with its leading ``name=`` (a Python API parameter) spelt as the option of
     ``parser`` the user typed: ``px_per_mm=-3.0 must be > 0`` -> ``--px-per-mm=-3.0 must be > 0``
-    (an option the API message names after it is not said twice), and its advice "give name"
-    as "give --name"; unchanged where the command has no such option."""
+    (an option the API message names after it is not said twice), its advice "give name" as
+    "give --name" and a parameter named in passing, "(name=)", as "(--name)"; unchanged where
+    the command has no such option."""
     if parser is None:
         return message
     message = re.sub(r"\bgive ([A-Za-z_]\w*)\b",
                      lambda g: f"give {_option(g.group(1), parser) or g.group(1)}", message)
+    message = re.sub(r"\(([A-Za-z_]\w*)=\)", lambda g: f"({_option(g.group(1), parser) or g.group(1) + '='})",
+                     message)
     m = re.match(r"([A-Za-z_]\w*)=", message)
     option = None if m is None else _option(m.group(1), parser)
     if option is None:
         return message
     return option + message[len(m.group(1)):].replace(f" ({option})", "", 1)
+
+
+def as_typed(args: argparse.Namespace, message: str) -> str:
+    """``message``, in an API's words, said as the command ``args`` was parsed for is typed
+    (:func:`_as_typed`): for what a command writes or warns itself (its errors are said so by
+    :func:`main`)."""
+    return _as_typed(message, getattr(args, "command_parser", None))
 
 
 def _describe_error(exc: BaseException, parser: argparse.ArgumentParser | None = None) -> tuple[int, str]:

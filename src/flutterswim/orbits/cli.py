@@ -99,12 +99,15 @@ def _cmd_branch(args) -> int:
     extra = {} if args.look_beyond is None else {"look_beyond": args.look_beyond}
     import warnings
 
+    from ..cli import as_typed
+
     with warnings.catch_warnings(record=True) as caught:  # the API's words, "(steps=)", said as typed
         br = continue_orbits(params, name, to, n_points=args.points, n_segments=n, steps=steps,
                              progress=not args.quiet, **extra)
     for w in caught:
-        warnings.warn(str(w.message).replace("(steps=)", "(--steps)"), w.category, stacklevel=1)
+        warnings.warn(as_typed(args, str(w.message)), w.category, stacklevel=1)
     ds = br.to_dataset()
+    ds.attrs["n_inaccurate_orbits_comment"] = as_typed(args, ds.attrs["n_inaccurate_orbits_comment"])
     ds.attrs["range_start" if side > 0 else "range_end"] = lo if side > 0 else hi
     from .._paths import atomic_path
 
