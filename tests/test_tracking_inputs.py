@@ -325,3 +325,23 @@ def test_a_grey_stack_saved_as_planar_rgb_says_how_it_was_read(tmp_path):
     from flutterswim.tracking.io import open_frames
 
     assert len(open_frames(tmp_path / "g.tif")) == 3
+
+
+def test_batch_from_python_names_its_parameters_and_from_the_command_line_its_options(movie, tmp_path, capsys):
+    """A TIFF stack records no frame rate and "trialA" misses the pattern: called from Python,
+    the failures named the command line's --fps and --pattern; they name track_batch's fps and
+    pattern there, and the options from the command line (its failures file too). A missing
+    px_per_mm likewise."""
+    folder = _trials(tmp_path / "t", movie, ("85V_sample1.tif", "trialA.tif"))
+    _, rows, failed = track_batch(folder, tmp_path / "o.csv", px_per_mm=movie.px_per_mm)
+    reasons = {Path(t).name: why for t, why in failed}
+    assert not rows and "give fps, or fps or times in the trial's sidecar" in reasons["85V_sample1.tif"], reasons
+    assert reasons["trialA.tif"].endswith("or give pattern") and not any("--" in r for r in reasons.values())
+    with pytest.raises(fs.ParameterError, match="give px_per_mm or put it in the sidecar"):
+        track_batch(folder, tmp_path / "o.csv")
+    assert main(["track-batch", str(folder), "--px-per-mm", str(movie.px_per_mm), "--out", str(tmp_path / "c.csv"),
+                 "--quiet"]) == 1
+    typed = {Path(r["trial"]).name: r["reason"] for r in _rows(tmp_path / "c_failed.csv")}
+    assert "give --fps, or fps" in typed["85V_sample1.tif"] and typed["trialA.tif"].endswith("or give --pattern")
+    assert main(["track-batch", str(folder), "--out", str(tmp_path / "c.csv"), "--quiet"]) == 2
+    assert "give --px-per-mm or put it in the sidecar" in capsys.readouterr().err

@@ -31,7 +31,7 @@ import re
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 from .._validate import ParameterError, direction_deg, finite, positive, positive_int
 from .io import FRAME_SUFFIXES, MOVIE_SUFFIXES, STACK_SUFFIXES, parse_roi
@@ -148,7 +148,7 @@ def find_trials(folder: str | os.PathLike, pattern: str = DEFAULT_PATTERN) -> li
             m = rx.search(p.stem if p.is_file() else p.name)
             if m is None:
                 out.append(Trial(p, math.nan, "", {}, f"no sidecar JSON and the name does not match the pattern "
-                                 f"{pattern!r}; add {p.stem}.json with voltage_V and sample, or give --pattern"))
+                                 f"{pattern!r}; add {p.stem}.json with voltage_V and sample, or give pattern"))
                 continue
             v, smp, opts = m.group("voltage").replace("p", ".").replace("P", "."), m.group("sample"), {}
         try:
@@ -181,10 +181,13 @@ def failures_path(out: str | os.PathLike) -> Path:
 
 def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm: float | None = None,
                 fps: float | None = None, pattern: str = DEFAULT_PATTERN, n_last: int = 5, plot: str | None = None,
-                progress: bool = False, **track_kwargs: Any) -> tuple[Path, list[dict], list[tuple[str, str]]]:
+                progress: bool = False, as_typed: Callable[[str], str] | None = None,
+                **track_kwargs: Any) -> tuple[Path, list[dict], list[tuple[str, str]]]:
     """Track every trial of ``folder`` and write the CSV ``out`` (and the Fig. 3e figure
     ``plot``). A sidecar's px_per_mm / fps override the arguments. Returns (CSV path, rows,
-    failures [(trial, reason)])."""
+    failures [(trial, reason)]). The reasons name this function's parameters ("give fps");
+    ``as_typed(reason)`` says them as the caller's user typed them (the command line's
+    options: :func:`flutterswim.cli.as_typed`)."""
     from .. import __version__
     from .._paths import atomic_write_text, check_output_file, is_ours
     from ..analysis.descriptors import _ALONG_FIELD_COS, describe
@@ -204,7 +207,7 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
     trials = [tr_ for tr_ in trials if not tr_.problem]  # (those without a voltage fail alone)
     for tr_ in trials:
         if tr_.options.get("px_per_mm", px_per_mm) is None:
-            raise ParameterError(f"px_per_mm is needed for trial {str(tr_.path)!r}: give --px-per-mm or put it in the sidecar")
+            raise ParameterError(f"px_per_mm is needed for trial {str(tr_.path)!r}: give px_per_mm or put it in the sidecar")
     rows: list[dict] = []
     it = trials
     if progress:
@@ -223,7 +226,7 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
             tk = track(tr_.path, px_per_mm=ppm, fps=f, **kw)
             d = describe(tk, n_last=n_last)
         except Exception as exc:  # noqa: BLE001 - one trial's failure, with its reason; the batch goes on
-            why = " ".join(str(exc).split()).replace(NO_FRAME_RATE, "give --fps, or fps or times in the trial's sidecar")
+            why = " ".join(str(exc).split()).replace(NO_FRAME_RATE, "give fps, or fps or times in the trial's sidecar")
             failed.append((str(tr_.path), why if isinstance(exc, ParameterError) else
                            f"{type(exc).__name__}: {why}" if why else type(exc).__name__))
             continue
@@ -243,6 +246,8 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
             "n_failed_frames": m["n_failed"], "trial": str(tr_.path), "tracked_by": f"flutterswim {__version__}",
         })
     failed.sort(key=lambda f: f[0])  # in the trials' order (by name), as the rows
+    if as_typed is not None:
+        failed = [(trial, as_typed(why)) for trial, why in failed]
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(CSV_COLUMNS)

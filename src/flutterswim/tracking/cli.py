@@ -108,6 +108,9 @@ def _cmd_track(args) -> int:
 
 
 def _cmd_batch(args) -> int:
+    from functools import partial
+
+    from ..cli import as_typed
     from .batch import DEFAULT_PATTERN, failures_path, track_batch
 
     positive_int("--last", args.last)  # checked before tracking (track_batch checks them again)
@@ -117,7 +120,8 @@ def _cmd_batch(args) -> int:
     field = {} if args.field_angle_deg is None else {"field_angle": direction_deg("--field-angle-deg", args.field_angle_deg)}
     out, rows, failed = track_batch(args.folder, args.out, px_per_mm=args.px_per_mm, fps=args.fps,
                                     pattern=args.pattern or DEFAULT_PATTERN, n_last=args.last, plot=args.plot,
-                                    progress=not args.quiet, dark_line=args.dark_line,
+                                    progress=not args.quiet, as_typed=partial(as_typed, args),
+                                    dark_line=args.dark_line,
                                     **field,
                                     **({} if args.start_end is None else {"start_end": args.start_end}))
     for trial, why in failed:
