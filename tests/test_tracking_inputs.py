@@ -345,3 +345,26 @@ def test_batch_from_python_names_its_parameters_and_from_the_command_line_its_op
     assert "give --fps, or fps" in typed["85V_sample1.tif"] and typed["trialA.tif"].endswith("or give --pattern")
     assert main(["track-batch", str(folder), "--out", str(tmp_path / "c.csv"), "--quiet"]) == 2
     assert "give --px-per-mm or put it in the sidecar" in capsys.readouterr().err
+
+
+def test_batch_of_which_no_trial_is_tracked_writes_no_csv_of_descriptors(movie, tmp_path, capsys):
+    """Every trial fails (TIFF stacks without a frame rate): the CSV of descriptors was written
+    with its header alone, which the fitting reads as a batch of no trials. Now none is written
+    (an earlier run's file is left as it was), the failures file is, and the command says in
+    one line that no trial was tracked, exit 1."""
+    folder = _trials(tmp_path / "t", movie, ("80V_sample1.tif", "85V_sample2.tif"))
+    out = tmp_path / "trials.csv"
+    _, rows, failed = track_batch(folder, out, px_per_mm=movie.px_per_mm)
+    assert not rows and len(failed) == 2 and not out.exists()
+    assert len(_rows(tmp_path / "trials_failed.csv")) == 2
+    rc = main(["track-batch", str(folder), "--px-per-mm", str(movie.px_per_mm), "--out", str(out), "--quiet"])
+    cap = capsys.readouterr()
+    said = [ln for ln in cap.err.splitlines() if "no trial was tracked" in ln]
+    assert rc == 1 and not out.exists() and len(said) == 1 and "wrote" not in cap.out, cap
+    assert "trials_failed.csv" in said[0] and str(out) in said[0]
+    # an earlier run's descriptors stay as they were
+    assert main(["track-batch", str(folder), "--px-per-mm", str(movie.px_per_mm), "--fps", "50", "--last", "3",
+                 "--out", str(out), "--quiet"]) == 0
+    before = out.read_bytes()
+    assert main(["track-batch", str(folder), "--px-per-mm", str(movie.px_per_mm), "--out", str(out), "--quiet"]) == 1
+    assert out.read_bytes() == before and "an earlier run's" in capsys.readouterr().err

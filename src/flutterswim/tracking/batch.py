@@ -16,8 +16,9 @@ the lateral peak-to-peak of the trailing end (the fitting's default), leading_la
 of the leading end. A trial that cannot be tracked (any error) or has no voltage and sample
 (no sidecar and a name the pattern does not match, a voltage that is no finite number) is left
 out of the CSV and listed, with its reason, in ``<out stem>_failed.csv`` (an old one of ours is
-removed when none failed); the batch goes on. The sidecars' options, the options and the output
-files are checked before the first trial.
+removed when none failed); the batch goes on. When none is tracked, no CSV of descriptors is
+written (a file already there is left as it was). The sidecars' options, the options and the
+output files are checked before the first trial.
 """
 
 from __future__ import annotations
@@ -185,7 +186,7 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
                 **track_kwargs: Any) -> tuple[Path, list[dict], list[tuple[str, str]]]:
     """Track every trial of ``folder`` and write the CSV ``out`` (and the Fig. 3e figure
     ``plot``). A sidecar's px_per_mm / fps override the arguments. Returns (CSV path, rows,
-    failures [(trial, reason)]). The reasons name this function's parameters ("give fps");
+    failures [(trial, reason)]); the CSV is written only if a trial was tracked. The reasons name this function's parameters ("give fps");
     ``as_typed(reason)`` says them as the caller's user typed them (the command line's
     options: :func:`flutterswim.cli.as_typed`)."""
     from .. import __version__
@@ -248,12 +249,13 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
     failed.sort(key=lambda f: f[0])  # in the trials' order (by name), as the rows
     if as_typed is not None:
         failed = [(trial, as_typed(why)) for trial, why in failed]
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(CSV_COLUMNS)
-    for r in rows:
-        w.writerow([_fmt(r[c]) for c in CSV_COLUMNS])
-    atomic_write_text(out_p, buf.getvalue())
+    if rows:  # (none tracked: no CSV of descriptors, a header alone read as a batch of none)
+        buf = io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(CSV_COLUMNS)
+        for r in rows:
+            w.writerow([_fmt(r[c]) for c in CSV_COLUMNS])
+        atomic_write_text(out_p, buf.getvalue())
     if failed:
         check_output_file(failed_p, (".csv",), what="failures file")
         fb = io.StringIO()

@@ -127,7 +127,12 @@ def _cmd_batch(args) -> int:
     for trial, why in failed:
         print(f"flutterswim track-batch: {trial}: {why}", file=sys.stderr)
     failed_csv = f"; the failures and their reasons in {failures_path(out)}" if failed else ""
-    print(f"tracked {len(rows)} of {len(rows) + len(failed)} trials; wrote {out}" + (f" and {args.plot}" if args.plot and rows else "")
+    if not rows:  # (track_batch wrote no CSV of descriptors)
+        earlier = " (the file there is an earlier run's)" if out.exists() else ""
+        print(f"flutterswim track-batch: no trial was tracked ({len(failed)} failed){failed_csv}; {out} was not "
+              f"written{earlier}", file=sys.stderr)
+        return 1
+    print(f"tracked {len(rows)} of {len(rows) + len(failed)} trials; wrote {out}" + (f" and {args.plot}" if args.plot else "")
           + failed_csv)
     # a failed trial fails the batch (exit 1), as a failed point fails a sweep; the others are kept
-    return 0 if rows and not failed else 1
+    return 1 if failed else 0
