@@ -166,3 +166,31 @@ def test_a_point_without_a_stroke_is_never_taken_over_one_with_a_stroke(tmp_path
     # and when it is not a fit, the line says the data are out of reach, not "more segments"
     if status == 1:
         assert "out of the model's reach" in err and "advance" in err and "--segments" not in err, err
+
+
+def test_cli_json_of_a_refused_fit_is_marked_failed_with_its_reason(tmp_path, monkeypatch, capsys):
+    """Data with 4x the model's lateral: the fit is refused (exit 1) but its JSON, written for
+    the diagnosis, began with the values like a fit's (the refusal only in convergence.converged).
+    Now it says first that it failed, and why, in the words of the command's line; a fit of data
+    from the model says it converged."""
+    import json
+
+    ff = importlib.import_module("flutterswim.fitting.fit")
+    x = to_identifiable(BASE, *TRUTH)
+    m = Onset(0.7 * math.exp(x[1]))
+    real_fit = ff.fit
+    monkeypatch.setattr(ff, "fit", lambda mean, sem, **kw: real_fit(mean, sem, model=m, cost=kw.get("cost", "sem")))
+    for scale, status in ((4.0, 1), (1.0, 0)):
+        y = m(x) * np.array([1, 1, scale])
+        csv = tmp_path / f"t{scale:g}.csv"
+        csv.write_text("voltage_V,sample,period_s,advance_mm,lateral_mm\n"
+                       + "".join(f"85,{k},{v[0]},{v[1]},{v[2]}\n" for k, v in enumerate((y * 1.01, y, y * 0.99))))
+        out = tmp_path / f"f{scale:g}.json"
+        assert cli.main(["fit", str(csv), "--out", str(out)]) == status
+        err = [ln for ln in capsys.readouterr().err.splitlines() if "failed:" in ln]
+        d = json.loads(out.read_text())
+        if status:
+            assert list(d)[1:3] == ["status", "failure"] and d["status"] == "failed", list(d)
+            assert len(err) == 1 and err[0].endswith("failed: " + d["failure"]) and "lateral" in d["failure"]
+        else:
+            assert d["status"] == "converged" and "failure" not in d and not err

@@ -115,8 +115,7 @@ def _verdict(res) -> int:
         return 0
     import sys
 
-    why = res.message if res.settings.get("out_of_reach") else f"not converged: {res.message}"
-    print(f"flutterswim fit: failed: {why}", file=sys.stderr)
+    print(f"flutterswim fit: failed: {res.failure}", file=sys.stderr)
     return 1
 
 

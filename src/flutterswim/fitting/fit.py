@@ -74,11 +74,22 @@ class FitResult:
         volts = self.settings.get("voltages_V")
         return [f"{d}@{v:g}V" for v in volts for d in names] if volts else names
 
+    @property
+    def failure(self) -> str:
+        """Why this is not a fit ("" for a converged one): data beyond the model's reach, or
+        "not converged: " and the optimiser's reason."""
+        if self.converged:
+            return ""
+        return self.message if self.settings.get("out_of_reach") else f"not converged: {self.message}"
+
     def to_dict(self) -> dict[str, Any]:
         def f(v):
             return None if v is None or not math.isfinite(float(v)) else float(v)
 
         out = {
+            # first, so that a failed fit's values are not read as a fit's
+            "status": "converged" if self.converged else "failed",
+            **({"failure": self.failure} if not self.converged else {}),
             "values": {"B_N_m2": self.B, "tau_s": self.tau, "kappa_E_per_m": self.kappa_E,
                        "B_N_mm2": self.B * 1e6, "kappa_E_per_mm": self.kappa_E * 1e-3},
             "sigma_rel": {n: f(s) for n, s in zip(NAMES, self.sigma_rel)},
