@@ -10,11 +10,13 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
 
 import flutterswim as fs
+from flutterswim._paths import atomic_path, check_files_in, check_output_dir, figure_metadata
 
 
 def run(rate: float, turns: float, start: float, n_segments: int, frames: int):
@@ -46,7 +48,8 @@ def figure(run, path: Path) -> Path:
     ax2.set_xlabel("t (s)")
     ax2.set_ylabel("field direction (deg)")
     fig.tight_layout()
-    fig.savefig(path, dpi=150)
+    with atomic_path(path) as tmp:  # signed, so that a rerun may replace it
+        fig.savefig(tmp, dpi=150, **figure_metadata(".png"))
     plt.close(fig)
     return path
 
@@ -58,8 +61,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--turns", type=float, default=1.0)
     ap.add_argument("--small", action="store_true", help="coarse and short (for the test suite)")
     args = ap.parse_args(argv)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    try:  # before computing: a folder inside an existing one, files of ours or new
+        out = check_output_dir(args.out, what="--out")
+        check_files_in(out, ("steering_run.nc", "steering_circle.png"), what="--out")
+    except fs.ParameterError as exc:
+        print(f"steering_circle.py: {exc}", file=sys.stderr)
+        return 2
+    out.mkdir(exist_ok=True)  # (its parent exists: check_output_dir)
     if args.small:
         res = run(args.rate, args.turns, start=8.0, n_segments=16, frames=600)
     else:

@@ -30,6 +30,29 @@ def test_steering_example_follows_the_rotating_field(tmp_path):
     assert np.cos(phi) < -0.9  # the field has turned by about pi
 
 
+def test_steering_example_refuses_a_missing_parent_and_files_not_its_own(tmp_path):
+    """The house rule for outputs: a missing parent folder is refused, not made (the example
+    made every missing folder of --out), and a file there that is not ours is never replaced;
+    a rerun replaces the example's own files (its figure is signed)."""
+    def example(out):
+        return subprocess.run([sys.executable, str(EXAMPLES / "steering_circle.py"), "--out", str(out), "--small",
+                               "--rate", "0.4", "--turns", "0.5"], capture_output=True, text=True, timeout=300)
+
+    r = example(tmp_path / "typo" / "deeper" / "out")
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "does not exist" in r.stderr and not (tmp_path / "typo").exists()
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "steering_circle.png").write_bytes(b"a figure of mine")
+    r = example(mine)
+    assert r.returncode == 2 and "never" in r.stderr and not (mine / "steering_run.nc").exists(), r.stderr
+    assert (mine / "steering_circle.png").read_bytes() == b"a figure of mine"
+    (mine / "steering_circle.png").unlink()
+    assert example(mine).returncode == 0
+    r = example(mine)  # its own files: replaced
+    assert r.returncode == 0, r.stderr
+
+
 def test_demo_module_runs(tmp_path):
     out = subprocess.run([sys.executable, "-m", "flutterswim.demo", "--out", str(tmp_path), "--cycles", "3",
                           "--segments", "16"], capture_output=True, text=True, timeout=300)
