@@ -40,10 +40,14 @@ class RefPath:
 
     def project(self, p: np.ndarray, near: int | None = None, window: int = 400) -> tuple[int, float]:
         """Index of the closest path point (searched near ``near`` if given: the path may cross
-        itself) and the signed cross-track error (positive: left of the path direction)."""
+        itself) and the signed cross-track error (positive: left of the path direction). On a
+        closed path the search near ``near`` runs on through its start (a second lap)."""
         pts = self.points
         if near is None:
             idx = np.arange(len(pts))
+        elif self.closed:
+            # (the last point is the first again: the search steps over it)
+            idx = np.arange(near - window // 4, near + window) % (len(pts) - 1)
         else:
             lo = max(0, near - window // 4)
             idx = np.arange(lo, min(len(pts), near + window))

@@ -231,7 +231,12 @@ def metrics(run, path: RefPath, reduced: ReducedModel, t0: float, body_length: f
         hit = np.nonzero((path.s[idx] >= path.s[c]) & (np.abs(e) < bl))[0]
         arrivals.append(float(ts[hit[0]]) if hit.size else math.nan)
     speed = np.hypot(np.gradient(ax, ts), np.gradient(ay, ts))
-    covered = float(path.s[idx].max() - path.s[idx[0]]) if idx.size else 0.0
+    # progress along the path, laps counted on a closed one (its arc length starts again)
+    prog = path.s[idx].astype(float)
+    if path.closed and prog.size > 1:
+        prog = prog + path.length * np.concatenate([[0], np.cumsum(np.diff(prog) < -0.5 * path.length)
+                                                    - np.cumsum(np.diff(prog) > 0.5 * path.length)])
+    covered = float(prog.max() - prog[0]) if idx.size else 0.0
     return {
         "cross_track_rms_mm": float(np.sqrt(np.mean(e ** 2)) * 1e3), "cross_track_rms_bl": float(np.sqrt(np.mean(e ** 2)) / bl),
         "cross_track_max_mm": float(np.abs(e).max() * 1e3), "cross_track_max_bl": float(np.abs(e).max() / bl),
