@@ -112,6 +112,7 @@ def _lateral_series(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray) -> l
 # simulation's round-off and solver tolerance; the paper's swimmer advances 0.1), or for a tracked
 # movie 0.05 px (its centroid's noise over the body's hundreds of pixels is about 0.01 px)
 _STILL_BL = 1e-6
+_FADED = 1e-3  # described cycles this small beside the record's largest: the stroke stopped
 _STILL_PX = 0.05
 # a swimmer more than about 5.7 degrees off the field's line (the advance along it 0.5 %
 # short of the advance along the path) is noted: the field's direction given is likely wrong
@@ -597,6 +598,15 @@ def describe(
         note = (f"the oscillation decays: its amplitude fell every cycle, by {100 * (1 - rate):.2g} % per cycle "
                 f"over the last {amp.size}: no sustained stroke (below the flutter threshold the straight state "
                 "is stable); the figures describe a dying transient")
+    # an oscillation a thousandth of the record's largest in the cycles described: the stroke
+    # stopped (a filament trapped in a bent equilibrium, or at rest: the integrator's or the
+    # camera's noise makes the cycles), which no limit cycle of a stroke describes
+    faded = cyc.n_cycles > 0 and float(np.mean(amp)) < _FADED * float(np.max(cyc.amplitudes))
+    if faded and not note.startswith("the oscillation decays"):  # (that says more)
+        settled = False
+        note = (f"the stroke stopped: the oscillation over the cycles described is "
+                f"{float(np.mean(amp)) / float(np.max(cyc.amplitudes)):.2g} of the record's largest (at rest, "
+                "or trapped in a bent equilibrium), so no limit cycle and these figures describe no stroke")
     if still:
         note = (note + "; " if note else "") + (
             f"no net swimming: the centroid moves {drift / tr.length:.2g} body lengths per cycle, under "
@@ -611,7 +621,7 @@ def describe(
         used = cyc.tol_used[k_lc:]
         if used.size and np.nanmax(used) > 1.2 * cyc.tol:
             worst = 100.0 * np.nanmax(used, axis=0)
-            note = (f"limit cycle within what the frames resolve (noise, or harmonics too fast for the frame "
+            note = (note + "; " if note else "") + (f"limit cycle within what the frames resolve (noise, or harmonics too fast for the frame "
                     f"rate): over its last {run} cycles, changes from cycle "
                     f"to cycle of up to {worst[0]:.2g} % in period, {worst[1]:.2g} % in amplitude and "
                     f"{worst[2]:.2g} % in shape would go unseen (tol {100.0 * cyc.tol:.2g} %)")
@@ -691,10 +701,10 @@ def describe(
         reciprocal=bool(abs(nrec_mean) < reciprocal_threshold),
         self_intersecting=bool(np.any(inter)),
         self_intersection_fraction=float(np.mean(inter)),
-        limit_cycle=cyc.limit_cycle,
-        limit_cycle_time_s=cyc.limit_cycle_time,
+        limit_cycle=settled,
+        limit_cycle_time_s=cyc.limit_cycle_time if settled else math.nan,
         onset_time_s=cyc.onset_time if settled else math.nan,
-        transient_duration_s=cyc.transient_duration,
+        transient_duration_s=cyc.transient_duration if settled else math.nan,
         growth_rate_per_s=cyc.growth_rate,
         growth_rate_stderr_per_s=cyc.growth_rate_stderr,
         leading_lateral_p2p_mm=p2p_end[lead] * mm,
