@@ -285,6 +285,16 @@ def test_steer_cli_rerun_replaces_its_own_metrics(tmp_path, fast_steer):
     assert is_ours(tmp_path / "s.json")
     assert main(args) == 0
     assert fast_steer == ["orbit", "identify", "steer"] * 2
+    # the run's file holds what scores it: the path as placed, when control started, the model
+    import json
+
+    import xarray as xr
+
+    with xr.open_dataset(tmp_path / "s.nc", engine="h5netcdf") as ds:
+        assert ds["path_x"].attrs["units"] == "m" and ds["path_x"].size > 100
+        assert ds.attrs["steering_closed_loop"] == 1 and ds.attrs["steering_path_closed"] == 1
+        assert json.loads(ds.attrs["steering_reduced_model"])["omega_max_rad_s"] == pytest.approx(0.26)
+    assert fs.load(tmp_path / "s.nc").t.size > 0
 
 
 @pytest.mark.parametrize("option, value", [("--noise-px", "nan"), ("--noise-px", "-1"), ("--noise-px", "inf"),

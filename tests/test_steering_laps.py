@@ -7,6 +7,7 @@ body lengths on the second lap of a circle, 0.0068 reported)."""
 import math
 
 import numpy as np
+import pytest
 
 import flutterswim as fs
 from flutterswim.steering.path import circle, square
@@ -50,3 +51,28 @@ def test_a_circle_is_followed_on_its_second_lap():
     # the metrics see the same run: over the whole of it, within 0.02 L of the independent error
     assert res.metrics["cross_track_max_bl"] > err[tt > t0 + 3 * red.period].max() / L - 0.02
     assert res.metrics["path_covered_fraction"] > 1.5
+
+
+def test_the_steering_file_alone_scores_the_run(tmp_path):
+    """The saved run holds the path as placed: its distance to the averaged centroid, from the
+    file alone, is the metrics' cross-track error."""
+    import xarray as xr
+
+    from flutterswim.steering.steer import steer_dataset
+
+    p = fs.PAPER
+    red = ReducedModel(U=1.0582e-3, period=0.3776, k=3.83, omega_max=0.2606, omega_max_bracket=(0.2592, 0.2620),
+                       r_min=4.061e-3, onset_time=12.0)
+    res = steer(p, lambda s, h: square(6 * p.l, s, h), red, laps=0.5)
+    steer_dataset(res, red).to_netcdf(tmp_path / "r.nc", engine="h5netcdf")
+    with xr.open_dataset(tmp_path / "r.nc", engine="h5netcdf") as ds:
+        P = np.stack([ds["path_x"].values, ds["path_y"].values], 1)
+        t0, T = float(ds.attrs["steering_control_start"]), red.period
+        t, cx, cy = ds["t"].values, ds["x"].values.mean(1), ds["y"].values.mean(1)
+    w = int(round(T / float(np.median(np.diff(t)))))
+    k = np.ones(w) / w
+    ax, ay = np.convolve(cx, k, "valid"), np.convolve(cy, k, "valid")
+    tt = t[w // 2 : w // 2 + ax.size]
+    sel = tt >= t0
+    d = np.min(np.hypot(ax[sel, None] - P[None, :, 0], ay[sel, None] - P[None, :, 1]), axis=1)
+    assert np.max(d) / p.l == pytest.approx(res.metrics["cross_track_max_bl"], rel=0.05, abs=0.005)

@@ -34,6 +34,30 @@ class SteerResult:
     control_start: float
 
 
+def steer_dataset(res: SteerResult, reduced=None):
+    """The run as an xarray Dataset (``SimulationResult.to_xarray``) with what scores it on its
+    own: the reference path as placed (``path_x``, ``path_y`` [m] along ``path_point``, with
+    the corner indices), the time control started, closed or open loop, and the reduced model
+    the controller used. ``flutterswim.load`` reads it as the run."""
+    import json
+
+    ds = res.run.to_xarray()
+    units = {"units": "m"}
+    ds["path_x"] = ("path_point", np.asarray(res.path.points[:, 0], float),
+                    {**units, "long_name": "reference path, x (as placed when control started)"})
+    ds["path_y"] = ("path_point", np.asarray(res.path.points[:, 1], float),
+                    {**units, "long_name": "reference path, y (as placed when control started)"})
+    ds.attrs.update({"steering_path": res.path.name, "steering_path_closed": int(res.path.closed),
+                     "steering_path_corners": json.dumps([int(c) for c in res.path.corners]),
+                     "steering_closed_loop": int(res.closed_loop),
+                     "steering_control_start": float(res.control_start), "steering_control_start_units": "s"})
+    if reduced is not None:
+        ds.attrs["steering_reduced_model"] = json.dumps(
+            {"U_m_s": reduced.U, "period_s": reduced.period, "k_per_s": reduced.k,
+             "omega_max_rad_s": reduced.omega_max, "r_min_m": reduced.r_min})
+    return ds
+
+
 def _centroid(run) -> tuple[np.ndarray, np.ndarray]:
     return run.x.mean(axis=1), run.y.mean(axis=1)
 
