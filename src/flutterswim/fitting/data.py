@@ -59,16 +59,23 @@ def read_trials(path: str | Path) -> Trials:
     if not p.is_file():
         raise ParameterError(f"trials={str(p)!r} is not a file")
     try:
-        with open(p, newline="") as f:
-            rows = list(csv.DictReader(f))
+        with open(p, newline="", encoding="utf-8-sig") as f:  # (a spreadsheet's byte-order mark)
+            reader = csv.DictReader(f)
+            rows = list(reader)
+            header = [str(h) for h in (reader.fieldnames or [])]
     except (UnicodeDecodeError, csv.Error) as exc:
         raise ParameterError(f"trials={str(p)!r} is not a readable CSV file ({exc})") from None
     if not rows:
         raise ParameterError(f"trials={str(p)!r} has no data rows")
+    # names padded with spaces (", period_s") are the names
+    rows = [{(k.strip() if isinstance(k, str) else k): v for k, v in r.items()} for r in rows]
     missing = [c for c in COLUMNS if c not in rows[0]]
     if missing:
-        raise ParameterError(f"trials={str(p)!r} lacks the column(s) {', '.join(missing)}; "
-                             f"required: {', '.join(COLUMNS)}")
+        sep = next((f" (its header is separated by {d!r}: the file must be comma-separated)"
+                    for d in (";", "\t") if len(header) == 1 and d in header[0]), "")
+        raise ParameterError(f"trials={str(p)!r} lacks the column(s) {', '.join(missing)}{sep}; its header has "
+                             f"{', '.join(repr(h) for h in header[:8])}{' ...' if len(header) > 8 else ''}; "
+                             f"required (spelt so): {', '.join(COLUMNS)}")
     vals = np.empty((len(rows), 3))
     volt = np.empty(len(rows))
     for i, r in enumerate(rows):
@@ -78,9 +85,10 @@ def read_trials(path: str | Path) -> Trials:
         except (TypeError, ValueError):
             raise ParameterError(f"trials={str(p)!r}, row {i + 2}: a number is required in "
                                  f"{', '.join(('voltage_V',) + DESCRIPTORS)}") from None
-        if not math.isfinite(volt[i]):
-            raise ParameterError(f"trials={str(p)!r}, row {i + 2}: voltage_V={r['voltage_V']!r} is not finite; "
-                                 "a finite voltage is required")
+        if not (math.isfinite(volt[i]) and volt[i] > 0):
+            raise ParameterError(f"trials={str(p)!r}, row {i + 2}: voltage_V={r['voltage_V']!r} is not allowed; "
+                                 "a finite voltage > 0 is required (the magnitude of the voltage that makes the field; "
+                                 "without one there is no stroke)")
         for k, c in enumerate(DESCRIPTORS):
             if not (math.isfinite(vals[i, k]) and (vals[i, k] > 0 if k == 0 else vals[i, k] >= 0)):
                 raise ParameterError(f"trials={str(p)!r}, row {i + 2}: {c}={r[c]!r} is not allowed; periods must "

@@ -113,10 +113,11 @@ class FitResult:
             "settings": self.settings,
         }
         if self.profiles:
-            out["profiles"] = {k: {"values": v["values"].tolist(), "chi2": v["chi2"].tolist(),
+            out["profiles"] = {k: {"values": v["values"].tolist(), "chi2": [f(c) for c in v["chi2"]],
                                    "sigma_rel_profile": f(v["sigma_rel"]),
                                    "interval_rel": [f(v.get("lower")), f(v.get("upper"))],
-                                   "note": "null: the profile flattens before rising by 1 (unbounded)"}
+                                   "note": "interval null: the profile flattens before rising by 1 (unbounded); "
+                                           "chi2 null: the model has no stroke there"}
                                for k, v in self.profiles.items()}
         if self.bootstrap_sigma_rel is not None:
             out["bootstrap_sigma_rel"] = dict(zip(NAMES, self.bootstrap_sigma_rel.tolist()))

@@ -43,7 +43,9 @@ def plot_fit(res, summary, trials, path=None, *, voltage: float | None = None):
         ax = axs[1, k]
         if res.profiles:
             pr = res.profiles[n]
-            ax.plot(pr["values"] * scale, pr["chi2"] - pr["chi2"].min(), "o-", color="k", ms=3, label="profile")
+            ok = np.isfinite(pr["chi2"])  # (no stroke elsewhere: not drawn)
+            ax.plot(pr["values"][ok] * scale, pr["chi2"][ok] - pr["chi2"][ok].min(), "o-", color="k", ms=3,
+                    label="profile")
             ax.axhline(1.0, color="tab:blue", ls=":", lw=1, label=r"$\Delta\chi^2 = 1$")
             ax.set_ylabel(r"$\Delta\chi^2$")
         else:

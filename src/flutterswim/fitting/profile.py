@@ -20,6 +20,8 @@ def profile_likelihood(model, base, x_best: np.ndarray, mean: np.ndarray, sem: n
 
     from .fit import Penalty, _weighted, model_jacobian
 
+    from .model import NotSwimming
+
     minv = np.linalg.inv(LOG_MAP)
     y_best = LOG_MAP @ x_best
     out = {}
@@ -27,9 +29,16 @@ def profile_likelihood(model, base, x_best: np.ndarray, mean: np.ndarray, sem: n
         free = [k for k in range(3) if k != i]
         # within +-span sigma, at most a factor e either way (sigma may be huge if unidentifiable)
         vals = y_best[i] + np.linspace(-span, span, n) * min(max(sigma_rel[i], 1e-6), 1.0 / span)
-        chi2 = []
-        z = y_best[free].copy()
-        for v in vals:
+        chi2 = np.full(vals.size, np.inf)  # inf: no stroke there (the profile rises without bound)
+        # outwards from the best fit, each value started from its inner neighbour's minimum (a
+        # start far out along the scan with the other parameters at their best can have no
+        # stroke: the Jacobian there failed and the whole fit was lost)
+        centre = int(np.argmin(np.abs(vals - y_best[i])))
+        order = list(range(centre, vals.size)) + list(range(centre - 1, -1, -1))
+        starts = {centre: y_best[free].copy()}
+        for j in order:
+            v = vals[j]
+            z = starts.get(j + 1 if j < centre else j - 1, starts[centre])
             def to_x(zz, v=v, i=i, free=free):
                 y = y_best.copy()
                 y[i] = v
@@ -45,9 +54,14 @@ def profile_likelihood(model, base, x_best: np.ndarray, mean: np.ndarray, sem: n
                 xx = to_x(zz)
                 return (model_jacobian(model, xx, model(xx)) / sem[:, None]) @ minv[:, free]
 
-            r = least_squares(fun, z, jac=jac, method="trf", xtol=1e-12, ftol=1e-14, gtol=1e-14, max_nfev=40)
-            chi2.append(float(np.sum(r.fun ** 2)))
-        chi2 = np.array(chi2)
+            try:
+                model(to_x(z))
+                r = least_squares(fun, z, jac=jac, method="trf", xtol=1e-12, ftol=1e-14, gtol=1e-14, max_nfev=40)
+            except NotSwimming:
+                starts[j] = z
+                continue
+            starts[j] = r.x
+            chi2[j] = float(np.sum(r.fun ** 2))
         lo, hi = profile_interval(vals - y_best[i], chi2)
         sig = 0.5 * (lo + hi) if math.isfinite(lo + hi) else min(lo, hi)
         phys = []
