@@ -194,3 +194,36 @@ def test_cli_json_of_a_refused_fit_is_marked_failed_with_its_reason(tmp_path, mo
             assert len(err) == 1 and err[0].endswith("failed: " + d["failure"]) and "lateral" in d["failure"]
         else:
             assert d["status"] == "converged" and "failure" not in d and not err
+
+
+def test_cli_says_when_the_papers_box_holds_a_value_on_its_bound(tmp_path, monkeypatch, capsys):
+    """Data from kappa_E = 1.8 x the guess fitted with the paper's cost: the value ends on the
+    box's bound; the command's line said nothing of it (a review: tau = 0.45 s, exactly the
+    bound, reported as +-15 %). It now notes the bound, and the JSON names the voltage fitted."""
+    import json
+
+    import numpy as np
+
+    import flutterswim as fs
+    from flutterswim.cli import main
+    import importlib
+
+    from flutterswim.fitting import to_identifiable
+    from flutterswim.fitting.surrogate import ScalingSurrogate
+
+    sur = ScalingSurrogate(fs.PAPER)
+    y = sur(to_identifiable(fs.PAPER, 2e-14, 0.3, 18e3 * 1.8))
+    fit_module = importlib.import_module("flutterswim.fitting.fit")
+    real = fit_module.fit
+    monkeypatch.setattr(fit_module, "fit", lambda *a, **kw: real(*a, **{**kw, "model": sur}))
+    rows = [f"85,s{i},{y[0] * (1 + d):.9g},{y[1] * (1 + d):.9g},{y[2] * (1 + d):.9g}"  # (s, mm, mm)
+            for i, d in enumerate((-0.01, 0.0, 0.01))]
+    csv = tmp_path / "t.csv"
+    csv.write_text("voltage_V,sample,period_s,advance_mm,lateral_mm\n" + "\n".join(rows) + "\n")
+    out = tmp_path / "f.json"
+    main(["fit", str(csv), "--preset", "paper", "--paper-cost", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert "kappa_E ended on the bound of the paper's box" in err
+    doc = json.loads(out.read_text())
+    assert doc["at_bound"] == ["kappa_E"] and doc["settings"]["voltage_V"] == 85.0
+    assert np.isfinite(doc["values"]["kappa_E_per_m"])

@@ -89,6 +89,9 @@ def _cmd_fit(args) -> int:
 
         print(f"flutterswim fit: failed: {' '.join(str(exc).split())}", file=sys.stderr)
         return 1
+    from dataclasses import replace
+
+    res = replace(res, settings={**res.settings, "voltage_V": float(v)})  # (kappa_E is this voltage's)
     res.save(out)
     if res.settings.get("out_of_reach"):  # no values to speak of: the one line why (the JSON has the rest)
         return _verdict(res)
@@ -105,6 +108,12 @@ def _cmd_fit(args) -> int:
     print(f"{out}: B = {res.B * 1e6:.4g} N mm^2 (+-{100 * s[0]:.2g}%), tau = {res.tau:.4g} s (+-{100 * s[1]:.2g}%), "
           f"kappa_E = {res.kappa_E * 1e-3:.4g} 1/mm (+-{100 * s[2]:.2g}%) at {v:g} V; paper cost C = {res.paper_cost:.3g}; "
           f"{res.card.describe()}")
+    if res.at_bound:
+        import sys
+
+        print(f"flutterswim fit: note: {', '.join(res.at_bound)} ended on the bound of the paper's box (factor 0.5 or "
+              "1.5 of the guess): the data ask for a value beyond it, so that value is the bound's, not the fit's "
+              "(without --paper-cost the fit is unbounded)", file=sys.stderr)
     _plot(args, res, summary, trials, v)
     return _verdict(res)
 
