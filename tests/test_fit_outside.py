@@ -227,3 +227,35 @@ def test_cli_says_when_the_papers_box_holds_a_value_on_its_bound(tmp_path, monke
     doc = json.loads(out.read_text())
     assert doc["at_bound"] == ["kappa_E"] and doc["settings"]["voltage_V"] == 85.0
     assert np.isfinite(doc["values"]["kappa_E_per_m"])
+
+
+def test_a_fit_that_runs_too_long_stops_at_its_best_point_and_says_why(monkeypatch):
+    """A fit among slow strokes (the leading end's excursions fitted as the trailing end's ran
+    for over 18 minutes without a word) stops after MAX_FIT_SECONDS at its best point: not
+    converged, the failure says why and names the leading end; no finer model is tried."""
+    import importlib
+    import time
+
+    import numpy as np
+
+    import flutterswim as fs
+    from flutterswim.fitting import to_identifiable
+    from flutterswim.fitting.surrogate import ScalingSurrogate
+
+    fit_module = importlib.import_module("flutterswim.fitting.fit")
+    sur = ScalingSurrogate(fs.PAPER)
+    calls = []
+
+    def slow(x):
+        calls.append(1)
+        time.sleep(0.05)
+        return sur(x)
+
+    # data no stroke of the surrogate reproduces exactly (a misfit: the optimiser keeps going)
+    y = sur(to_identifiable(fs.PAPER, 2e-14, 0.3, 18e3)) * np.array([1.0, 1.0, 0.3])
+    monkeypatch.setattr(fit_module, "MAX_FIT_SECONDS", 0.3)
+    t0 = time.perf_counter()
+    res = fit_module.fit(y, y * np.array([0.005, 0.05, 0.03]), model=slow)
+    assert time.perf_counter() - t0 < 5.0
+    assert not res.converged and "stopped after 0.3 s" in res.failure and "--tip leading" in res.failure
+    assert res.to_dict()["status"] == "failed"

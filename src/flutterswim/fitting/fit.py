@@ -216,6 +216,10 @@ def on_backend(model, backend: str, workers: int | None, call) -> FitResult:
 #: a fit that hit strokes its model does not resolve (Unresolved) and ends with a misfit above
 #: these (chi-square: a 3-sigma miss; the paper's C: 1 % per descriptor) stopped against them
 STALL_CHI2 = 9.0
+#: a fit (one resolution) stops after this long, at its best point, and says why: a good fit
+#: takes 10-40 s; the leading end's excursions fitted as the trailing end's searched among
+#: strokes near the onset (slow orbits) for over 18 minutes without a word
+MAX_FIT_SECONDS = 240.0
 STALL_PAPER_C = 1e-4
 
 
@@ -301,7 +305,7 @@ def _fit_once(measured, sem=None, *, base, guess, cost, tip, model, profiles, bo
     from scipy.optimize import least_squares, minimize
 
     _start(model, x0, mean)
-    track = Reach()  # the strokes the fit computed, and its failed points
+    track = Reach(MAX_FIT_SECONDS)  # the strokes the fit computed, and its failed points
     if cost == "sem":
         penalty = Penalty()
 
@@ -365,6 +369,12 @@ def _fit_once(measured, sem=None, *, base, guess, cost, tip, model, profiles, bo
     beyond = track.beyond(mean, sem_arr) if cost == "sem" and not chi2 <= STALL_CHI2 else None
     if beyond:
         ok, msg = False, _outside(mean, beyond)
+    elif track.timed_out:  # (no finer model either: it would be slower)
+        beyond = msg = (
+            f"{msg} (chi2 = {chi2:.3g} at the best point): the strokes where the fit searched are slow to "
+            "compute (near the onset of swimming, where the lateral excursions are small)"
+            + ("; if the lateral excursions are the leading end's, fit them as such (--tip leading, tip='leading')"
+               if tip == "trailing" else ""))
     prof = {}
     if profiles and sem_arr is not None and not beyond:
         from .profile import profile_likelihood

@@ -16,6 +16,7 @@ SEMs, it exceeds the largest value the model reached by more than a finer model 
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 
@@ -46,13 +47,18 @@ class Reach:
     """Trial points of one fit: the best with a stroke, the range of each descriptor over all
     with a stroke, and the failures (in a row and in all)."""
 
-    def __init__(self):
+    def __init__(self, seconds: float = math.inf):
         self.in_a_row, self.failed, self.best_x, self.best = 0, 0, None, math.inf
         self.lo, self.hi, self.n_strokes = np.full(3, np.inf), np.full(3, -np.inf), 0
+        self.seconds, self.deadline, self.timed_out = seconds, time.perf_counter() + seconds, False
 
     def record(self, x, r, y) -> None:
         """Note trial point ``x`` with weighted residuals ``r`` and descriptors ``y`` (None: no
-        stroke); raise :class:`Stuck` when the failures reach a limit and a stroke was found."""
+        stroke); raise :class:`Stuck` when the failures reach a limit and a stroke was found, or
+        when the fit has run for longer than ``seconds`` (``timed_out``)."""
+        if self.best_x is not None and time.perf_counter() > self.deadline:
+            self.timed_out = True
+            raise Stuck(self.best_x, f"stopped after {self.seconds:g} s without converging")
         if y is not None:
             self.in_a_row, self.n_strokes = 0, self.n_strokes + 1
             self.lo, self.hi = np.minimum(self.lo, y), np.maximum(self.hi, y)
