@@ -98,12 +98,16 @@ def test_identifiability_card_sensitivities_match_finite_differences(model):
     truth = (1.94e-14, 0.375, 19.1e3)
     y = model(to_identifiable(BASE, *truth))
     res = fit(y, y * REL_SEM, model=model, guess=truth)
+    # the card is the model's the fit ended with (data made by the 24/48 model: the 48/96 one
+    # moves the parameters by 0.26 %, so the fit is repeated with it)
+    used = model if res.settings["n_segments"] == model.n_segments else model.finer()
+    at = (res.B, res.tau, res.kappa_E)
     fd = np.zeros((3, 3))
     for k in range(3):
-        up, dn = list(truth), list(truth)
+        up, dn = list(at), list(at)
         up[k] *= math.exp(1e-4)
         dn[k] *= math.exp(-1e-4)
-        fd[:, k] = (np.log(model(to_identifiable(BASE, *up))) - np.log(model(to_identifiable(BASE, *dn)))) / 2e-4
+        fd[:, k] = (np.log(used(to_identifiable(BASE, *up))) - np.log(used(to_identifiable(BASE, *dn)))) / 2e-4
     assert np.allclose(res.card.sensitivities, fd, atol=1e-5 * np.abs(fd).max())
     # B and tau enter advance and lateral only through B tau: equal sensitivities there
     assert np.allclose(fd[1:, 0], fd[1:, 1], atol=1e-6)
