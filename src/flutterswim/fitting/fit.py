@@ -216,7 +216,8 @@ def on_backend(model, backend: str, workers: int | None, call) -> FitResult:
 #: a fit that hit strokes its model does not resolve (Unresolved) and ends with a misfit above
 #: these (chi-square: a 3-sigma miss; the paper's C: 1 % per descriptor) stopped against them
 STALL_CHI2 = 9.0
-#: a fit (one resolution) stops after this long, at its best point, and says why: a good fit
+#: a fit stops after this long (its tries at finer resolutions included), at its best point, and
+#: says why: a good fit
 #: takes 10-40 s; the leading end's excursions fitted as the trailing end's searched among
 #: strokes near the onset (slow orbits) for over 18 minutes without a word
 MAX_FIT_SECONDS = 240.0
@@ -276,9 +277,12 @@ def _fit(measured, sem=None, *, base, guess, cost, tip, model, profiles, bootstr
         raise ParameterError(f"base={base!r} must be flutterswim.Parameters")
     model = DescriptorModel(base_, tip=tip, n_segments=n_segments, extrapolate=extrapolate) if model is None else model
 
-    def run(m):
+    t_start = time.perf_counter()
+
+    def run(m):  # (MAX_FIT_SECONDS for the whole fit, finer tries included: at least 10 s each)
+        left = max(MAX_FIT_SECONDS - (time.perf_counter() - t_start), min(10.0, MAX_FIT_SECONDS))
         return _fit_once(measured, sem, base=base, guess=guess, cost=cost, tip=tip, model=m, profiles=profiles,
-                         bootstrap=bootstrap, n_segments=n_segments, extrapolate=extrapolate, seed=seed)
+                         bootstrap=bootstrap, n_segments=n_segments, extrapolate=extrapolate, seed=seed, seconds=left)
 
     res = refine_while_stalled(run, model, _stalled, lambda r: f"chi2 = {r.cost:.3g}" if r.cost_kind == "sem"
                                else f"the paper's C = {r.paper_cost:.3g}")
@@ -321,7 +325,7 @@ def _refine_if_sensitive(res: "FitResult", model, run, base) -> "FitResult":
 
 
 def _fit_once(measured, sem=None, *, base, guess, cost, tip, model, profiles, bootstrap, n_segments, extrapolate,
-              seed) -> FitResult:
+              seed, seconds: float | None = None) -> FitResult:
     t0 = time.perf_counter()
     base = preset("paper") if base is None else base
     if not isinstance(base, Parameters):
@@ -341,7 +345,9 @@ def _fit_once(measured, sem=None, *, base, guess, cost, tip, model, profiles, bo
     from scipy.optimize import least_squares, minimize
 
     _start(model, x0, mean)
-    track = Reach(MAX_FIT_SECONDS)  # the strokes the fit computed, and its failed points
+    # the strokes the fit computed, its failed points, and its time (what is left of the fit's
+    # MAX_FIT_SECONDS after its coarser tries)
+    track = Reach(MAX_FIT_SECONDS if seconds is None else seconds)
     if cost == "sem":
         penalty = Penalty()
 
@@ -407,7 +413,7 @@ def _fit_once(measured, sem=None, *, base, guess, cost, tip, model, profiles, bo
         ok, msg = False, _outside(mean, beyond)
     elif track.timed_out:  # (no finer model either: it would be slower)
         beyond = msg = (
-            f"{msg} (chi2 = {chi2:.3g} at the best point): the strokes where the fit searched are slow to "
+            f"{msg} ({MAX_FIT_SECONDS:g} s, MAX_FIT_SECONDS; chi2 = {chi2:.3g} at the best point): the strokes where the fit searched are slow to "
             "compute (near the onset of swimming, where the lateral excursions are small)"
             + ("; if the lateral excursions are the leading end's, fit them as such (--tip leading, tip='leading')"
                if tip == "trailing" else ""))

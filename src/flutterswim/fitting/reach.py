@@ -58,7 +58,7 @@ class Reach:
         when the fit has run for longer than ``seconds`` (``timed_out``)."""
         if self.best_x is not None and time.perf_counter() > self.deadline:
             self.timed_out = True
-            raise Stuck(self.best_x, f"stopped after {self.seconds:g} s without converging")
+            raise Stuck(self.best_x, "stopped at the fit's time limit without converging")
         if y is not None:
             self.in_a_row, self.n_strokes = 0, self.n_strokes + 1
             self.lo, self.hi = np.minimum(self.lo, y), np.maximum(self.hi, y)
