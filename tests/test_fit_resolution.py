@@ -46,3 +46,22 @@ def test_a_fit_the_resolution_would_move_is_repeated_finer():
     res2 = fit(y, sem, model=fine)
     assert "refined_from_segments" not in res2.settings and res2.settings["resolution_shift_rel"] < 1e-3
     assert res2.B == pytest.approx(truth[0], rel=1e-3)
+
+
+def test_profiles_are_computed_once_on_the_fit_kept(monkeypatch):
+    """With profiles, a fit repeated finer computes them once, on the model it keeps."""
+    from flutterswim.fitting import profile as profile_module
+
+    truth = (1.2e-14, 0.42, 25.2e3)
+    y = ScalingSurrogate(fs.PAPER)(to_identifiable(fs.PAPER, *truth))
+    seen = []
+    real = profile_module.profile_likelihood
+
+    def counting(model, *a, **kw):
+        seen.append(model.n_segments)
+        return real(model, *a, **kw)
+
+    monkeypatch.setattr(profile_module, "profile_likelihood", counting)
+    res = fit(y, y * np.array([0.005, 0.05, 0.03]), model=_Resolved([0.0, 0.0, 4e-3]), profiles=True)
+    assert res.settings["refined_from_segments"] == 24 and seen == [48]
+    assert set(res.profiles) == {"B", "tau", "kappa_E"}

@@ -281,14 +281,35 @@ def _fit(measured, sem=None, *, base, guess, cost, tip, model, profiles, bootstr
 
     def run(m):  # (MAX_FIT_SECONDS for the whole fit, finer tries included: at least 10 s each)
         left = max(MAX_FIT_SECONDS - (time.perf_counter() - t_start), min(10.0, MAX_FIT_SECONDS))
-        return _fit_once(measured, sem, base=base, guess=guess, cost=cost, tip=tip, model=m, profiles=profiles,
-                         bootstrap=bootstrap, n_segments=n_segments, extrapolate=extrapolate, seed=seed, seconds=left)
+        # profiles and bootstrap once, on the fit that is kept (below)
+        return _fit_once(measured, sem, base=base, guess=guess, cost=cost, tip=tip, model=m, profiles=False,
+                         bootstrap=0, n_segments=n_segments, extrapolate=extrapolate, seed=seed, seconds=left)
 
     res = refine_while_stalled(run, model, _stalled, lambda r: f"chi2 = {r.cost:.3g}" if r.cost_kind == "sem"
                                else f"the paper's C = {r.paper_cost:.3g}")
     while getattr(model, "n_segments", None) is not None and model.n_segments < res.settings.get("n_segments", 0):
         model = model.finer()  # (the resolution refine_while_stalled ended at)
-    return _refine_if_sensitive(res, model, run, base_)
+    res, model = _refine_if_sensitive(res, model, run, base_)
+    return _with_extras(res, model, base_, profiles, bootstrap, seed)
+
+
+def _with_extras(res: "FitResult", model, base, profiles: bool, bootstrap: int, seed) -> "FitResult":
+    """``res`` with its profile likelihoods and parametric bootstrap (as asked), on ``model``;
+    none for data out of the model's reach, and no profiles without standard errors."""
+    if not (profiles or bootstrap) or res.settings.get("out_of_reach"):
+        return res
+    sem_arr = res.sem if np.all(np.isfinite(res.sem)) else None
+    x = to_identifiable(base, res.B, res.tau, res.kappa_E)
+    prof, boot = {}, None
+    if profiles and sem_arr is not None:
+        from .profile import profile_likelihood
+
+        prof = profile_likelihood(model, base, x, res.measured, sem_arr, res.sigma_rel)
+    if bootstrap:
+        if sem_arr is None:
+            raise ParameterError("bootstrap needs the standard errors (sem)")
+        boot = _bootstrap(model, x, res.measured, sem_arr, bootstrap, seed)
+    return replace(res, profiles=prof, bootstrap_sigma_rel=boot)
 
 
 #: a converged fit is repeated with the model from twice the segments when the finer model's
@@ -298,30 +319,32 @@ def _fit(measured, sem=None, *, base, guess, cost, tip, model, profiles, bootstr
 REFINE_PARAMETER_TOL = 1e-3
 
 
-def _refine_if_sensitive(res: "FitResult", model, run, base) -> "FitResult":
+def _refine_if_sensitive(res: "FitResult", model, run, base) -> tuple["FitResult", object]:
+    """(the fit kept, its model): ``res``, or the fit repeated with ``model.finer()`` when that
+    model's descriptors at ``res`` would move a parameter by over REFINE_PARAMETER_TOL."""
     finer = model.finer() if res.converged and hasattr(model, "finer") else None
     if finer is None:
-        return res
+        return res, model
     x = to_identifiable(base, res.B, res.tau, res.kappa_E)
     try:
         y_fine = np.asarray(finer(x), float)
     except (NotSwimming, Unresolved):
-        return res
+        return res, model
     y = np.asarray(res.model, float)
     try:
         dx = np.linalg.solve(res.card.sensitivities, np.log(y_fine / y))
     except np.linalg.LinAlgError:
-        return res
+        return res, model
     shift = np.abs(np.asarray(to_physical(base, x + dx)) / np.array([res.B, res.tau, res.kappa_E]) - 1.0)
     if not np.max(shift) > REFINE_PARAMETER_TOL:
-        return replace(res, settings={**res.settings, "resolution_shift_rel": float(np.max(shift))})
+        return replace(res, settings={**res.settings, "resolution_shift_rel": float(np.max(shift))}), model
     finer_res = run(finer)
     if not finer_res.converged:
-        return res
+        return res, model
     return replace(finer_res, settings={**finer_res.settings, "refined_from_segments": model.n_segments,
                                         "resolution_shift_rel": float(np.max(shift))},
                    message=f"{finer_res.message} (refined from {model.n_segments} to {finer.n_segments} segments: "
-                           f"the finer model moved a parameter by {100 * np.max(shift):.2g} % at the first fit)")
+                           f"the finer model moved a parameter by {100 * np.max(shift):.2g} % at the first fit)"), finer
 
 
 def _fit_once(measured, sem=None, *, base, guess, cost, tip, model, profiles, bootstrap, n_segments, extrapolate,
