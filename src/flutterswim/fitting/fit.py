@@ -217,9 +217,8 @@ def on_backend(model, backend: str, workers: int | None, call) -> FitResult:
 #: these (chi-square: a 3-sigma miss; the paper's C: 1 % per descriptor) stopped against them
 STALL_CHI2 = 9.0
 #: a fit stops after this long (its tries at finer resolutions included), at its best point, and
-#: says why: a good fit
-#: takes 10-40 s; the leading end's excursions fitted as the trailing end's searched among
-#: strokes near the onset (slow orbits) for over 18 minutes without a word
+#: says why: a good fit takes 10-40 s; the leading end's excursions fitted as the trailing end's
+#: searched among strokes near the onset (slow orbits) for over 18 minutes without a word
 MAX_FIT_SECONDS = 240.0
 STALL_PAPER_C = 1e-4
 
