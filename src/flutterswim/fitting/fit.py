@@ -280,9 +280,8 @@ def _fit(measured, sem=None, *, base, guess, cost, tip, model, profiles, bootstr
 
     def run(m):  # (MAX_FIT_SECONDS for the whole fit, finer tries included: at least 10 s each)
         left = max(MAX_FIT_SECONDS - (time.perf_counter() - t_start), min(10.0, MAX_FIT_SECONDS))
-        # profiles and bootstrap once, on the fit that is kept (below)
-        return _fit_once(measured, sem, base=base, guess=guess, cost=cost, tip=tip, model=m, profiles=False,
-                         bootstrap=0, n_segments=n_segments, extrapolate=extrapolate, seed=seed, seconds=left)
+        return _fit_once(measured, sem, base=base, guess=guess, cost=cost, tip=tip, model=m, n_segments=n_segments,
+                         seconds=left)
 
     res = refine_while_stalled(run, model, _stalled, lambda r: f"chi2 = {r.cost:.3g}" if r.cost_kind == "sem"
                                else f"the paper's C = {r.paper_cost:.3g}")
@@ -350,8 +349,10 @@ def _refine_if_sensitive(res: "FitResult", model, run, base) -> tuple["FitResult
                            f"the finer model moved a parameter by {100 * np.max(shift):.2g} % at the first fit)"), finer
 
 
-def _fit_once(measured, sem=None, *, base, guess, cost, tip, model, profiles, bootstrap, n_segments, extrapolate,
-              seed, seconds: float | None = None) -> FitResult:
+def _fit_once(measured, sem=None, *, base, guess, cost, tip, model, n_segments, seconds: float | None = None
+              ) -> FitResult:
+    """One fit with ``model`` (no profiles or bootstrap: :func:`_with_extras` adds them to the
+    fit that is kept)."""
     t0 = time.perf_counter()
     base = preset("paper") if base is None else base
     if not isinstance(base, Parameters):
@@ -443,20 +444,10 @@ def _fit_once(measured, sem=None, *, base, guess, cost, tip, model, profiles, bo
             "compute (near the onset of swimming, where the lateral excursions are small)"
             + ("; if the lateral excursions are the leading end's, fit them as such (--tip leading, tip='leading')"
                if tip == "trailing" else ""))
-    prof = {}
-    if profiles and sem_arr is not None and not beyond:
-        from .profile import profile_likelihood
-
-        prof = profile_likelihood(model, base, x, mean, sem_arr, cov.sigma_rel)
-    boot = None
-    if bootstrap and not beyond:
-        if sem_arr is None:
-            raise ParameterError("bootstrap needs the standard errors (sem)")
-        boot = _bootstrap(model, x, mean, sem_arr, bootstrap, seed)
     return FitResult(B, tau, kE, cov.sigma_rel, cov.correlation, chi2 if cost == "sem" else paper_cost(mean, y),
                      paper_cost(mean, y), cost, ok, msg, getattr(model, "evaluations", getattr(model, "n_evaluations", 0)),
                      time.perf_counter() - t0, mean, sem_arr if sem_arr is not None else np.full(3, np.nan), y,
-                     card, prof, boot,
+                     card, {}, None,
                      {"tip": tip, "n_segments": getattr(model, "n_segments", n_segments),
                       "extrapolate": bool(getattr(model, "_fine", None) is not None),
                       "model": getattr(model, "resolution", type(model).__name__), "guess": list(guess), "cost": cost,
