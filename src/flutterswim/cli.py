@@ -57,6 +57,33 @@ def _still_and_bent(run) -> str:
     return ""
 
 
+def _crossing(run) -> str:
+    """A note when the body crosses itself over the last fifth of a run: the model has no contact
+    between parts of the body, so such shapes are not physical. A field turning faster than the
+    swimmer can follow, or turning while its stroke still grows, curls it up this way, and the run
+    said only "completed" (its trap note looks for a still, bent filament)."""
+    import numpy as np
+
+    from .analysis.intersection import polyline_self_intersects
+
+    t = np.asarray(run.t)
+    last = t >= t[-1] - 0.2 * (t[-1] - t[0])
+    if t.size < 10 or last.sum() < 5:
+        return ""
+    hit = polyline_self_intersects(np.asarray(run.x), np.asarray(run.y))
+    if not hit[last].any():
+        return ""
+    note = (f"; the body crosses itself in {100 * float(np.mean(hit[last])):.2g} % of the frames of the last fifth "
+            f"(first at t = {float(t[np.argmax(hit)]):.4g} s): the model has no contact between parts of the body, so these shapes "
+            "are not physical")
+    field = np.unwrap(np.asarray(run.field_angle, float))
+    if field.size and np.ptp(field) > np.radians(5.0):
+        note += (" (a swimmer curls up when the field turns faster than it can follow, its step-out rate Omega_max "
+                 "that `flutterswim steer` reports, or while its stroke still grows: start turning after the onset, "
+                 "--field-start)")
+    return note
+
+
 def _simulate(args: argparse.Namespace) -> int:
     from ._paths import check_output_file
     from ._validate import ParameterError
@@ -111,6 +138,7 @@ def _simulate(args: argparse.Namespace) -> int:
         if orb:
             note += (f"; periodic orbit: period {orb['period']:.6g} s, advance {orb['advance'] * 1e3:.6g} mm "
                      f"per cycle, {'stable' if orb['stable'] else 'UNSTABLE'}")
+    note += _crossing(run)
     line = (f"{run.status}: {run.message}; {run.t[-1]:.3f} s simulated, "
             f"{run.stats.n_steps} steps in {run.stats.wall_time:.2f} s; wrote {path}{note}")
     if not run.ok:  # a failure goes to stderr, with the command's name, as every error does

@@ -647,7 +647,14 @@ def describe(
         note = (note + "; " if note else "") + (
             f"the lateral excursions are not measured: {per_stroke:.2g} frames per stroke, a cycle needs at "
             "least 4 (a higher frame rate)")
-    if not still and abs(math.cos(rel)) < _ALONG_FIELD_COS:  # (along the field's line, either way)
+    if np.any(inter):  # the paper's red strokes, or a swimmer curled up by a field turning too fast
+        note = (note + "; " if note else "") + (
+            f"the centreline crosses itself in {100 * float(np.mean(inter)):.2g} % of the frames described: "
+            + ("the tracked shape joins two parts of the body there" if movie else
+               "the model has no contact between parts of the body, so those shapes are not physical"))
+    # a turning field has no one direction to swim along: the turning figures describe it
+    field_turns = float(np.ptp(np.unwrap(np.asarray(w.field_angle, float)))) > math.radians(5.0)
+    if not still and not field_turns and abs(math.cos(rel)) < _ALONG_FIELD_COS:  # (along its line, either way)
         note = (note + "; " if note else "") + (
             f"swims at {math.degrees(rel):.3g} deg to the field direction taken ({math.degrees(fa):.3g} deg in the "
             f"image): the advance is measured along the field, {100 * (1 - abs(math.cos(rel))):.2g} % less than "
