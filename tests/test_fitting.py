@@ -166,6 +166,11 @@ def test_trials_csv_means_sems_and_cli(tmp_path, coarse, capsys):
     assert d["settings"]["extrapolate"] is False and d["settings"]["model"] == "orbits of 24 segments"
     assert set(d["sigma_rel"]) == {"B", "tau", "kappa_E"} and d["convergence"]["converged"]
     assert "B-tau" in d["correlation"] and d["identifiability"]["condition_number"] > 1
+    # what the fit held fixed is the preset's geometry and viscosity, and only that: the preset's
+    # own B, tau and kappa_E (under "base") were read as results
+    held = d["settings"]["held_fixed"]
+    assert "base" not in d["settings"] and not {"B", "tau", "kappa_E"} & set(held)
+    assert held == pytest.approx({k: getattr(fs.PAPER, k) for k in held}) and set(held) >= {"l", "b", "mu"}
     # bad input: one line, exit 2
     bad = tmp_path / "bad.csv"
     bad.write_text("voltage_V,period_s\n85,0.4\n")

@@ -451,10 +451,17 @@ def _fit_once(measured, sem=None, *, base, guess, cost, tip, model, n_segments, 
                      {"tip": tip, "n_segments": getattr(model, "n_segments", n_segments),
                       "extrapolate": bool(getattr(model, "_fine", None) is not None),
                       "model": getattr(model, "resolution", type(model).__name__), "guess": list(guess), "cost": cost,
-                      "base": {k: float(v) for k, v in asdict(base).items()},
+                      "held_fixed": held_fixed(base),
                       "uncertainty_weights": "sem" if sem_arr is not None else "5% of the measured values",
                       **({"out_of_reach": beyond} if beyond else {})},
                      at_bound)
+
+
+def held_fixed(base: Parameters) -> dict[str, float]:
+    """The parameters a fit holds fixed (geometry, viscosity), SI, for its settings. The base's
+    own B, tau and kappa_E are left out: the fit does not use them, and under a key "base" they
+    were easily read as results."""
+    return {k: float(v) for k, v in asdict(base).items() if k not in ("B", "tau", "kappa_E")}
 
 
 def model_jacobian(model, x: np.ndarray, y: np.ndarray) -> np.ndarray:

@@ -11,13 +11,12 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict
 
 import numpy as np
 
 from .._validate import ParameterError, positive
 from ..params import Parameters, preset
-from .fit import PAPER_GUESS, FitResult, Penalty, model_jacobian, paper_cost
+from .fit import PAPER_GUESS, FitResult, Penalty, held_fixed, model_jacobian, paper_cost
 from .model import DescriptorModel, NotSwimming, Unresolved, to_identifiable, to_physical
 from .uncertainty import covariance, identifiability_card
 
@@ -161,7 +160,7 @@ def fit_voltages(voltages, means, sems, *, v_ref: float | None = None, n_trials=
             "extrapolate": bool(getattr(m, "_fine", None) is not None),
             "model": getattr(m, "resolution", type(m).__name__), "guess": list(guess),
             "start": {"from": started, "B_N_m2": x0B, "tau_s": x0tau, "kappa_E_per_m": x0k},
-            "cost": "sem", "base": {k: float(val) for k, val in asdict(base).items()},
+            "cost": "sem", "held_fixed": held_fixed(base),
             "uncertainty_weights": "sem",
             "voltages_V": v.tolist(), "v_ref_V": v_ref, "kappa_E_proportional_to_voltage": True,
             "kappa_E_per_m_per_V": kE / v_ref,
