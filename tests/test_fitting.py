@@ -343,6 +343,10 @@ def test_fit_figure_draws_the_trials_as_fig3e_and_the_model_at_the_fitted_voltag
             mark = next(ln for ln in ax.lines if ln.get_label() == "model at the fit")
             np.testing.assert_allclose(mark.get_xdata(), [85.0])
             np.testing.assert_allclose(mark.get_ydata(), [res.model[k]])
+            # the residual the panel shows is the fit's: model against the mean it fitted
+            text = next(t.get_text() for t in ax.texts if t.get_text().startswith("model - mean"))
+            rel = float(text.split(": ")[1].split(" %")[0])
+            assert rel == pytest.approx(100 * (res.model[k] / mean[k] - 1), abs=0.006)
         # the lateral axis names the end fitted, the title the voltage
         assert f"{res.settings['tip']} end" in fig.axes[2].get_ylabel() and "85 V" in fig._suptitle.get_text()
         import matplotlib.pyplot as plt

@@ -1,4 +1,4 @@
-"""Figure of a fit: the data (Fig. 3e), the model at the fit, residuals and profiles."""
+"""Figure of a fit: the data (Fig. 3e), the model at the fit and its residual, and profiles."""
 
 from __future__ import annotations
 
@@ -7,6 +7,15 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["plot_fit"]
+
+
+def _residual(res, k: int) -> str:
+    """The fit's residual in descriptor k: model - mean, relative and in SEMs (the quantity the
+    fit weighs), for the panel that shows both."""
+    mean, model = float(res.measured[k]), float(res.model[k])
+    sem = float(np.asarray(res.sem, float)[k])
+    out = f"model - mean: {100 * (model / mean - 1):+.2f} %"
+    return out + (f" = {(model - mean) / sem:+.2f} SEM" if np.isfinite(sem) and sem > 0 else "")
 
 
 def plot_fit(res, summary, trials, path=None, *, voltage: float | None = None):
@@ -34,6 +43,7 @@ def plot_fit(res, summary, trials, path=None, *, voltage: float | None = None):
                     label="model at the fit (kappa_E ~ V)")
         else:
             ax.plot([voltage], [res.model[k]], "s", mfc="none", color="k", ms=8, label="model at the fit")
+            ax.text(0.97, 0.03, _residual(res, k), ha="right", va="bottom", fontsize=8, transform=ax.transAxes)
     tip = res.settings.get("tip", "trailing")
     axs[0, 2].set_ylabel(f"lateral peak-to-peak, {tip} end [mm]")
     axs[0, 0].legend(fontsize=8)
