@@ -84,19 +84,34 @@ def sample_cycle(t: np.ndarray, f: np.ndarray, t0: float, period: float, n: int,
     return (1 - w) * f[j] + w * f[j + 1]
 
 
+def leading_axes(X: np.ndarray, n: int) -> np.ndarray:
+    """The ``n`` leading right singular vectors of X (F, N) (rows: frames), as rows (n, N), from
+    the eigenvectors of the N x N matrix X^T X: an SVD of the F frames cost a sixth of describe.
+    Their signs are arbitrary, as an SVD's."""
+    _, v = np.linalg.eigh(X.T @ X)
+    return v[:, ::-1][:, :n].T.copy()
+
+
 def _fourier_columns(phase: np.ndarray, H: int) -> np.ndarray:
     """Columns 1, cos(2 pi h phase) for h = 1..H, sin(2 pi h phase) for h = 1..H."""
     arg = np.outer(phase, 2 * np.pi * np.arange(1, H + 1))
     return np.hstack([np.ones((np.size(phase), 1)), np.cos(arg), np.sin(arg)])
 
 
-def fourier_fit(phase: np.ndarray, q: np.ndarray, harmonics: int, *, constant: bool = False, cov: bool = False):
+def fourier_harmonics(n: int, harmonics: int) -> int:
+    """The harmonics :func:`fourier_fit` fits to n samples: at most (n - 1) / 4, at least 1."""
+    return int(min(harmonics, max(1, (n - 1) // 4)))
+
+
+def fourier_fit(phase: np.ndarray, q: np.ndarray, harmonics: int, *, constant: bool = False, cov: bool = False,
+                design: bool = False):
     """Least-squares Fourier series in phase (period 1) of q (n,) or (n, M), with at most
     (n - 1) / 4 harmonics (at least 1): (coefficients, H), and with ``cov`` the inverse of the
     normal matrix (2H + 1, 2H + 1) (the coefficients' covariance per unit noise variance).
     The coefficients are the harmonics' (2H, ...): cos 1..H, then sin 1..H; with
-    ``constant``, the constant first ((2H + 1, ...))."""
-    H = int(min(harmonics, max(1, (phase.size - 1) // 4)))
+    ``constant``, the constant first ((2H + 1, ...)). ``design`` (with ``cov``): the columns
+    (n, 2H + 1) too, last."""
+    H = fourier_harmonics(phase.size, harmonics)
     A = _fourier_columns(phase, H)
     G = A.T @ A
     try:
@@ -104,7 +119,13 @@ def fourier_fit(phase: np.ndarray, q: np.ndarray, harmonics: int, *, constant: b
     except np.linalg.LinAlgError:
         coef = np.linalg.lstsq(A, q, rcond=None)[0]
     coef = coef if constant else coef[1:]
-    return (coef, H, np.linalg.pinv(G)) if cov else (coef, H)
+    if not cov:
+        return coef, H
+    try:  # (G is symmetric positive definite when solve succeeded: pinv's SVD cost 15 % of describe)
+        inv = np.linalg.inv(G)
+    except np.linalg.LinAlgError:
+        inv = np.linalg.pinv(G)
+    return (coef, H, inv, A) if design else (coef, H, inv)
 
 
 @dataclass(frozen=True, eq=False)
@@ -256,9 +277,10 @@ _MAX_RESOLVABLE = 0.2  # a limit cycle needs comparisons that resolve a change o
 
 def _chi2_quantile(q: float, p: float) -> float:
     """The q point of the chi-square distribution with p degrees of freedom, per degree."""
-    from scipy.stats import chi2
+    from scipy.special import chdtri  # the inverse upper tail: chi2.ppf(q, p) without its
+    # argument checks, which cost 10 % of describe (a few dozen calls)
 
-    return float(chi2.ppf(q, p)) / p
+    return float(chdtri(p, 1.0 - q)) / p
 
 
 def _chi2_999(p: float) -> float:
@@ -314,10 +336,10 @@ def _log_linear_rate(tm: np.ndarray, la: np.ndarray) -> tuple[float, float]:
     quadratic goes through, all of b^2)."""
     x = tm - tm.mean()
     n = x.size
-    A = np.vstack([x, np.ones_like(x)]).T
-    coef = np.linalg.lstsq(A, la, rcond=None)[0]
-    resid = la - A @ coef
     sxx = float(x @ x)
+    # (x is centred: the normal equations are diagonal; one time: no slope, as lstsq's minimum norm)
+    coef = (float(x @ la) / sxx if sxx > 0 else 0.0, float(la.mean()))
+    resid = la - coef[0] * x - coef[1]
     var = float(resid @ resid) / max(n - 2, 1) / sxx if n > 2 else math.nan
     if n >= 3:
         Q = np.vstack([x * x - sxx / n, x, np.ones_like(x)]).T
@@ -325,8 +347,11 @@ def _log_linear_rate(tm: np.ndarray, la: np.ndarray) -> tuple[float, float]:
         b2 = float(cq[0]) ** 2
         if n > 3:
             rq = la - Q @ cq
-            G = np.linalg.pinv(Q.T @ Q)
-            b2 -= float(rq @ rq) / (n - 3) * float(G[0, 0])
+            try:
+                g00 = float(np.linalg.inv(Q.T @ Q)[0, 0])
+            except np.linalg.LinAlgError:
+                g00 = float(np.linalg.pinv(Q.T @ Q)[0, 0])
+            b2 -= float(rq @ rq) / (n - 3) * g00
         var += max(b2, 0.0) * float(np.ptp(x)) ** 2
     return float(coef[0]), math.sqrt(var) if math.isfinite(var) else math.nan
 
@@ -453,8 +478,7 @@ def detect_cycles(
     f1 = np.maximum(np.searchsorted(t, starts[1:], side="left"), f0 + 1)
     basis = None
     if K >= 2 and n_shape_modes:
-        _, _, vt = np.linalg.svd(th[f0[0] : f1[-1]], full_matrices=False)
-        basis = vt[: int(n_shape_modes)].T
+        basis = leading_axes(th[f0[0] : f1[-1]], int(n_shape_modes)).T
     modes = th @ basis if basis is not None else th
     E_grid = {}
     shapes, shape_cov, shapes_phase = [], [], []
@@ -466,16 +490,16 @@ def detect_cycles(
     for k in range(K):
         sl = slice(f0[k], f1[k])
         ph = (t[sl] - starts[k]) / periods[k]
-        c, H, C = fourier_fit(ph, d[sl], 6, cov=True, constant=True)
+        # the lateral signal and the shape modes in one solve, with the same design
+        cc, H, C, A = fourier_fit(ph, np.column_stack([d[sl], modes[sl]]), 6, cov=True, constant=True, design=True)
+        c, cm = cc[:, 0], cc[:, 1:]
         ch = c[1:]
-        A = _fourier_columns(ph, H)
         rss_u[k] = float(np.sum((d[sl] - A @ c) ** 2))
         dof[k] = max(ph.size - (2 * H + 1), 0)
         fit_amp[k] = math.sqrt(float(ch @ ch) / 2.0)
         g = ch / (2.0 * fit_amp[k]) if fit_amp[k] > 0 else np.zeros_like(ch)
         amp_gain[k] = float(g @ C[1:, 1:] @ g)  # the amplitude's variance per unit noise variance
         slope[k] = float(2 * np.pi * np.arange(1, H + 1) @ ch[H:]) / periods[k]
-        cm = C @ (A.T @ modes[sl])  # the same design for the shape
         rss_m[k] = np.sum((modes[sl] - A @ cm) ** 2, axis=0)
         if H not in E_grid:
             E_grid[H] = _fourier_columns(np.arange(n_shape) / n_shape, H), _fourier_phase_derivative(n_shape, H)
@@ -505,15 +529,22 @@ def detect_cycles(
     # the crossing times' noise: the signal's noise over its slope there
     sig_x = math.sqrt(v_u) / np.maximum(np.abs(np.append(slope, slope[-1:])), 1e-300) if K else np.zeros(1)
 
+    # per cycle, once (each is compared with its neighbours and across gaps): the shape's norm,
+    # its covariance's trace and squared Frobenius norm
+    sum_vm, sum_vm2 = float(np.sum(v_m)), float(np.sum(v_m**2))
+    shape_norm = [float(np.linalg.norm(S)) for S in shapes]
+    cov_trace = [float(np.trace(P)) for P in shape_cov]
+    cov_sq = [float(np.vdot(P, P)) for P in shape_cov]
+
     def compare(j: int, k: int):
         """(change of period, amplitude, shape, their tolerances (3,), converged) from cycle j to k."""
         dp = abs(periods[k] - periods[j]) / max(abs(periods[k]), 1e-300)
         da = abs(fit_amp[k] - fit_amp[j]) / max(fit_amp[k], 1e-300)
         num = float(np.linalg.norm(_phase_free(shapes[k] - shapes[j], 0.5 * (shapes_phase[k] + shapes_phase[j]))))
-        den = max(float(np.linalg.norm(shapes[k])), 1e-300)
-        Pc = shape_cov[k] + shape_cov[j]
-        tr_s = float(np.sum(v_m)) * float(np.trace(Pc))
-        tr_s2 = float(np.sum(v_m**2)) * float(np.sum(Pc * Pc))
+        den = max(shape_norm[k], 1e-300)
+        # the summed covariance P_k + P_j: its trace, and its squared norm
+        tr_s = sum_vm * (cov_trace[k] + cov_trace[j])
+        tr_s2 = sum_vm2 * (cov_sq[k] + cov_sq[j] + 2.0 * float(np.vdot(shape_cov[k], shape_cov[j])))
         noise_s = math.sqrt(_chi2_999(tr_s * tr_s / tr_s2) * tr_s) if tr_s2 > 0 else 0.0
         # P_k - P_j = s[k+1] - s[k] - s[j+1] + s[j] (the middle crossing twice when adjacent)
         coef: dict[int, float] = {}

@@ -11,6 +11,7 @@ from scipy.interpolate import CubicSpline
 
 from .._validate import ParameterError
 from .cycles import (
+    leading_axes,
     _MAX_RESOLVABLE,
     GAP_MARGIN,
     Cycles,
@@ -18,6 +19,7 @@ from .cycles import (
     body_axis_angle,
     detect_cycles,
     fourier_fit,
+    fourier_harmonics,
     sample_cycle,
     tip_index,
 )
@@ -57,7 +59,7 @@ def _fourier_p2p(phase: np.ndarray, q: np.ndarray, harmonics: int, keep: np.ndar
     (bool, harmonic h at index h - 1): only those harmonics (and the constant) are fitted."""
     if keep is None:
         return _waveform_p2p(*fourier_fit(phase, q, harmonics))
-    H = int(min(harmonics, max(1, (phase.size - 1) // 4)))
+    H = fourier_harmonics(phase.size, harmonics)
     k = np.ones(H, bool)  # harmonics beyond those tested are kept
     k[: min(H, keep.size)] = keep[:H]
     use = np.concatenate([[True], k, k])
@@ -243,7 +245,7 @@ def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmoni
     se = _template_se(tr, i_end)
     keep = _template_harmonics(steady, need, se) if se > 0 else None
     out = np.array([_fourier_p2p(*c, harmonics, keep) if c is not None else np.nan for c in series])
-    own = [fourier_fit(*c, harmonics)[1] if c is not None else need for c in series]
+    own = [fourier_harmonics(c[0].size, harmonics) if c is not None else need for c in series]
     if min(own, default=need) < need:
         # as many harmonics as the pooled phases resolve: a whole number n of frames per
         # stroke puts them on n phases, which resolve (n - 1) / 2 harmonics
@@ -283,8 +285,7 @@ def shape_modes(obj: Any, t0: float | None = None, t1: float | None = None, n_mo
     sh = th - th.mean(axis=1, keepdims=True)
     mean = sh.mean(axis=0)
     X = sh - mean
-    _, sv, vt = np.linalg.svd(X, full_matrices=False)
-    modes = vt[:n_modes].copy()
+    modes = leading_axes(X, n_modes)
     # deterministic orientation: largest component of mode 1 positive, and mode 2 oriented so
     # that sum(m1 dm2/ds) > 0; then a shape wave travelling towards s = l runs the (a1, a2)
     # loop counter-clockwise (positive area), whatever signs the SVD returned

@@ -237,17 +237,17 @@ def upward_crossings(
     state = np.where(last >= 0, mark[np.maximum(last, 0)], 0)
     # upward transition: state goes from -1 to +1 at j
     js = np.nonzero((state[1:] == 1) & (state[:-1] == -1))[0] + 1
-    ms = []
-    for j in js:
-        ilow = last[j - 1]  # last index that was below -h
-        seg = d[ilow : j + 1]
-        cand = np.nonzero((seg[:-1] <= 0) & (seg[1:] > 0))[0]
-        if cand.size:
-            ms.append(ilow + int(cand[-1]))
-    if not ms:
+    # at each, the last rise through 0 (between frames i and i + 1) since the last index that
+    # was below -h: i in [last[j - 1], j - 1]
+    rises = np.nonzero((d[:-1] <= 0) & (d[1:] > 0))[0]
+    pos = np.searchsorted(rises, js - 1, side="right") - 1
+    ok = pos >= 0
+    ms = rises[np.maximum(pos, 0)]
+    ms = ms[ok & (ms >= last[js - 1])]
+    if not ms.size:
         return np.empty(0)
     # without a window: linear interpolation (what _local_root falls back to)
-    return _local_roots(t, d, np.array(ms), half_window, deg)
+    return _local_roots(t, d, ms, half_window, deg)
 
 
 _ROUNDING = 1e-10  # a variation under this fraction of the record's largest is rounding, not a stroke
@@ -336,8 +336,9 @@ def section_crossings(
         # refine with the period of the well-developed (later) cycles, away from frames
         # missing (a gap moves the crossings within about half a period of it)
         dif = np.diff(cross)
-        clear = ~np.array([np.any((gap_b > c0 - 0.6 * W) & (gap_a < c1 + 0.6 * W))
-                           for c0, c1 in zip(cross[:-1], cross[1:])], bool)
+        clear = (~np.array([np.any((gap_b > c0 - 0.6 * W) & (gap_a < c1 + 0.6 * W))
+                            for c0, c1 in zip(cross[:-1], cross[1:])], bool) if gap_a.size
+                 else np.ones(dif.size, bool))
         dif = dif[clear] if np.count_nonzero(clear) >= 1 else dif
         W_new = float(np.median(dif[len(dif) // 2 :]))
         if abs(W_new - W) < 1e-12 * W:
