@@ -214,6 +214,8 @@ def _frame_gaps(starts: np.ndarray, t: np.ndarray, margin: float) -> np.ndarray:
         return out
     dt = np.diff(t)
     dt = np.where(dt > 1.5 * float(np.median(dt)), dt, 0.0)
+    if not dt.any():  # no frames missing (every simulation)
+        return out
     for k in range(K):
         a, b = starts[k], starts[k + 1]
         over = (t[1:] > a - margin * (b - a)) & (t[:-1] < b + margin * (b - a))

@@ -380,23 +380,29 @@ class Descriptors:
         return out
 
 
+def _centroid_at(tr: Track, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The centroid (x, y) at ``times``: a cubic spline through every frame's."""
+    xc, yc = tr.centroid()
+    return CubicSpline(tr.t, xc)(times), CubicSpline(tr.t, yc)(times)
+
+
 def per_cycle(obj: Any, cycles: Cycles | None = None, *, tip: int | str = "end", harmonics: int = 6,
               swim_angle: float | None = None, end: int | str | None = None,
-              crossing: np.ndarray | None = None) -> dict[str, np.ndarray]:
+              crossing: np.ndarray | None = None, centroid_at_starts: tuple | None = None) -> dict[str, np.ndarray]:
     """Per-cycle measurements, each (K,) (``swim_angle``: direction(s) across which the tip's
     lateral peak-to-peak is measured, scalar or (K,); default the mean displacement): period, advance along the field, displacement,
     speed, tip lateral peak-to-peak, nonreciprocity, self_intersecting (any frame of the
     cycle crosses itself); lengths in track units. ``end``: the end whose lateral peak-to-peak
     is measured ("start" s=0 or "end" s=l; default the section tip of the cycles). ``crossing``:
     per-frame self-intersection flags of the frames from the first cycle's start to the last
-    one's end, if already known."""
+    one's end, if already known; ``centroid_at_starts``: the centroid (x, y) at the cycles'
+    starts, if already known (a cubic spline through every frame's)."""
     tr = as_track(obj)
     cyc = detect_cycles(tr, tip=tip) if cycles is None else cycles
     i_end = cyc.tip if end is None else tip_index(tr, end)
     st = cyc.starts
     K = st.size - 1
-    xc, yc = tr.centroid()
-    cx, cy = CubicSpline(tr.t, xc)(st), CubicSpline(tr.t, yc)(st)
+    cx, cy = centroid_at_starts if centroid_at_starts is not None else _centroid_at(tr, st)
     dx, dy = np.diff(cx), np.diff(cy)
     fa = np.unwrap(tr.field_angle)
     fa_c = np.array([np.interp(0.5 * (st[k] + st[k + 1]), tr.t, fa) for k in range(K)])
@@ -529,7 +535,8 @@ def describe(
     # swimming direction over the window
     xc, yc = tr.centroid()
     t0, t1 = float(sub.starts[0]), float(sub.starts[-1])
-    sx, sy = CubicSpline(tr.t, xc)([t0, t1]), CubicSpline(tr.t, yc)([t0, t1])
+    at_starts = _centroid_at(tr, sub.starts)
+    sx, sy = at_starts[0][[0, -1]], at_starts[1][[0, -1]]
     swim = math.atan2(float(sy[1] - sy[0]), float(sx[1] - sx[0]))
     w = tr.window(t0, t1)
     movie = "px_per_mm" in tr.meta
@@ -546,13 +553,13 @@ def describe(
     if still:
         swim = body_axis_angle(w)
     inter = self_intersections(w) > 0
-    pc = per_cycle(tr, sub, tip=tip, harmonics=harmonics, swim_angle=swim, crossing=inter)
+    pc = per_cycle(tr, sub, tip=tip, harmonics=harmonics, swim_angle=swim, crossing=inter, centroid_at_starts=at_starts)
     pc_angle = np.asarray(swim, float)
     # a turning swimmer (cycle directions spread by more than a degree): measure the tip's
     # lateral excursion across each cycle's own displacement
     chord = np.arctan2(pc["dy"], pc["dx"])
     if not still and use.sum() > 1 and np.max(np.abs(np.angle(np.exp(1j * (chord[use] - swim))))) > math.radians(1.0):
-        pc = per_cycle(tr, sub, tip=tip, harmonics=harmonics, swim_angle=chord, crossing=inter)
+        pc = per_cycle(tr, sub, tip=tip, harmonics=harmonics, swim_angle=chord, crossing=inter, centroid_at_starts=at_starts)
         pc_angle = chord
     pc = {k: v[use] for k, v in pc.items()}
     mm = tr.scale_m * 1e3
