@@ -94,3 +94,26 @@ def test_branch_figure_breaks_the_lateral_curves_where_the_other_end_leads(branc
     ys = [ln.get_ydata() for ln in fig.axes[2].lines if len(ln.get_ydata()) > 10 and ln.get_linestyle() != "None"]
     span = np.nanmax(np.concatenate(ys)) - np.nanmin(np.concatenate(ys))
     assert max(np.nanmax(np.abs(np.diff(y))) for y in ys) < 0.15 * span
+
+
+def test_a_folded_branch_file_is_cf_and_indexable(branch, tmp_path):
+    """Past a fold the parameter turns back: as the dimension coordinate it was neither
+    monotonic (CF) nor unique (xarray: sel raised 'Reindexing only valid with uniquely valued
+    Index objects'). The file runs along `orbit`, the parameter an auxiliary coordinate."""
+    import xarray as xr
+
+    x = np.asarray(branch.values)
+    assert np.any(np.diff(x) < 0)  # the branch folds back (else this test tests nothing)
+    path = tmp_path / "b.nc"
+    branch.to_dataset().to_netcdf(path, engine="h5netcdf")
+    ds = xr.open_dataset(path, engine="h5netcdf")
+    assert ds.indexes["orbit"].is_monotonic_increasing and ds.indexes["orbit"].is_unique
+    np.testing.assert_array_equal(ds["kappa_E_ratio"].values, x)  # every orbit, in the order continued
+    assert "kappa_E_ratio" in ds.coords and "kappa_E_ratio" not in ds.indexes
+    # the orbits at one value, found by a mask on the coordinate: the two coexisting strokes
+    # of the bistable range (periods far apart) are both there
+    near = ds.where(np.abs(ds["kappa_E_ratio"] - 1.95) < 0.03, drop=True)
+    per = near.period.values
+    assert per.size >= 2 and per.max() > 1.1 * per.min()
+    for v in ds.data_vars.values():
+        assert "units" in v.attrs

@@ -81,3 +81,76 @@ def test_cli_sweep_and_plot(tmp_path, capsys):
                           "--n-segments", "8", "--t-cap", "4", "--no-progress"])
     with pytest.raises(Exception, match="different sweep"):
         args.func(args)
+
+
+OUT_VARS = ["straight", "limit_cycle", "not_periodic", "capped", "bent_equilibrium", "self_intersecting",
+            "reached_limit_cycle", "advance_per_cycle_bl", "period_s"]
+
+
+def fake_outcomes(task):
+    """Straight below 0.7, strokes to 1.2, then no stroke: not periodic, capped, bent."""
+    r = task["values"]["kappa_E_ratio"]
+    kind = ("straight" if r < 0.7 else "limit_cycle" if r <= 1.2 else "not_periodic" if r <= 1.5
+            else "capped" if r <= 1.7 else "bent_equilibrium")
+    out = {k: float(kind == k) for k in OUT_VARS[:5]}
+    swim = kind == "limit_cycle"
+    out.update({"self_intersecting": 0.0 if swim else math.nan, "reached_limit_cycle": float(swim),
+                "advance_per_cycle_bl": 0.1 * r if swim else math.nan, "period_s": 0.4 / r if swim else math.nan})
+    return out
+
+
+fake_outcomes.variables = OUT_VARS
+fake_outcomes.required = ["straight", "limit_cycle"]
+
+
+def _drawn_x(ax):
+    return {round(float(v), 6) for l in ax.lines for v in np.atleast_1d(l.get_xdata())}
+
+
+def test_every_point_is_drawn_by_its_outcome(tmp_path):
+    """A review: points that ended neither straight nor swimming (not periodic, capped, bent)
+    were not drawn, and the axis shrank to the last straight point, as if the sweep ended there;
+    straight points (self_intersecting NaN) were coloured as self-intersecting."""
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    ds = sweep(["kappa_E_ratio=0:2:21"], backend="serial", point_fn=fake_outcomes, progress=False)
+    fig = plot_sweep(ds)
+    ax = fig.axes[0]
+    xs = {round(float(v), 6) for v in ds.kappa_E_ratio.values}
+    assert xs <= _drawn_x(ax)  # each of the 21 points has an artist
+    lo, hi = ax.get_xlim()
+    assert lo < 0.0 and hi > 2.0
+    labels = " ".join(t.get_text() for t in ax.get_legend().get_texts())
+    for word in ("not periodic", "capped", "bent equilibrium"):
+        assert word in labels
+    assert not [l for l in ax.lines if l.get_color() == "tab:red"]  # nothing self-intersects
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+
+
+def test_a_continuation_sweep_draws_both_branches_and_its_jumps():
+    """A review: only the "up" branch was drawn, with a solid line across its jump to the other
+    stroke, so the hysteresis did not show."""
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    import xarray as xr
+
+    from flutterswim.sweep.plot import _jumps
+
+    ds = sweep(["kappa_E_ratio=0:2:21"], backend="serial", point_fn=fake, progress=False)
+    down = ds.copy(deep=True)
+    # the down branch stays on another stroke (twice the period) above 1.3
+    down["period_s"] = xr.where(ds.kappa_E_ratio > 1.25, ds.period_s * 2.0, ds.period_s)
+    both = xr.concat([ds, down], dim=xr.DataArray(["up", "down"], dims="branch", name="branch"))
+    jumps = _jumps(down.period_s.values)
+    assert np.count_nonzero(jumps) == 1 and jumps[12]  # between 1.2 and 1.3 only
+    assert not _jumps(ds.period_s.values).any()
+    fig = plot_sweep(both)
+    ax = fig.axes[1]
+    dashed = [l for l in ax.lines if l.get_linestyle() == "--"]
+    dotted = [l for l in ax.lines if l.get_linestyle() == ":" and np.ptp(l.get_xdata()) > 0]  # (not the onset)
+    assert dashed and len(dotted) == 1 and np.allclose(dotted[0].get_xdata(), [1.2, 1.3])
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)

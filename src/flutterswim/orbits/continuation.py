@@ -71,7 +71,10 @@ class Branch:
     message: str
 
     def to_dataset(self):
-        """The branch as an xarray Dataset (CF attributes, units), indexed by the parameter."""
+        """The branch as an xarray Dataset (CF attributes, units), along the dimension ``orbit``
+        (0 at the Hopf point's side, in the order continued), the parameter an auxiliary
+        coordinate: past a fold the parameter turns back, and a coordinate variable must be
+        monotonic (CF) and unique (xarray's indexing)."""
         import xarray as xr
 
         name = self.axis.name
@@ -108,11 +111,13 @@ class Branch:
         }
         mults = np.array([o.multipliers[:N_MULTIPLIERS] for o in orbs]) if orbs else np.zeros((0, N_MULTIPLIERS))
         ds = xr.Dataset(
-            {k: ((name,), v, {"units": u, "long_name": ln}) for k, (v, u, ln) in data.items()},
-            coords={name: ((name,), self.values, {"units": self.axis.units, "long_name": self.axis.long_name})},
+            {k: (("orbit",), v, {"units": u, "long_name": ln}) for k, (v, u, ln) in data.items()},
+            coords={"orbit": (("orbit",), np.arange(len(orbs), dtype="i4"),
+                              {"units": "1", "long_name": "orbit number along the branch, from the Hopf point"}),
+                    name: (("orbit",), self.values, {"units": self.axis.units, "long_name": self.axis.long_name})},
         )
-        ds["multiplier_real"] = ((name, "multiplier"), mults.real, {"units": "1", "long_name": "Floquet multipliers (largest moduli), real part"})
-        ds["multiplier_imag"] = ((name, "multiplier"), mults.imag, {"units": "1", "long_name": "Floquet multipliers (largest moduli), imaginary part"})
+        ds["multiplier_real"] = (("orbit", "multiplier"), mults.real, {"units": "1", "long_name": "Floquet multipliers (largest moduli), real part"})
+        ds["multiplier_imag"] = (("orbit", "multiplier"), mults.imag, {"units": "1", "long_name": "Floquet multipliers (largest moduli), imaginary part"})
         ds["leading_end"].attrs.update({"flag_values": np.array([0, 1], dtype="i1"),
                                         "flag_meanings": "s_equals_0 s_equals_l"})
         ds = ds.assign_coords(multiplier=("multiplier", np.arange(N_MULTIPLIERS), {"units": "1", "long_name": "rank by modulus"}))

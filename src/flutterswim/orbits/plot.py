@@ -63,6 +63,9 @@ def plot_branch(ds, path=None, *, x_range: tuple[float, float] | None = None):
     fig, axes = plt.subplots(3, 1, figsize=(6.0, 8.0), sharex=True, constrained_layout=True)
     ax = axes[0]
     ax.plot(sorted([straight_end, hopf]), [0, 0], color="0.5", lw=1.8, label="straight, stable (linear theory)")
+    # the straight state past the Hopf point: still a solution, unstable (a review: left out)
+    other_end = hi if stable_side < 0 else lo
+    ax.plot(sorted([hopf, other_end]), [0, 0], color="0.5", lw=1.2, ls="--", label="straight, unstable")
     un = np.r_[False, unstable]
     _segments(ax, xs, np.r_[0.0, ds.advance.values * lscale], np.r_[False, red], un, lw=1.8,
               label="stroke (periodic orbit)")
@@ -88,6 +91,7 @@ def plot_branch(ds, path=None, *, x_range: tuple[float, float] | None = None):
     axes[0].text(hopf, 0.97, f" Hopf {hopf:.4g} ", transform=axes[0].get_xaxis_transform(), fontsize=8, va="top",
                  ha="left" if right else "right")
     handles = [Line2D([], [], color="0.5", lw=1.8, label="straight, stable (linear theory)"),
+               Line2D([], [], color="0.5", lw=1.2, ls="--", label="straight, unstable"),
                Line2D([], [], color="k", lw=1.8, label="stroke (periodic orbit)"),
                Line2D([], [], color="tab:red", lw=1.8, label="self-intersecting stroke"),
                Line2D([], [], color="0.3", ls=":", label="Hopf point (discrete linear stability)")]
