@@ -89,7 +89,8 @@ def test_interrupt_inside_a_compiled_kernel_stops_the_build(tmp_path):
     with pytest.raises(KeyboardInterrupt):
         build_targets(ts, tmp_path, Settings())
     assert calls == []
-    assert "k" not in Manifest.load(tmp_path).targets
+    man = Manifest.load(tmp_path)  # not recorded as failed (nor done): as interrupted while building
+    assert man.targets.get("k", {}).get("status", "building") == "building" and not man.up_to_date("k", "")
 
 
 def test_interrupt_inside_a_compiled_kernel_stops_a_sweep_point():
@@ -136,7 +137,9 @@ def test_sigkill_loses_no_finished_target(tmp_path):
         proc.wait(timeout=30)
     man = Manifest.load(out)  # a valid manifest with the finished target
     assert man.targets["fast"]["status"] == "ok"
-    assert "slow" not in man.targets
+    # the target being built records no output hashes (its files are ours, not edits) and is not up to date
+    assert man.targets.get("slow", {}).get("status", "building") == "building"
+    assert "outputs" not in man.targets.get("slow", {}) and not man.up_to_date("slow", "")
     assert json.loads((out / "fast_data.json").read_text())["v"] == 1
     assert not (out / "slow_data.json").exists()  # never a half-written output under its name
     assert man.up_to_date("fast", man.targets["fast"]["key"])
@@ -156,6 +159,20 @@ def test_out_folder_safety(tmp_path):
     (ours / "table1_data.json").write_text('{"written by": "someone else"}')  # no signature
     with pytest.raises(ParameterError, match="was not written by flutterswim"):
         reproduce(ours, targets=["table1"])
+    # an output edited after we wrote it keeps our signature (xarray keeps the attributes, a JSON
+    # its generator): it was replaced without a word (a review); its hash tells
+    edited = tmp_path / "edited"
+    reproduce(edited, targets=["table1"])
+    f = edited / "table1_data.json"
+    d = json.loads(f.read_text())
+    d["my_note"] = "checked by hand"
+    f.write_text(json.dumps(d))
+    with pytest.raises(ParameterError, match="changed after flutterswim wrote it"):
+        reproduce(edited, targets=["table1"])
+    assert json.loads(f.read_text())["my_note"] == "checked by hand"
+    f.unlink()  # deleted: rebuilt
+    reproduce(edited, targets=["table1"])
+    assert "my_note" not in json.loads(f.read_text())
     with pytest.raises(ParameterError, match="unknown"):
         reproduce(tmp_path / "x", targets=["fig99"])
     with pytest.raises(ParameterError, match="mode"):

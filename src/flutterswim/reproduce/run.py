@@ -43,7 +43,28 @@ def check_out(out: str | os.PathLike, targets) -> Path:
     names = ["report.html", "manifest.json"] + [f for t in targets for f in t.outputs]
     check_files_in(p, names, what="--out")
     del MARKER
+    _check_unedited(p, targets)
     return p
+
+
+def _check_unedited(folder: Path, targets) -> None:
+    """An output the manifest records with another SHA-256 than the file's was changed after
+    flutterswim wrote it (an edit saved through xarray keeps our signature): it is the user's
+    now, and is not replaced. A target being built records no hashes until it is done, so the
+    files of an interrupted build are not taken for edits."""
+    from .io import sha256_file
+    from .manifest import Manifest
+
+    if not (folder / "manifest.json").is_file():
+        return
+    man = Manifest.load(folder)
+    for t in targets:
+        for rel, digest in man.targets.get(t.name, {}).get("outputs", {}).items():
+            f = folder / rel
+            if f.is_file() and sha256_file(f) != digest:
+                raise ParameterError(
+                    f"--out={str(folder)!r}: {rel} was changed after flutterswim wrote it (its SHA-256 is not the "
+                    "one in manifest.json), so it is not replaced: move it elsewhere, or delete it to have it rebuilt")
 
 
 def reproduce(out: str | os.PathLike, *, mode: str = "quick", trials: str | os.PathLike | None = None,

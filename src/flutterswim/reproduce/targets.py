@@ -218,6 +218,8 @@ def build_targets(targets: list[Target], out: Path, settings: Settings, *, log: 
             log(f"{t.name}: up to date" + (" (a full build)" if kept != mode else ""))
             continue
         log(f"{t.name}: building ...")
+        # no output hashes while it builds: files an interrupted build leaves are ours, not edits
+        man.record(t.name, {"title": t.title, "status": "building", "key": key, "inputs": inputs, "mode": mode})
         t0 = time.perf_counter()
         ctx = Context(out, settings, records)
         try:
