@@ -140,6 +140,13 @@ def test_onset_shapes_are_small_and_limit_shapes_large(built):
     p2p = {k: np.ptp(ds[f"ghost_{k}_y"].values[:, 0]) for k in ("onset", "limit")}
     assert p2p["onset"] < 0.5 * p2p["limit"]
     assert ds.attrs["onset_window_s"][1] < ds.attrs["limit_window_s"][0]
+    # the report's limit-cycle tip excursion is the stroke's: the periodic orbit's trailing end
+    # (it was read off the 8 shapes drawn: 1.062 against 1.132 mm)
+    import json
+
+    reported = json.loads((built.out / "fig4c.json").read_text())["values"]["tip_p2p_limit_mm"]
+    orbit = json.loads((built.out / "paper_orbit.json").read_text())["orbit"]["lateral_trailing"]
+    assert reported == pytest.approx(orbit * 1e3, rel=0.01)
 
 
 def test_steering_circle_radius_is_U_over_Omega(built):
