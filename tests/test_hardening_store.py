@@ -298,3 +298,21 @@ def test_an_unreachable_scheduler_leaves_no_store_behind(tmp_path, monkeypatch):
         sweep({"chi": [1.0, 2.0, 3.0]}, out=str(out), backend="dask", scheduler="tcp://127.0.0.1:1",
               point_fn=point, progress=False)
     assert _tree(out) == before
+
+
+def test_a_killed_sweeps_lock_file_is_removed_by_the_next_run(tmp_path):
+    """A review: after a SIGKILL the lock file (.s.zarr.lock) stayed in the user's folder for
+    good, even after the resumed sweep finished. Ours are signed; a file we did not write is
+    left alone."""
+    from flutterswim.sweep.store import _LOCK_SIGNATURE
+
+    out = tmp_path / "s.zarr"
+    sweep({"chi": [1.0, 2.0, 3.0]}, out=str(out), backend="serial", point_fn=point, progress=False, max_points=1)
+    lock = tmp_path / ".s.zarr.lock"
+    assert not lock.exists()  # a run that ends removes its own
+    lock.write_text(_LOCK_SIGNATURE)  # as a killed run leaves it
+    sweep({"chi": [1.0, 2.0, 3.0]}, out=str(out), backend="serial", point_fn=point, progress=False)
+    assert not lock.exists()
+    lock.write_text("the user's own notes\n")  # not ours: kept as it is
+    sweep({"chi": [1.0, 2.0, 3.0]}, out=str(out), backend="serial", point_fn=point, progress=False)
+    assert lock.read_text() == "the user's own notes\n"

@@ -274,3 +274,19 @@ def test_the_branch_files_inaccurate_orbits_comment_names_the_steps_option(tmp_p
 
     api = continue_orbits(PAPER, "kappa_E_ratio", 0.8, n_points=3, n_segments=8, steps=32).to_dataset()
     assert "(steps=)" in api.attrs["n_inaccurate_orbits_comment"]
+
+
+def test_a_range_typed_downwards_bounds_the_same_branch(tmp_path, capsys):
+    """kappa_E_ratio=0.9:0.6 was refused as holding no branch 'above the Hopf point 0.68', which
+    lies inside it: the branch starts at the Hopf point either way, the range only bounds it."""
+    import xarray as xr
+
+    opts = ["--points", "4", "--segments", "12", "--quiet"]
+    up, down = tmp_path / "up.nc", tmp_path / "down.nc"
+    assert main(["branch", "kappa_E_ratio=0.6:0.9", "--out", str(up), *opts]) == 0
+    assert main(["branch", "kappa_E_ratio=0.9:0.6", "--out", str(down), *opts]) == 0
+    a, b = xr.open_dataset(up, engine="h5netcdf"), xr.open_dataset(down, engine="h5netcdf")
+    np.testing.assert_array_equal(a["kappa_E_ratio"].values, b["kappa_E_ratio"].values)
+    np.testing.assert_array_equal(a["period"].values, b["period"].values)
+    assert main(["branch", "kappa_E_ratio=0.7:0.7", "--out", str(tmp_path / "z.nc"), *opts]) == 2
+    assert "equal" in capsys.readouterr().err

@@ -57,3 +57,14 @@ def test_real_point_with_a_bad_parameter_is_refused_up_front():
     ds = sweep({"tau": [0.375]}, **kw)
     assert ds["done"].all() and not ds["failed"].any()
     assert bool(ds["straight"].values[0])
+
+
+def test_a_solver_failure_names_its_time_once_in_seconds():
+    """A review: 'the solver failed at t=19.2331: step size collapsed at t=51.2882', the same
+    moment in s and in tau, neither named."""
+    from flutterswim.simulate import _message_in_seconds
+
+    tau = 0.375
+    assert _message_in_seconds("step size collapsed to 1e-12 at t=51.2882", tau) == \
+        f"step size collapsed to 1e-12 at t={51.2882 * tau:.6g} s"
+    assert _message_in_seconds("reached t_end", tau) == "reached t_end"

@@ -217,7 +217,7 @@ def settle(params: Parameters | Groups, *, initial=None, n_cycles: int = default
         if bar is not None:
             bar.update(round((t1 - t0) / tau, 3))
         if not part.ok:
-            outcome, reason = "failed", f"the solver failed at t={part.t_final:.6g}: {part.message}"
+            outcome, reason = "failed", f"the solver failed at t={part.t_final:.6g} s: {part.message}"
             break
         sl = slice(1, None) if k else slice(None)
         amp = watch.add(k, part.t[sl] / tau, part.theta[sl, 0], skipped=sl.start or 0)

@@ -199,6 +199,15 @@ def _progress(enabled: bool, t0: float, t1: float):
     return bar, tick
 
 
+def _message_in_seconds(message: str, tau: float) -> str:
+    """The integrator's message with its times (in tau) in seconds, as the run's: a failed sweep
+    point read 'the solver failed at t=19.2331: step size collapsed at t=51.2882', one moment
+    twice in two units, neither named."""
+    import re
+
+    return re.sub(r"\bt=([-+0-9.eE]+)", lambda m: f"t={float(m.group(1)) * tau:.6g} s", message)
+
+
 def _package(sol, fil: Filament, fld: Field, groups, params, tau, forces, settings) -> SimulationResult:
     n = fil.n
     y = sol.y
@@ -224,7 +233,7 @@ def _package(sol, fil: Filament, fld: Field, groups, params, tau, forces, settin
 
         res = replace(
             res, t=t * tau, s=res.s * L, s_mid=res.s_mid * L, x=x * L, y=yy * L, kappa=kappa / L,
-            r0=r0 * L, t_final=sol.t_final * tau, units="SI",
+            r0=r0 * L, t_final=sol.t_final * tau, units="SI", message=_message_in_seconds(sol.message, tau),
             A=None if a is None else a * F, V=None if v is None else v * F,
             M=None if m is None else m * F * L,
         )

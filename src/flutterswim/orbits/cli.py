@@ -45,7 +45,12 @@ def _parse_range(text: str) -> tuple[str, float, float]:
         raise ParameterError(f"range={text!r}: FROM and TO must be numbers") from None
     if not (math.isfinite(lo) and math.isfinite(hi)):
         raise ParameterError(f"range={text!r}: FROM and TO must be finite numbers")
-    return name.strip(), lo, hi
+    if lo == hi:
+        raise ParameterError(f"range={text!r}: FROM and TO are equal; give a range, e.g. kappa_E_ratio=0.6:2")
+    # the branch always starts at the Hopf point and runs the way it exists: the range bounds it
+    # either way round (2:0.6 was refused as 'no stroke branch above the Hopf point 0.683', which
+    # lies inside it)
+    return name.strip(), min(lo, hi), max(lo, hi)
 
 
 def _cmd_branch(args) -> int:

@@ -82,9 +82,10 @@ def _cmd_plot(args) -> int:
 
     from pathlib import Path
 
+    ds = open_sweep(args.store)  # a store that is not a sweep's is named first, not the figure's name
     out = check_output_file(args.out or Path(args.store).with_suffix(".png"), (".png", ".pdf", ".svg"),
                             what="--out")  # (two stores in one folder: two figures)
-    plot_sweep(open_sweep(args.store), out, branch=args.branch)
+    plot_sweep(ds, out, branch=args.branch)
     print(f"figure: {out}")
     return 0
 

@@ -223,7 +223,8 @@ def _time_unit(spec: SweepSpec) -> str:
 
 class _Lock:
     """The open lock file; :meth:`close` removes it if it is still the file this process
-    created (a lock file that was already there, or was replaced, is left alone)."""
+    created, or one a killed sweep left (signed); another lock file there, or one replaced, is
+    left alone."""
 
     def __init__(self, f, path: Path, created: bool):
         self.f, self.path, self.created = f, path, created
@@ -250,6 +251,9 @@ def _same_file(f, path: Path) -> bool:
     return (a.st_dev, a.st_ino) == (b.st_dev, b.st_ino)
 
 
+_LOCK_SIGNATURE = "flutterswim sweep lock\n"
+
+
 def _acquire(path: Path) -> _Lock:
     """Exclusive advisory lock next to the store: one writer at a time (close-on-exec)."""
     import fcntl
@@ -274,6 +278,12 @@ def _acquire(path: Path) -> _Lock:
                 "is held); wait for it to finish or stop it, then rerun the same command to resume"
             ) from None
         if _same_file(f, lock_path):
+            if created:  # signed: a lock a killed run leaves is known as ours and removed by the next
+                f.write(_LOCK_SIGNATURE)
+                f.flush()
+            else:
+                f.seek(0)
+                created = f.read(len(_LOCK_SIGNATURE)) == _LOCK_SIGNATURE
             return _Lock(f, lock_path, created)
         f.close()  # the file was removed by the process that held it: lock the current one
     raise SweepLockedError(f"the lock {str(lock_path)!r} of the store {str(path)!r} keeps being replaced; "
