@@ -148,3 +148,18 @@ def test_a_swimmer_off_the_fields_line_is_noted(turn_deg):
     for fa in (a, a + math.pi):
         on = describe(Track(t=tr.t, x=x, y=y, s=tr.s, length=1.0, units="m", field_angle=fa), n_last=10)
         assert on.note == "" and abs(on.advance_per_cycle_mm) == pytest.approx(ref.advance_per_cycle_mm, rel=1e-6)
+
+
+def test_one_cycle_has_no_spread():
+    """A review: a movie described over one cycle printed period_std_s 0 (and every other
+    spread), read as perfect precision; one cycle has no spread to measure."""
+    import math
+
+    import flutterswim as fs
+    from flutterswim.analysis import describe
+
+    run = fs.simulate(fs.PAPER, 16.0, n_segments=24)
+    one, two = describe(run, n_last=1), describe(run, n_last=2)
+    assert one.n_cycles_used == 1 and two.n_cycles_used == 2
+    assert math.isnan(one.period_std_s) and one.to_dict()["advance_per_cycle_std_mm"] is None
+    assert two.period_std_s >= 0 and math.isfinite(two.period_std_s)

@@ -266,3 +266,16 @@ def test_readme_numbers_match_the_api_defaults():
     assert re.search(r"ms at N = (\d+)", line).group(1) == str(DEFAULT_SEGMENTS), line
     said = re.search(r"`describe\(run\)` averages the last `n_last=(\d+)` cycles", " ".join(readme.split()))
     assert said and int(said.group(1)) == inspect.signature(describe).parameters["n_last"].default
+
+
+def test_a_switch_is_advised_as_typed():
+    """A review: an all-noise movie's error ended "give --dark-line=True (--dark-line)", which
+    argparse refuses ("ignored explicit argument 'True'"): --dark-line is a switch."""
+    from flutterswim.cli import _as_typed, build_parser
+
+    args = build_parser().parse_args(["track", "x.tif", "--px-per-mm", "70"])
+    msg = _as_typed("too noisy a movie, or if the filament is darker than its background, give dark_line=True "
+                    "(--dark-line)", args.command_parser)
+    assert msg.endswith("give --dark-line") and "True" not in msg
+    # the advice, typed, parses
+    build_parser().parse_args(["track", "x.tif", "--px-per-mm", "70", msg.rsplit(" ", 1)[1]])

@@ -269,6 +269,20 @@ def test_truncated_png_in_a_frame_folder_is_named(tmp_path):
             pass
 
 
+def test_hidden_companion_files_in_a_frame_folder_are_not_frames(tmp_path):
+    """A review: a folder copied from a Mac holds "._f0.png" companions (AppleDouble, not images);
+    the whole folder was refused as "cannot be read as an image"."""
+    import imageio.v3 as iio
+
+    frames = np.random.default_rng(0).integers(0, 255, (4, 40, 50)).astype(np.uint8)
+    for i, f in enumerate(frames):
+        iio.imwrite(tmp_path / f"f{i}.png", f)
+        (tmp_path / f"._f{i}.png").write_bytes(b"\x00\x05\x16\x07" + b"\x00" * 60)
+    fr = open_frames(tmp_path)
+    assert fr.n_frames == 4
+    np.testing.assert_array_equal(np.stack(list(fr)).astype(np.uint8), frames)
+
+
 # ---- render: inputs -------------------------------------------------------------------------------------------------
 
 def _line(T=3, P=9):

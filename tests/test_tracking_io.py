@@ -299,3 +299,20 @@ def test_png_folder_with_a_frame_of_another_shape_is_refused(tmp_path):
 def test_a_bad_sigma_is_refused_before_any_frame_is_read(tmp_path):
     with pytest.raises(fs.ParameterError, match="sigma=-1"):
         track(tmp_path / "not-read.tif", px_per_mm=70.0, fps=50.0, sigma=-1.0)
+
+
+def test_a_track_does_not_replace_a_simulated_run_nor_a_run_a_track(tracked, tmp_path):
+    """A review: `track --out run.nc` replaced a saved simulation (both are flutterswim files)
+    without a word. Each command replaces only its own kind of file."""
+    run = fs.simulate(fs.PAPER, 0.05, n_segments=8)
+    run_path = run.save(tmp_path / "run.nc")
+    before = run_path.read_bytes()
+    with pytest.raises(fs.ParameterError, match="another kind of flutterswim result"):
+        save_track(tracked, run_path)
+    assert run_path.read_bytes() == before
+    track_path = save_track(tracked, tmp_path / "t.nc")
+    with pytest.raises(fs.ParameterError, match="another kind of flutterswim result"):
+        run.save(track_path)
+    assert load_track(track_path).t.size == tracked.t.size
+    save_track(tracked, track_path)  # its own kind: replaced as before
+    run.save(run_path)

@@ -214,13 +214,32 @@ def _writable_dir(folder: Path, what: str, path: Path, *, may_create: bool = Fal
         os.unlink(tmp)
 
 
-def check_output_file(path: str | os.PathLike, suffixes: Sequence[str], *, what: str = "out") -> Path:
+def netcdf_title(path: str | os.PathLike) -> str:
+    """The ``title`` attribute of a NetCDF-4 file ("" if none or not NetCDF-4)."""
+    p = Path(os.fspath(path))
+    try:
+        with open(p, "rb") as f:
+            if f.read(8) != b"\x89HDF\r\n\x1a\n":
+                return ""
+        import h5py
+
+        with h5py.File(p, "r") as h:
+            title = h.attrs.get("title", b"")
+    except Exception:  # noqa: BLE001 - unreadable: no title
+        return ""
+    return title.decode("utf-8", "replace") if isinstance(title, bytes) else str(title)
+
+
+def check_output_file(path: str | os.PathLike, suffixes: Sequence[str], *, what: str = "out",
+                      kind: str | None = None) -> Path:
     """Check an output file path before computing; return it as a Path.
 
     Raises ParameterError naming the path if it is a directory, an existing read-only file, a
     pipe, socket or device, has a suffix not in ``suffixes`` (lower case, with the dot), or its
     folder is not writable. A symbolic link to a file is followed: the path returned is its
-    target's, so the file is replaced there and the link kept."""
+    target's, so the file is replaced there and the link kept. ``kind``: the NetCDF title the
+    command writes; a flutterswim NetCDF of another title (a simulated run under a track's
+    name) is refused, not replaced."""
     try:
         p = Path(os.fspath(path))
     except TypeError:
@@ -248,6 +267,11 @@ def check_output_file(path: str | os.PathLike, suffixes: Sequence[str], *, what:
     if p.is_file() and p.stat().st_size > 0 and not is_ours(p):
         raise ParameterError(f"{what}={str(p)!r} exists and was not written by flutterswim; it is never "
                              "overwritten. Choose another name, or move the file away first")
+    if kind is not None and p.is_file() and p.stat().st_size > 0:
+        title = netcdf_title(p)
+        if title and title != kind:
+            raise ParameterError(f"{what}={str(p)!r} holds another kind of flutterswim result ({title!r}); it is "
+                                 f"not replaced by a {kind!r}. Choose another name, or move the file away first")
     _writable_dir(p.parent if str(p.parent) else Path("."), what, p)
     return p
 

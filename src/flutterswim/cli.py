@@ -93,7 +93,9 @@ def _simulate(args: argparse.Namespace) -> int:
         raise ParameterError(
             f"--cycles={args.cycles} and --t-end={args.t_end} were both given; --cycles runs to that many "
             "settled cycles of the limit cycle, --t-end for a fixed time: give one of them")
-    out = check_output_file(args.out, (".nc",), what="--out")
+    from .result import RUN_TITLE
+
+    out = check_output_file(args.out, (".nc",), what="--out", kind=RUN_TITLE)
     params = preset(args.preset)
     if args.kappa_E_ratio is not None:
         from ._validate import finite
@@ -363,6 +365,9 @@ def _as_typed(message: str, parser: argparse.ArgumentParser | None) -> str:
     the command has no such option."""
     if parser is None:
         return message
+    # a switch: "give dark_line=True (--dark-line)" is "give --dark-line" (its "=True" fails to parse)
+    message = re.sub(r"\bgive ([A-Za-z_]\w*)=True(?: \((--[\w-]+)\))?",
+                     lambda g: f"give {opt}" if (opt := _option(g.group(1), parser)) else g.group(0), message)
     message = re.sub(r"\bgive ([A-Za-z_]\w*)\b",
                      lambda g: f"give {_option(g.group(1), parser) or g.group(1)}", message)
     message = re.sub(r"\(([A-Za-z_]\w*)=\)", lambda g: f"({_option(g.group(1), parser) or g.group(1) + '='})",

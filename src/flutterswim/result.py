@@ -14,6 +14,10 @@ from .params import Groups, Parameters
 __all__ = ["SimulationResult", "load"]
 
 
+#: the NetCDF title of a simulated run (simulate replaces only these)
+RUN_TITLE = "flutterswim simulation of an active filament"
+
+
 @dataclass(frozen=True)
 class SimulationResult:
     """Time series of the filament.
@@ -139,7 +143,7 @@ class SimulationResult:
         )
         attrs = {
             "Conventions": "CF-1.10",
-            "title": "flutterswim simulation of an active filament",
+            "title": RUN_TITLE,
             "source": f"flutterswim {__version__}",
             "flutterswim_version": __version__,
             "units": self.units,
@@ -167,7 +171,7 @@ class SimulationResult:
         folder renamed onto ``path``). Returns the path."""
         from ._paths import atomic_path, check_output_file
 
-        path = check_output_file(path, (".nc", ".nc4", ".h5", ".hdf5"), what="path")
+        path = check_output_file(path, (".nc", ".nc4", ".h5", ".hdf5"), what="path", kind=RUN_TITLE)
         with atomic_path(path) as tmp:
             self.to_xarray().to_netcdf(tmp, engine="h5netcdf")
         return path

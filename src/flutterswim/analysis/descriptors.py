@@ -30,8 +30,10 @@ __all__ = ["Descriptors", "describe", "shape_modes", "stroke_area", "per_cycle"]
 
 
 def _std(v: np.ndarray) -> float:
+    """Sample standard deviation over the cycles; NaN (unknown) from one cycle, which has no
+    spread to measure (0 read as perfect precision on a one-cycle movie)."""
     v = np.asarray(v, float)
-    return float(np.std(v, ddof=1)) if v.size > 1 else 0.0
+    return float(np.std(v, ddof=1)) if v.size > 1 else math.nan
 
 
 _GRID = 256

@@ -73,7 +73,9 @@ def _cmd_track(args) -> int:
 
     positive_int("--last", args.last)  # checked before tracking, as the output paths
     field_angle = direction_deg("--field-angle-deg", args.field_angle_deg)
-    out = check_output_file(args.out, (".nc",), what="--out")
+    from .netcdf import TRACK_TITLE
+
+    out = check_output_file(args.out, (".nc",), what="--out", kind=TRACK_TITLE)
     if args.kymograph:
         check_output_file(args.kymograph, (".png", ".pdf", ".svg"), what="--kymograph")
     times = None

@@ -208,7 +208,9 @@ def _image_shape(p: Path) -> tuple[int, ...]:
 
 
 def _folder(p: Path) -> Frames:
-    files = sorted((f for f in p.iterdir() if f.is_file() and f.suffix.lower() in FRAME_SUFFIXES), key=_natural_key)
+    # hidden files are not frames (macOS leaves "._frame1.png" companions beside copied files)
+    files = sorted((f for f in p.iterdir() if f.is_file() and f.suffix.lower() in FRAME_SUFFIXES
+                    and not f.name.startswith(".")), key=_natural_key)
     if not files:
         raise ParameterError(f"input={str(p)!r} is a folder without PNG or TIFF frames")
     sfx = {f.suffix.lower().replace(".tiff", ".tif") for f in files}

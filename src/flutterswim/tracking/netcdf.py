@@ -32,10 +32,16 @@ def to_xarray(tr: Track):
     mm = 1.0 / tr.meta["px_per_mm"]
     ok = np.asarray(info["ok"], bool)
     reason = np.array([str(r) for r in info["reason"]], dtype=object)
+    # with a region of interest the positions are measured from its corner (a review: the label
+    # said the image's axes, 10 px off for an ROI from column 10)
+    origin = (" from the region of interest's corner (roi attribute: x0,y0,x1,y1 in px of the image)"
+              if tr.meta.get("roi") else " from the image's corner")
     ds = xr.Dataset(
         {
-            "x": (("frame", "point"), info["x_px"] * mm, {"units": "mm", "long_name": "centreline x (image column axis)"}),
-            "y": (("frame", "point"), info["y_px"] * mm, {"units": "mm", "long_name": "centreline y (image row axis, downwards)"}),
+            "x": (("frame", "point"), info["x_px"] * mm,
+                  {"units": "mm", "long_name": "centreline x (image column axis)" + origin}),
+            "y": (("frame", "point"), info["y_px"] * mm,
+                  {"units": "mm", "long_name": "centreline y (image row axis, downwards)" + origin}),
             "body_length": ("frame", info["length_px"] * mm, {"units": "mm", "long_name": "tracked body length"}),
             "contrast": ("frame", info["contrast"], {"units": "1", "long_name": "ridge height over the filtered noise sd"}),
             "tracked": ("frame", ok.astype(np.int8), {"units": "1", "long_name": "frame tracked (1) or failed (0)",
@@ -54,7 +60,7 @@ def to_xarray(tr: Track):
     m = tr.meta
     ds.attrs.update({
         "Conventions": "CF-1.8",
-        "title": "filament tracked from video by flutterswim",
+        "title": TRACK_TITLE,
         "source": f"flutterswim {__version__} tracking of {m.get('source', '?')}",
         "input": str(m.get("source", "")),
         "px_per_mm": float(m["px_per_mm"]), "px_per_mm_units": "1/mm",
@@ -77,11 +83,15 @@ def to_xarray(tr: Track):
     return ds
 
 
+#: the NetCDF title of a track (a command writing tracks replaces only these)
+TRACK_TITLE = "filament tracked from video by flutterswim"
+
+
 def save_track(tr: Track, path: str | os.PathLike) -> Path:
     """Write :func:`to_xarray` to NetCDF atomically (never over a file not ours)."""
     from .._paths import atomic_path, check_output_file
 
-    p = check_output_file(path, (".nc",), what="out")
+    p = check_output_file(path, (".nc",), what="out", kind=TRACK_TITLE)
     ds = to_xarray(tr)
     with atomic_path(p) as tmp:
         ds.to_netcdf(tmp, engine="h5netcdf")
