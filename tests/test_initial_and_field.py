@@ -50,3 +50,16 @@ def test_a_piecewise_hold_field_needs_no_time_derivative(paper_groups):
     # the constant-field runs evaluate f once per stage; so does the held one
     per_step = held.stats.n_rhs / (held.stats.n_steps + held.stats.n_rejected)
     assert per_step < 4.5
+
+
+def test_a_run_records_the_method_that_ran():
+    """A review: a field turning between breakpoints is stepped by another method than the one
+    asked for; the run's settings said "ndf" and its stats "ros34pw2"."""
+    import flutterswim as fs
+    from flutterswim.field import Field
+
+    turning = fs.simulate(fs.PAPER, 0.2, n_segments=8, field=Field(direction=lambda t: 0.1 * t))
+    steady = fs.simulate(fs.PAPER, 0.2, n_segments=8)
+    for r in (turning, steady):
+        assert r.settings["method_used"] == r.stats.method
+    assert steady.settings["method_used"] == steady.settings["method"]

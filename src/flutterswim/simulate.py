@@ -125,6 +125,9 @@ def simulate(
             bar.close()
     return _package(sol, fil, fld, groups, params, tau, forces, {
         "n_segments": n_segments, "method": method, "rtol": rtol, "atol": atol,
+        # what ran: a field turning between breakpoints is stepped in Python by another method (the
+        # settings said "ndf" where the stats said "ros34pw2")
+        "method_used": getattr(sol.stats, "method", method),
         "field": field.describe(), "initial": initial.describe(), "t_start": t_start,
         "t_end": t_end, "stop_on_self_intersection": stop_on_self_intersection,
     })
