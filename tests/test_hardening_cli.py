@@ -192,3 +192,24 @@ def test_tracked_movie_animates_and_a_too_short_one_is_named(tmp_path):
     save_track(track(mv.frames[:3], px_per_mm=mv.px_per_mm, fps=50.0, periodic=False), tmp_path / "t3.nc")
     line = _one_line_error(_cli("describe", tmp_path / "t3.nc"))
     assert "t3.nc" in line
+
+
+@pytest.mark.parametrize("delay", [0.15, 0.35, 0.6])
+def test_ctrl_c_while_the_command_starts_is_one_line_and_130(tmp_path, delay):
+    """A review: a Ctrl-C in the first half second (numpy, scipy and the subcommands loading)
+    printed a Python traceback. The entry point imports the package inside its own handler."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    code = "import sys, flutterswim_entry; sys.argv[0] = 'flutterswim'; sys.exit(flutterswim_entry.main())"
+    proc = subprocess.Popen([sys.executable, "-c", code, "reproduce", "--out", str(tmp_path / "r"), "--only", "table1"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+    time.sleep(delay)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    if proc.returncode == 0:  # finished before the signal (a fast machine): nothing to test
+        pytest.skip("the command finished before the interrupt")
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1 and "interrupted" in err

@@ -436,8 +436,8 @@ def main(argv: list[str] | None = None) -> int:
     debug = "--debug" in argv
     if debug:
         argv = [a for a in argv if a != "--debug"]
-    ap = build_parser()
-    try:
+    try:  # (building the parser imports the subcommands' modules: a Ctrl-C lands here too)
+        ap = build_parser()
         args = ap.parse_args(argv)
     except KeyboardInterrupt:
         print("flutterswim: interrupted", file=sys.stderr)
