@@ -133,7 +133,7 @@ def test_plot_branch_of_a_file_with_range_end_runs_forwards(tau_branch, tmp_path
     _, out, _ = tau_branch
     ds = xr.open_dataset(out, engine="h5netcdf").load()
     ds.attrs["range_end"] = 3.0
-    ds = ds.isel(tau=slice(0, 6))  # a short branch: far from its end of the range
+    ds = ds.isel(orbit=slice(0, 6))  # a short branch: far from its end of the range
     fig = plot_branch(ds)
     lo, hi = fig.axes[0].get_xlim()
     assert lo < hi and lo <= float(ds["tau"].min()) and hi >= 3.0
