@@ -204,8 +204,11 @@ def test_ctrl_c_while_the_command_starts_is_one_line_and_130(tmp_path, delay):
     import time
 
     code = "import sys, flutterswim_entry; sys.argv[0] = 'flutterswim'; sys.exit(flutterswim_entry.main())"
+    # (SIGINT's default restored: a test run in a background job inherits it ignored, and Python
+    # then never raises KeyboardInterrupt)
     proc = subprocess.Popen([sys.executable, "-c", code, "reproduce", "--out", str(tmp_path / "r"), "--only", "table1"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     time.sleep(delay)
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=120)
