@@ -84,3 +84,16 @@ def test_branch_stability_map_and_neutral_curve():
     assert ds.period.attrs["scaled_units"] == "tau" and ds.speed.attrs["scaled_units"] == "l tau-1"
     _check_cf(fs.stability_map(eta_perp=np.array([40.0, 70.0]), chi=np.array([60.0, 80.0])).to_dataset(), "stability map")
     _check_cf(fs.neutral_curve(np.array([40.0, 70.0])).to_dataset(), "neutral curve")
+
+
+def test_coordinates_carry_no_fill_value(tmp_path):
+    """CF: coordinate variables hold no missing data; xarray wrote _FillValue = NaN on every float
+    coordinate (a review of the reproduce folder). Data variables keep theirs."""
+    h5py = pytest.importorskip("h5py")
+    import flutterswim as fs
+
+    path = fs.simulate(fs.PAPER, 0.05, n_segments=8).save(tmp_path / "r.nc")
+    with h5py.File(path, "r") as h:
+        for name in ("t", "s"):
+            assert "_FillValue" not in h[name].attrs, name
+        assert "_FillValue" in h["x"].attrs

@@ -43,4 +43,7 @@ def cf_dataset(ds):
     for var in ds.variables.values():
         var.attrs = cf_attrs(var.attrs)
     ds.attrs = cf_attrs(ds.attrs)
+    for name in ds.coords:  # coordinates hold no missing values (CF): no _FillValue written for them
+        if ds[name].dtype.kind == "f":
+            ds[name].encoding["_FillValue"] = None
     return ds
