@@ -146,7 +146,10 @@ def test_a_continuation_sweep_draws_both_branches_and_its_jumps():
     jumps = _jumps(down.period_s.values)
     assert np.count_nonzero(jumps) == 1 and jumps[12]  # between 1.2 and 1.3 only
     assert not _jumps(ds.period_s.values).any()
+    both["failed"] = xr.where(both.kappa_E_ratio == 2.0, True, both["failed"])  # failed on either branch
     fig = plot_sweep(both)
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert labels.count("failed") == 1 and len(labels) == len(set(labels))
     ax = fig.axes[1]
     dashed = [l for l in ax.lines if l.get_linestyle() == "--"]
     dotted = [l for l in ax.lines if l.get_linestyle() == ":" and np.ptp(l.get_xdata()) > 0]  # (not the onset)

@@ -99,6 +99,13 @@ def _branch_values(ds, advance: str, period: str):
     return swim, straight, adv, per
 
 
+def _once(handles: list) -> list:
+    """Legend handles, each label once (both branches of a continuation sweep mark their failed
+    or unsettled points under one label)."""
+    seen: set = set()
+    return [h for h in handles if not (h.get_label() in seen or seen.add(h.get_label()))]
+
+
 def _axis_label(ds, x: str) -> str:
     """The swept axis's label with its units (from the store's coordinate)."""
     if x == "kappa_E_ratio":
@@ -196,9 +203,10 @@ def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str
     if math.isfinite(rc):
         for ax in axs:
             ax.axvline(rc, color="0.6", ls=":", lw=1)
-    axs[0].legend(handles=proxies + axs[0].get_legend_handles_labels()[0], fontsize=7, loc="best", frameon=False)
+    axs[0].legend(handles=_once(proxies + axs[0].get_legend_handles_labels()[0]), fontsize=7, loc="best",
+                  frameon=False)
     if axs[1].get_legend_handles_labels()[0]:
-        axs[1].legend(fontsize=8)
+        axs[1].legend(handles=_once(axs[1].get_legend_handles_labels()[0]), fontsize=8)
     if path is not None:
         from .._paths import atomic_path, check_output_file, figure_metadata
 
