@@ -68,3 +68,15 @@ def test_a_solver_failure_names_its_time_once_in_seconds():
     assert _message_in_seconds("step size collapsed to 1e-12 at t=51.2882", tau) == \
         f"step size collapsed to 1e-12 at t={51.2882 * tau:.6g} s"
     assert _message_in_seconds("reached t_end", tau) == "reached t_end"
+
+
+def test_a_stop_reason_keeps_its_own_time():
+    """The stop on self-intersection says its time in s already: converting every integrator
+    message put it at t * tau (0.60 s for a stop at 1.60 s)."""
+    import flutterswim as fs
+
+    p = fs.PAPER.replace(kappa_E=2.5 * fs.PAPER.kappa_E)
+    r = fs.simulate(p, 20.0, n_segments=16, stop_on_self_intersection=True)
+    assert r.status == "stopped" and "self-intersection" in r.message
+    said = float(r.message.split("t=")[1].split()[0])
+    assert said == pytest.approx(r.t_final, rel=1e-5)

@@ -236,7 +236,9 @@ def _package(sol, fil: Filament, fld: Field, groups, params, tau, forces, settin
 
         res = replace(
             res, t=t * tau, s=res.s * L, s_mid=res.s_mid * L, x=x * L, y=yy * L, kappa=kappa / L,
-            r0=r0 * L, t_final=sol.t_final * tau, units="SI", message=_message_in_seconds(sol.message, tau),
+            r0=r0 * L, t_final=sol.t_final * tau, units="SI",
+            # (a stop's reason comes from the check, already in s: only the integrator's failures)
+            message=_message_in_seconds(sol.message, tau) if sol.status == "failed" else sol.message,
             A=None if a is None else a * F, V=None if v is None else v * F,
             M=None if m is None else m * F * L,
         )
