@@ -33,7 +33,7 @@ def test_swim_direction_turns_by_half_a_turn_in_the_mirrored_field(mirrored):
     np.testing.assert_allclose(turn, 180.0, atol=1e-6)
     # in (-180, 180] as the attribute says, without flipping to -180 on a round-off (it did)
     np.testing.assert_allclose(neg.swim_direction.values, 180.0, atol=1e-6)
-    from flutterswim.orbits.continuation import _half_open_degrees
+    from flutterswim.orbits.dataset import _half_open_degrees
 
     d = _half_open_degrees(np.radians([-180.0, -179.9999999, 180.0, 90.0, -90.0]))
     assert np.all((d > -180.0) & (d <= 180.0)) and d[3] == pytest.approx(90.0) and d[4] == pytest.approx(-90.0)

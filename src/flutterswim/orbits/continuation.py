@@ -31,7 +31,6 @@ from .system import ShapeSystem
 
 __all__ = ["Branch", "continue_orbits"]
 
-N_MULTIPLIERS = 6
 #: Radau steps per period along a branch. Against 48 steps at kappa_E ratio 1.5 (N = 24):
 #: period 2.5e-7 and advance 7.7e-6 relative, far below the N = 24 space errors (1.7e-3,
 #: 1.4e-2); the trivial multiplier within 1e-9 of 1 from the Hopf point to kappa_E ratio 2
@@ -75,52 +74,15 @@ class Branch:
         (0 at the Hopf point's side, in the order continued), the parameter an auxiliary
         coordinate: past a fold the parameter turns back, and a coordinate variable must be
         monotonic (CF) and unique (xarray's indexing)."""
-        import xarray as xr
+        from .dataset import orbits_dataset
 
         name = self.axis.name
-        orbs = self.orbits
         si = isinstance(self.axis.base, Parameters)
-        tu, lu = ("s", "m") if si else ("tau", "l")
+        tu = "s" if si else "tau"
         tau_hopf = _scales(self.axis.at(self.hopf_value))[0]  # (1 for groups: periods in tau)
-
-        def col(key):
-            return np.array([getattr(o, key) for o in orbs], dtype=float)
-
-        data = {
-            "period": (col("period"), tu, "period of the stroke"),
-            "advance": (col("advance"), lu, "net advance per cycle (its magnitude; its direction: swim_direction)"),
-            "swim_direction": (_half_open_degrees(col("swim_direction")), "degree",
-                               "direction of the net advance per cycle, anticlockwise from the field (x axis), "
-                               "in (-180, 180]"),
-            "leading_end": (np.array([o.leading_end == "s=l" for o in orbs], dtype="i1"), "1",
-                            "the end of the filament that leads along swim_direction (lateral_leading is "
-                            "its excursion)"),
-            "speed": (col("speed"), f"{lu} {tu}-1", "mean swimming speed"),
-            "lateral_leading": (col("lateral_leading"), lu, "lateral peak-to-peak excursion of the leading end"),
-            "lateral_trailing": (col("lateral_trailing"), lu, "lateral peak-to-peak excursion of the trailing end"),
-            "amplitude": (col("amplitude"), "1",
-                          "2 |first Fourier coefficient of the shape (theta, kappa l)| / sqrt(2N+1): RMS over the "
-                          "2N+1 shape components of the first harmonic's amplitude (its scale independent of N; its value near the Hopf point converges with N at order 2)"),
-            "nonreciprocity": (col("nonreciprocity"), "1", "signed area of the stroke in the first two shape modes"),
-            "self_intersecting": (col("self_intersecting").astype("i1"), "1", "filament crosses itself during the stroke (0/1)"),
-            "stable": (col("stable").astype("i1"), "1", "orbit stable: all non-trivial Floquet multipliers inside the unit circle (0/1)"),
-            "max_multiplier": (np.array([o.max_multiplier for o in orbs]), "1", "largest modulus of the non-trivial Floquet multipliers"),
-            "trivial_multiplier_error": (col("trivial_multiplier_error"), "1", "|trivial Floquet multiplier - 1| (accuracy gauge)"),
-            "residual": (col("residual"), "1", "max-norm residual of the closing condition"),
-            "n_newton": (col("n_newton").astype("i4"), "1", "Newton iterations"),
-        }
-        mults = np.array([o.multipliers[:N_MULTIPLIERS] for o in orbs]) if orbs else np.zeros((0, N_MULTIPLIERS))
-        ds = xr.Dataset(
-            {k: (("orbit",), v, {"units": u, "long_name": ln}) for k, (v, u, ln) in data.items()},
-            coords={"orbit": (("orbit",), np.arange(len(orbs), dtype="i4"),
-                              {"units": "1", "long_name": "orbit number along the branch, from the Hopf point"}),
-                    name: (("orbit",), self.values, {"units": self.axis.units, "long_name": self.axis.long_name})},
-        )
-        ds["multiplier_real"] = (("orbit", "multiplier"), mults.real, {"units": "1", "long_name": "Floquet multipliers (largest moduli), real part"})
-        ds["multiplier_imag"] = (("orbit", "multiplier"), mults.imag, {"units": "1", "long_name": "Floquet multipliers (largest moduli), imaginary part"})
-        ds["leading_end"].attrs.update({"flag_values": np.array([0, 1], dtype="i1"),
-                                        "flag_meanings": "s_equals_0 s_equals_l"})
-        ds = ds.assign_coords(multiplier=("multiplier", np.arange(N_MULTIPLIERS), {"units": "1", "long_name": "rank by modulus"}))
+        ds = orbits_dataset(self.orbits, si=si, orbit_long_name="orbit number along the branch, from the Hopf point")
+        ds = ds.assign_coords({name: (("orbit",), self.values, {"units": self.axis.units,
+                                                                 "long_name": self.axis.long_name})})
         crossings = self.multiplier_crossings()
         from .. import __version__
         from .._cf import cf_dataset
@@ -149,7 +111,7 @@ class Branch:
             "multiplier_crossings": "; ".join(f"{name}={v:.6g}" for v in crossings) if crossings else "none",
             "n_segments": self.n_segments,
             "steps_per_period": self.steps,
-            "n_inaccurate_orbits": int(np.count_nonzero(col("trivial_multiplier_error") > ACCURACY_GAUGE)),
+            "n_inaccurate_orbits": int(np.count_nonzero(ds["trivial_multiplier_error"].values > ACCURACY_GAUGE)),
             "n_inaccurate_orbits_comment": (
                 f"orbits whose trivial Floquet multiplier is off 1 by more than {ACCURACY_GAUGE:g} (see "
                 "trivial_multiplier_error): the time discretisation limits their accuracy; more steps per "
@@ -180,13 +142,6 @@ class Branch:
 
 def _systems(axis: Axis, value: float, n: int) -> ShapeSystem:
     return ShapeSystem.of(axis.at(value), n)
-
-
-def _half_open_degrees(radians: np.ndarray) -> np.ndarray:
-    """Degrees in (-180, 180]: a stroke swimming against the field (along -x up to round-off)
-    reads 180, not -180 or 180 by the sign of a round-off in its lateral drift."""
-    d = np.degrees(radians)
-    return np.where(d <= -180.0 + 1e-6, 180.0, d)  # (exactly 180: -179.9999999 + 360 left the range)
 
 
 @one_blas_thread
