@@ -156,23 +156,28 @@ def test_out_folder_safety(tmp_path):
     assert (foreign / "notes.txt").read_text() == "user data"
     ours = tmp_path / "ours"
     reproduce(ours, targets=["table1"])
-    (ours / "table1_data.json").write_text('{"written by": "someone else"}')  # no signature
+    import xarray as xr
+
+    xr.Dataset({"x": ("x", [1.0])}).to_netcdf(ours / "table1_data.nc", engine="h5netcdf")  # no signature
     with pytest.raises(ParameterError, match="was not written by flutterswim"):
         reproduce(ours, targets=["table1"])
     # an output edited after we wrote it keeps our signature (xarray keeps the attributes, a JSON
     # its generator): it was replaced without a word (a review); its hash tells
     edited = tmp_path / "edited"
     reproduce(edited, targets=["table1"])
-    f = edited / "table1_data.json"
-    d = json.loads(f.read_text())
-    d["my_note"] = "checked by hand"
-    f.write_text(json.dumps(d))
+    f = edited / "table1_data.nc"
+    with xr.open_dataset(f, engine="h5netcdf") as ds:
+        ds = ds.load()
+    ds.attrs["my_note"] = "checked by hand"
+    ds.to_netcdf(f, engine="h5netcdf")
     with pytest.raises(ParameterError, match="changed after flutterswim wrote it"):
         reproduce(edited, targets=["table1"])
-    assert json.loads(f.read_text())["my_note"] == "checked by hand"
+    with xr.open_dataset(f, engine="h5netcdf") as ds:
+        assert ds.attrs["my_note"] == "checked by hand"
     f.unlink()  # deleted: rebuilt
     reproduce(edited, targets=["table1"])
-    assert "my_note" not in json.loads(f.read_text())
+    with xr.open_dataset(f, engine="h5netcdf") as ds:
+        assert "my_note" not in ds.attrs
     with pytest.raises(ParameterError, match="unknown"):
         reproduce(tmp_path / "x", targets=["fig99"])
     with pytest.raises(ParameterError, match="mode"):
@@ -213,12 +218,29 @@ def test_fig3e_from_a_trials_csv(tmp_path):
     csv.write_text("\n".join(rows) + "\n")
     res = reproduce(tmp_path / "r", targets=["fig3e"], trials=csv)
     assert res.records["fig3e"].status == "ok"
-    d = json.loads((res.out / "fig3e_data.json").read_text())
-    for k, v in enumerate(data):
-        x = np.array(data[v])
-        assert np.allclose(d["mean"][k], x.mean(axis=0))
-        assert np.allclose(d["sem"][k], x.std(axis=0, ddof=1) / np.sqrt(len(x)))
+    import xarray as xr
 
+    with xr.open_dataset(res.out / "fig3e_data.nc", engine="h5netcdf") as ds:
+        assert ds.attrs["data_source"] == "trials" and ds.attrs["Conventions"].startswith("CF-")
+        assert ds["voltage"].values.tolist() == list(data) and ds["voltage"].attrs["units"] == "V"
+        for k, v in enumerate(data):
+            x = np.array(data[v])
+            assert int(ds["n_trials"][k]) == len(x)
+            for j, (name, unit) in enumerate((("period", "s"), ("advance", "mm"), ("lateral", "mm"))):
+                assert ds[f"{name}_mean"].attrs["units"] == ds[f"{name}_sem"].attrs["units"] == unit
+                assert float(ds[f"{name}_mean"][k]) == pytest.approx(x[:, j].mean(), rel=1e-12)
+                assert float(ds[f"{name}_sem"][k]) == pytest.approx(x[:, j].std(ddof=1) / np.sqrt(len(x)), rel=1e-12)
+
+
+
+def test_every_data_output_is_netcdf():
+    """Table 1, the paper's orbit and Fig. 3e wrote JSON (no units, xarray cannot open it); the
+    outcome <name>.json files are bookkeeping, not data."""
+    from flutterswim.reproduce import TARGETS
+
+    data = [f for t in TARGETS for f in t.data]
+    assert {"table1_data.nc", "paper_orbit.nc", "fig3e_data.nc"} <= set(data)
+    assert all(f.endswith(".nc") for f in data), data
 
 
 def test_a_bad_trials_csv_is_refused_before_building(tmp_path, capsys):

@@ -44,6 +44,51 @@ def _open(res, name):
     return xr.open_dataset(res.out / name, engine="h5netcdf")
 
 
+def _assert_cf(ds, name):
+    """CF-style: Conventions and a title, units and a long name on every variable and coordinate."""
+    assert ds.attrs["Conventions"].startswith("CF-") and ds.attrs["title"], name
+    for k, var in {**ds.data_vars, **ds.coords}.items():
+        assert isinstance(var.attrs.get("units"), str) and var.attrs["units"], (name, k)
+        assert var.attrs.get("long_name"), (name, k)
+
+
+def test_table1_data_is_cf_netcdf_with_the_tables_numbers(built):
+    """table1_data was JSON without units: CF NetCDF now, holding the numbers the table shows."""
+    ds = _open(built, "table1_data.nc")
+    _assert_cf(ds, "table1_data.nc")
+    assert {ds[k].attrs["units"] for k in ("l", "b", "B", "tau", "mu", "mu_perp", "eta_perp")} >= {"m", "Pa s", "1"}
+    rows = {c.quantity: c.our_value for c in built.records["table1"].outcome.comparisons}
+    assert rows["Filament's width, 2b"] == pytest.approx(2e3 * float(ds["b"]), rel=1e-12)  # mm
+    assert rows["Bending stiffness, B"] == pytest.approx(1e6 * float(ds["B"]), rel=1e-12)  # N mm^2
+    readings = ds.attrs["b_drag_readings"].split("; ")
+    assert ds["b_drag"].values.tolist() == [float(ds["b"]), 2 * float(ds["b"])]  # semi-axis, full width
+    l, B, tau, mu = (float(ds[k]) for k in ("l", "B", "tau", "mu"))
+    for i, name in enumerate(readings):
+        L = math.log(2 * l / float(ds["b_drag"][i]))  # the Koens-Lauga coefficients from the file's own b
+        assert float(ds["mu_perp"][i]) == pytest.approx(4 * math.pi * mu / L, rel=1e-12)
+        assert float(ds["mu_par"][i]) == pytest.approx(4 * math.pi * mu / (2 * L - 1), rel=1e-12)
+        assert float(ds["eta_perp"][i]) == pytest.approx(float(ds["mu_perp"][i]) * l**4 / (B * tau), rel=1e-12)
+        assert rows[f"mu_perp = 4 pi mu / ln(2l/b) [{name}]"] == pytest.approx(1e3 * float(ds["mu_perp"][i]), rel=1e-12)
+        assert rows[f"eta_perp = mu_perp l^4/(B tau) [{name}]"] == pytest.approx(float(ds["eta_perp"][i]), rel=1e-12)
+    assert float(ds["chi"]) == pytest.approx(float(ds["kappa_E"]) * l, rel=1e-12)
+
+
+def test_paper_orbit_is_cf_netcdf_and_what_the_later_targets_read(built):
+    """paper_orbit was JSON without units, read back by Fig. 4c-e: CF NetCDF now, the same
+    numbers in the run's comparisons and in the files of the targets that read it."""
+    ds = _open(built, "paper_orbit.nc")
+    _assert_cf(ds, "paper_orbit.nc")
+    assert (ds["period"].attrs["units"], ds["advance"].attrs["units"], ds["speed"].attrs["units"]) == ("s", "m", "m s-1")
+    assert float(ds["speed"]) == pytest.approx(float(ds["advance"]) / float(ds["period"]), rel=1e-9)
+    rows = {c.quantity: c.paper_value for c in built.records["paper_run"].outcome.comparisons}
+    assert rows["period: simulation (mean of settled cycles) vs periodic orbit"] == float(ds["period"])
+    assert _open(built, "fig4de.nc").attrs["orbit_speed_m_s"] == float(ds["speed"])
+    # Fig. 4c draws the trailing end: s = 0 when s = l leads
+    tip = "start" if int(ds["leading_end"]) == 1 else "end"
+    assert f"({tip} of the filament)" in _open(built, "fig4c.nc")["tip_x"].attrs["long_name"]
+    assert np.hypot(ds["multiplier_real"], ds["multiplier_imag"]).max() == pytest.approx(1.0, abs=1e-6)  # trivial one
+
+
 def test_b_readings_match_the_formula_and_the_curves(built):
     from flutterswim.params import PAPER
 
@@ -145,7 +190,7 @@ def test_onset_shapes_are_small_and_limit_shapes_large(built):
     import json
 
     reported = json.loads((built.out / "fig4c.json").read_text())["values"]["tip_p2p_limit_mm"]
-    orbit = json.loads((built.out / "paper_orbit.json").read_text())["orbit"]["lateral_trailing"]
+    orbit = float(_open(built, "paper_orbit.nc")["lateral_trailing"])
     assert reported == pytest.approx(orbit * 1e3, rel=0.01)
 
 
@@ -162,16 +207,19 @@ def test_steering_circle_radius_is_U_over_Omega(built):
 
 
 def test_synthetic_fit_recovers_the_truth(built):
-    import json
-
     rec = built.records["fig3e"]
     if rec.status == "skipped":
         pytest.skip(rec.outcome.notes[0])
-    d = json.loads((built.out / "fig3e_data.json").read_text())
-    assert d["source"] == "synthetic"
-    fitted = d["fit"]["values"]
-    for k, v in (("B_N_m2", "B"), ("tau_s", "tau"), ("kappa_E_per_m", "kappa_E")):
-        assert fitted[k] == pytest.approx(d["truth"][v], rel=1e-2)
+    ds = _open(built, "fig3e_data.nc")
+    _assert_cf(ds, "fig3e_data.nc")
+    assert ds.attrs["data_source"] == "synthetic" and ds.attrs["source"].startswith("flutterswim ")
+    ratio = []
+    for k, unit in (("B", "N m2"), ("tau", "s"), ("kappa_E", "m-1")):
+        assert ds[f"{k}_true"].attrs["units"] == ds[f"{k}_fitted"].attrs["units"] == unit
+        assert float(ds[f"{k}_true"]) == getattr(fs.PAPER, k)
+        assert float(ds[f"{k}_fitted"]) == pytest.approx(float(ds[f"{k}_true"]), rel=1e-2)
+        ratio.append(float(ds[f"{k}_fitted"]) / float(ds[f"{k}_true"]))
+    assert ratio == pytest.approx(rec.outcome.values["ratio"], rel=1e-12)  # what the figure draws
 
 
 def test_two_runs_write_identical_data_files(built, tmp_path):

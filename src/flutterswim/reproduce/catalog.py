@@ -13,7 +13,7 @@ __all__ = ["TARGETS", "select"]
 TARGETS: tuple[Target, ...] = (
     Target("table1", "Table 1: model parameters and the derived groups",
            "Model parameters for the selected representative experiment as measured or determined by the "
-           "optimization procedure.", fs.build_table1, fs.table1_params, data=("table1_data.json",)),
+           "optimization procedure.", fs.build_table1, fs.table1_params, data=("table1_data.nc",)),
     Target("b_readings", "Two readings of b in ln(2l/b)",
            "mu_par = 4 pi mu/(2 ln(2l/b) - 1), mu_perp = 4 pi mu/ln(2l/b) for semi-axes a, b; the table gives the "
            "width 2b. 'a critical value of kappa_E,cr/kappa_E,fit ~ 0.65'.",
@@ -32,7 +32,7 @@ TARGETS: tuple[Target, ...] = (
            figures=("fig6cd.png",), data=("fig6cd.nc",)),
     Target("paper_run", "The representative run: onset to limit cycle",
            "Numerical simulation for the fitted parameters of Table 1, straight filament inclined by 0.01 degree.",
-           fm.build_paper_run, fm.run_params, data=("paper_run.nc", "paper_orbit.json")),
+           fm.build_paper_run, fm.run_params, data=("paper_run.nc", "paper_orbit.nc")),
     Target("fig4b", "Fig. 4b: the kappa_E sweep (branch of strokes)",
            "Swimming descriptors (advancement per cycle and shape change period) for different values of kappa_E. "
            "The red parts correspond to self-intersecting shape changes. Sharp transition at ~0.65.",
@@ -59,7 +59,7 @@ TARGETS: tuple[Target, ...] = (
     Target("fig3e", "Fig. 3e: experimental descriptors against voltage",
            "Average advancement and period per cycle as measured from the experiments (mean and standard error "
            "over the trials at each potential).", ff.build_fig3e, ff.fig3e_params,
-           figures=("fig3e.png",), data=("fig3e_data.json",)),
+           figures=("fig3e.png",), data=("fig3e_data.nc",)),
 )
 
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..params import PAPER
-from .io import save_figure, write_json
+from .io import save_figure, write_netcdf
 from .targets import Context, Outcome, Settings, compare
 
 __all__ = ["build_fig3e", "fitting_available"]
@@ -42,6 +42,7 @@ def _from_trials(ctx: Context) -> Outcome:
     import matplotlib.pyplot as plt
 
     from ..fitting import plot_trials, read_trials, summarise
+    from .datasets import trials_dataset
 
     trials = ctx.settings.trials
     tr = read_trials(trials)
@@ -50,9 +51,7 @@ def _from_trials(ctx: Context) -> Outcome:
     fig.suptitle("Fig. 3e: descriptors against voltage (mean ± SEM)", fontsize=9)
     save_figure(fig, ctx.path("fig3e.png"))
     plt.close(fig)
-    write_json(ctx.path("fig3e_data.json"), {"source": "trials", "voltage_V": sm.voltage_V, "n": sm.n,
-                                             "mean": sm.mean, "sem": sm.sem,
-                                             "columns": ["period_s", "advance_mm", "lateral_mm"]})
+    write_netcdf(ctx.path("fig3e_data.nc"), trials_dataset(sm))
     rows = (compare("trials", 49, float(sm.n.sum()), rtol=0.0, paper_text="49 trials on 7 samples", fmt="{:.0f}"),)
     return Outcome("ok", rows, (f"{int(sm.n.sum())} trials at {len(sm.voltage_V)} voltages from the CSV.",), {})
 
@@ -60,6 +59,7 @@ def _from_trials(ctx: Context) -> Outcome:
 def _synthetic(ctx: Context) -> Outcome:
     from ..fitting import DescriptorModel, fit, to_identifiable
     from ..plotting._common import new_figure
+    from .datasets import fit_dataset
 
     prm = fig3e_params(ctx.settings)
     # the descriptors of the preset's stroke by the fit's own model (the continuum's, extrapolated
@@ -83,9 +83,7 @@ def _synthetic(ctx: Context) -> Outcome:
                  "lateral p-p of the preset's stroke, 1 % SEM)", fontsize=8)
     ax.legend(fontsize=7)
     save_figure(fig, ctx.path("fig3e.png"))
-    d = res.to_dict()
-    d["convergence"].pop("wall_time_s", None)
-    write_json(ctx.path("fig3e_data.json"), {"source": "synthetic", "truth": truth, "fit": d})
+    write_netcdf(ctx.path("fig3e_data.nc"), fit_dataset(truth, res))
     rows = tuple(compare(f"fitted {k} (synthetic data, truth = preset)", truth[k], got[k], rtol=1e-2,
                          paper_text=f"truth {truth[k]:.4g}") for k in names)
     notes = ("No trials CSV given (--trials CSV, columns voltage_V, sample, period_s, advance_mm, lateral_mm): the "

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..params import PAPER
 from .figures_stability import PAPER_ONSET_RATIO, _close, _var
-from .io import read_json, save_figure, write_json, write_netcdf
+from .io import save_figure, write_netcdf
 from .targets import Context, Outcome, Settings, compare, verdict
 
 __all__ = ["build_paper_run", "build_fig4b", "build_fig4c", "build_fig4de", "build_video_s4", "average_velocity"]
@@ -36,6 +36,7 @@ def build_paper_run(ctx: Context) -> Outcome:
     from ..analysis.descriptors import describe
     from ..limit_cycle import run_to_limit_cycle
     from ..orbits import periodic_orbit
+    from .datasets import orbit_dataset
 
     prm = run_params(ctx.settings)
     run = run_to_limit_cycle(PAPER, n_cycles=prm["n_cycles"], n_segments=prm["n_segments"],
@@ -46,8 +47,7 @@ def build_paper_run(ctx: Context) -> Outcome:
     orb = periodic_orbit(PAPER, n_segments=prm["n_segments"])
     d = describe(run, n_last=prm["n_cycles"])
     od = orb.descriptors()
-    write_json(ctx.path("paper_orbit.json"), {"orbit": od, "n_segments": prm["n_segments"],
-                                              "multipliers_abs": np.abs(orb.multipliers[:6])})
+    write_netcdf(ctx.path("paper_orbit.nc"), orbit_dataset(orb))
     st = run.settings
     rows = [
         verdict("the straight, slightly tilted filament reaches a limit cycle", "transient, then steady oscillation",
@@ -86,13 +86,14 @@ def build_fig4c(ctx: Context) -> Outcome:
 
     from ..analysis.cycles import detect_cycles, tip_index
     from ..analysis.kymograph import kymograph_windows
+    from .datasets import read_orbit
     from .plots import plot_fig4c
 
     run, tr = _load_run(ctx)
     cyc = detect_cycles(tr)
     wins = kymograph_windows(tr, n_cycles=1, cycles=cyc)
     n_g = fig4c_params(ctx.settings)["n_ghosts"]
-    orb = read_json(ctx.path("paper_orbit.json"))["orbit"]
+    orb = read_orbit(ctx.path("paper_orbit.nc"))
     tip = "start" if orb["leading_end"] == "s=l" else "end"  # the trailing end: the larger sway
     it = tip_index(tr, tip)
     ghosts = {}
@@ -144,10 +145,11 @@ def build_fig4de(ctx: Context) -> Outcome:
 
     from ..analysis.kymograph import kymograph_windows
     from ..plotting.figures import path_sections
+    from .datasets import read_orbit
     from .plots import plot_fig4de
 
     run, tr = _load_run(ctx)
-    orb = read_json(ctx.path("paper_orbit.json"))["orbit"]
+    orb = read_orbit(ctx.path("paper_orbit.nc"))
     wins = kymograph_windows(tr, n_cycles=fig4de_params(ctx.settings)["n_cycles"])
     vel = {k: average_velocity(tr, w) for k, w in wins.items()}
     fig = plot_fig4de(tr, wins, vel)

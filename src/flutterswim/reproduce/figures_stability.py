@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from ..params import PAPER, Parameters
-from .io import save_figure, write_json, write_netcdf
+from .io import save_figure, write_netcdf
 from .targets import Context, Outcome, Settings, compare, verdict
 
 __all__ = ["readings", "mode_fields", "build_table1", "build_b_readings", "build_fig6a", "build_fig6b",
@@ -45,6 +45,8 @@ TABLE1_ROWS = (  # (label, paper value, unit, our value in the table's unit)
 
 
 def build_table1(ctx: Context) -> Outcome:
+    from .datasets import table1_dataset
+
     p = PAPER
     rows = [compare(label, paper, f(p), unit=unit, rtol=1e-6) for label, paper, unit, f in TABLE1_ROWS]
     derived = []
@@ -64,7 +66,7 @@ def build_table1(ctx: Context) -> Outcome:
     values = {"params_SI": p.to_dict(), "groups": {k: r.groups.to_dict() for k, r in readings(p).items()},
               "mu_par": {k: r.mu_par for k, r in readings(p).items()},
               "mu_perp": {k: r.mu_perp for k, r in readings(p).items()}}
-    write_json(ctx.path("table1_data.json"), values)
+    write_netcdf(ctx.path("table1_data.nc"), table1_dataset(p, readings(p)))
     return Outcome("ok", tuple(rows + derived), ("The table lists the width 2b and the thickness 2a, so "
                    "b and a are semi-axes; the groups are given for both readings of b in ln(2l/b).",), values)
 
