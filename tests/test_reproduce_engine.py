@@ -233,6 +233,28 @@ def test_fig3e_from_a_trials_csv(tmp_path):
 
 
 
+def test_report_counts_only_rows_compared_with_the_paper(tmp_path):
+    """The report counted every row with an ok among the agreements with the paper, also a
+    simulation checked against our own periodic orbit (its "paper" column our number): only rows
+    against a value or statement printed in the paper count now; the others say ours only."""
+    from flutterswim.reproduce.report import write_report
+    from flutterswim.reproduce.targets import TargetRecord, cross_check, verdict
+
+    rows = (compare("a printed value", 2.0, 3.0, rtol=0.1),  # disagrees with the paper
+            verdict("a printed statement", "it swims", "it swims", True),  # agrees with it
+            cross_check("simulation vs orbit", 1.0, 1.001, rtol=0.01, reference="orbit: 1 s"),
+            cross_check("discrete vs continuum", 1.0, 1.5, rtol=0.01, reference="linear theory: 1"),
+            compare("a number the paper does not give", None, 4.0))
+    assert [c.from_paper for c in rows] == [True, True, False, False, False]
+    t = Target("t", "T", "", lambda ctx: None, lambda s: {})
+    rec = TargetRecord(t, "ok", True, 0.0, Outcome("ok", rows), mode="quick")
+    html = write_report(tmp_path, {"t": rec}, "quick").read_text()
+    assert "Comparisons with the paper: 1 agree, 1 disagree." in html
+    assert "1 of their 2 checks within tolerance" in html
+    assert "<td>1 / 2</td><td>1 / 2</td>" in html  # per target: paper 1 of 2, ours only 1 of 2
+    assert html.count('<span class="na">ours only</span> (') == 3
+
+
 def test_every_data_output_is_netcdf():
     """Table 1, the paper's orbit and Fig. 3e wrote JSON (no units, xarray cannot open it); the
     outcome <name>.json files are bookkeeping, not data."""

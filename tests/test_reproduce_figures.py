@@ -194,6 +194,24 @@ def test_onset_shapes_are_small_and_limit_shapes_large(built):
     assert reported == pytest.approx(orbit * 1e3, rel=0.01)
 
 
+def test_rows_against_our_own_numbers_are_not_agreements_with_the_paper(built):
+    """The run's period against our periodic orbit's (its "paper" column our own number) was
+    counted as an agreement with the paper; such rows are ours only now, and the report counts
+    the rows compared with the paper."""
+    orbit = _open(built, "paper_orbit.nc")
+    ours = {float(orbit["period"]), float(orbit["advance"]) * 1e3, float(orbit["speed"]) * 1e3}
+    rows = [c for r in built.records.values() for c in r.outcome.comparisons]
+    against_orbit = [c for c in rows if c.paper_value in ours]
+    assert len(against_orbit) >= 3 and not any(c.from_paper for c in against_orbit)
+    assert all(c.from_paper and c.ok for c in built.records["table1"].outcome.comparisons if c.paper_value)
+    if built.records["fig3e"].status == "ok":  # a fit recovering the truth of its synthetic data
+        assert not any(c.from_paper for c in built.records["fig3e"].outcome.comparisons)
+    paper = [c for c in rows if c.from_paper and c.ok is not None]
+    n_agree = sum(c.ok for c in paper)
+    assert 0 < len(paper) < len([c for c in rows if c.ok is not None])
+    assert f"Comparisons with the paper: {n_agree} agree, {len(paper) - n_agree} disagree." in built.report.read_text()
+
+
 def test_steering_circle_radius_is_U_over_Omega(built):
     ds = _open(built, "fig5.nc")
     predicted = ds.attrs["orbit_speed_m_s"] / ds.attrs["rate_rad_s"]

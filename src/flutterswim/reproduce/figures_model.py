@@ -12,7 +12,7 @@ import numpy as np
 from ..params import PAPER
 from .figures_stability import PAPER_ONSET_RATIO, _close, _var
 from .io import save_figure, write_netcdf
-from .targets import Context, Outcome, Settings, compare, verdict
+from .targets import Context, Outcome, Settings, compare, cross_check, verdict
 
 __all__ = ["build_paper_run", "build_fig4b", "build_fig4c", "build_fig4de", "build_video_s4", "average_velocity"]
 
@@ -53,15 +53,15 @@ def build_paper_run(ctx: Context) -> Outcome:
         verdict("the straight, slightly tilted filament reaches a limit cycle", "transient, then steady oscillation",
                 f"{st.get('outcome')}: limit cycle from t = {st.get('limit_cycle_time', math.nan):.2f} s",
                 bool(st.get("limit_cycle"))),
-        compare("period: simulation (mean of settled cycles) vs periodic orbit", od["period"], d.period_s,
-                unit="s", rtol=5e-3, paper_text=f"orbit: {od['period']:.4f} s"),
-        compare("advance per cycle: simulation vs periodic orbit", od["advance"] * 1e3, d.advance_per_cycle_mm,
-                unit="mm", rtol=2e-2, paper_text=f"orbit: {od['advance'] * 1e3:.4f} mm"),
+        cross_check("period: simulation (mean of settled cycles) vs periodic orbit", od["period"], d.period_s,
+                    unit="s", rtol=5e-3, reference=f"orbit: {od['period']:.4f} s"),
+        cross_check("advance per cycle: simulation vs periodic orbit", od["advance"] * 1e3, d.advance_per_cycle_mm,
+                    unit="mm", rtol=2e-2, reference=f"orbit: {od['advance'] * 1e3:.4f} mm"),
     ]
     gl, gm = st.get("growth_rate_linear"), st.get("growth_rate_measured")
     if gl is not None and gm is not None and math.isfinite(gl) and math.isfinite(gm):
-        rows.append(compare("onset growth rate: simulation vs linear theory", gl, gm, unit="1/s", rtol=5e-2,
-                            paper_text=f"linear theory: {gl:.4f} 1/s"))
+        rows.append(cross_check("onset growth rate: simulation vs linear theory", gl, gm, unit="1/s", rtol=5e-2,
+                                reference=f"linear theory: {gl:.4f} 1/s"))
     values = {"period_s": d.period_s, "advance_mm": d.advance_per_cycle_mm, "speed_mm_s": d.speed_mm_s,
               "orbit": od, "limit_cycle_time_s": st.get("limit_cycle_time")}
     return Outcome("ok", tuple(rows), (f"N = {prm['n_segments']} segments, tilt 0.01 degree, "
@@ -170,8 +170,8 @@ def build_fig4de(ctx: Context) -> Outcome:
     write_netcdf(ctx.path("fig4de.nc"), ds)
     v_on, v_lim = vel["onset"][0], vel["limit"][0]
     rows = (
-        compare("average velocity at the limit cycle (kymograph line) vs periodic-orbit speed", orb["speed"] * 1e3,
-                v_lim * 1e3, unit="mm/s", rtol=1e-2, paper_text=f"orbit: {orb['speed'] * 1e3:.4f} mm/s"),
+        cross_check("average velocity at the limit cycle (kymograph line) vs periodic-orbit speed", orb["speed"] * 1e3,
+                    v_lim * 1e3, unit="mm/s", rtol=1e-2, reference=f"orbit: {orb['speed'] * 1e3:.4f} mm/s"),
         verdict("velocity grows with the oscillation amplitude", "the average velocity increases after onset",
                 f"{v_on * 1e3:.4f} mm/s near onset, {v_lim * 1e3:.4f} mm/s at the limit cycle", v_on < 0.5 * v_lim),
     )
@@ -235,8 +235,8 @@ def build_fig4b(ctx: Context) -> Outcome:
     rows = [
         compare("onset kappa_E,cr / kappa_E,fit (Hopf point of the branch)", PAPER_ONSET_RATIO, br.hopf_value,
                 rtol=0.02, paper_text="~ 0.65"),
-        compare("onset: branch Hopf point vs linear threshold (continuum)", linear, br.hopf_value, rtol=1e-2,
-                paper_text=f"linear theory: {linear:.4f}"),
+        cross_check("onset: branch Hopf point vs linear threshold (continuum)", linear, br.hopf_value, rtol=1e-2,
+                    reference=f"linear theory: {linear:.4f}"),
         verdict("supercritical Hopf bifurcation", "supercritical (paper, section LIN)",
                 f"first Lyapunov coefficient {br.lyapunov_coefficient:.3g}", br.lyapunov_coefficient < 0),
         compare("kappa_E / kappa_E,fit of the largest advance per cycle", 1.0, best, rtol=0.15,

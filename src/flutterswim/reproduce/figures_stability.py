@@ -9,7 +9,7 @@ import numpy as np
 
 from ..params import PAPER, Parameters
 from .io import save_figure, write_netcdf
-from .targets import Context, Outcome, Settings, compare, verdict
+from .targets import Context, Outcome, Settings, compare, cross_check, verdict
 
 __all__ = ["readings", "mode_fields", "build_table1", "build_b_readings", "build_fig6a", "build_fig6b",
            "build_fig6cd", "PAPER_ONSET_RATIO"]
@@ -100,8 +100,8 @@ def build_b_readings(ctx: Context) -> Outcome:
                      "omega_max_real": le.omega.real, "omega_max_imag": le.omega.imag}
         rows.append(compare(f"onset kappa_E,cr / kappa_E,fit, b = {name} (b = {p.b * 1e3:.3f} mm)",
                             PAPER_ONSET_RATIO, chi_cr / g.chi, rtol=0.02, paper_text="~ 0.65"))
-        rows.append(compare(f"same, discrete model (N = {prm['n_segments']}) Hopf point, b = {name}",
-                            chi_cr / g.chi, hp.value, rtol=0.01, paper_text="linear threshold (continuum)"))
+        rows.append(cross_check(f"same, discrete model (N = {prm['n_segments']}) Hopf point, b = {name}",
+                                chi_cr / g.chi, hp.value, rtol=0.01, reference="linear threshold (continuum)"))
     semi, full = out["semi-axis"], out["full width"]
     rows.append(verdict("which reading gives the paper's ~0.65", "the paper's onset ~ 0.65",
                         f"semi-axis {semi['onset_ratio']:.3f}, full width {full['onset_ratio']:.3f}",
@@ -245,8 +245,8 @@ def build_fig6b(ctx: Context) -> Outcome:
     rows = (
         verdict("oscillatory solutions for every chi != 0", "Im omega_max != 0 for chi != 0",
                 f"min Im omega_max over chi in (0, 130] = {b1.omega.imag.min():.3g} /tau", bool(b1.omega.imag.min() > 0)),
-        compare("Re omega_max = 0 crossing in chi (interpolated) vs Hopf-Newton chi_cr", chi_cr, cross, rtol=2e-3,
-                paper_text=f"damped below a critical chi (chi_cr = {chi_cr:.4f}, linear theory)"),
+        cross_check("Re omega_max = 0 crossing in chi (interpolated) vs Hopf-Newton chi_cr", chi_cr, cross, rtol=2e-3,
+                    reference=f"damped below a critical chi (chi_cr = {chi_cr:.4f}, linear theory)"),
         compare("critical eta_perp at the paper's chi", None, eta_cr, paper_text="flutter needs eta_perp large enough"),
         compare("leading eigenvalue Re omega_max at the operating point", None, le.omega.real, unit="1/tau",
                 paper_text="> 0 (flutter)"),

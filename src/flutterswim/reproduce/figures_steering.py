@@ -13,7 +13,7 @@ from ..params import PAPER
 from .figures_model import _scrub
 from .figures_stability import _var
 from .io import save_figure, write_netcdf
-from .targets import Context, Outcome, Settings, compare, verdict
+from .targets import Context, Outcome, Settings, compare, cross_check, verdict
 
 __all__ = ["fit_circle", "cycle_average", "build_fig5", "build_video_s5"]
 
@@ -97,8 +97,8 @@ def build_fig5(ctx: Context) -> Outcome:
                "predicted_radius_m": predicted})
     write_netcdf(ctx.path("fig5.nc"), ds)
     rows = (
-        compare("radius of the mean circular path vs U / Omega", predicted * 1e3, circle[2] * 1e3, unit="mm",
-                rtol=3e-2, paper_text=f"circular (U/Omega = {predicted * 1e3:.3f} mm)"),
+        cross_check("radius of the mean circular path vs U / Omega", predicted * 1e3, circle[2] * 1e3, unit="mm",
+                    rtol=3e-2, reference=f"circular (U/Omega = {predicted * 1e3:.3f} mm)"),
         compare("roundness: spread of the distance to the centre / R", None, float(np.std(rfit) / circle[2]),
                 paper_text="circular", fmt="{:.2e}"),
         verdict("the swimmer's axis follows the field", "the axis continuously aligns to the field",

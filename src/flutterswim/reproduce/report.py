@@ -1,5 +1,7 @@
 """The self-contained HTML report: every figure embedded (base64 PNG), per target a table of
-the paper's statement, our number and the agreement, and the environment (Jinja2)."""
+the paper's statement, our number and the agreement, and the environment (Jinja2). Only rows
+compared with the paper (``Comparison.from_paper``) count as agreements with it; the others
+are shown as ours only, their checks against our own numbers counted apart."""
 
 from __future__ import annotations
 
@@ -58,11 +60,14 @@ def write_report(out: Path, records: dict, mode: str, *, name: str = "report.htm
             if p.is_file():
                 imgs.append({"name": f, "data": base64.b64encode(p.read_bytes()).decode("ascii")})
         comps = list(rec.outcome.comparisons)
+        paper = [c for c in comps if c.from_paper and c.ok is not None]
+        ours = [c for c in comps if not c.from_paper and c.ok is not None]
         rows.append({"name": t.name, "title": t.title, "caption": t.caption, "status": rec.status, "mode": rec.mode,
                      "reran": rec.reran, "wall_time": rec.wall_time, "error": rec.error, "images": imgs,
                      "videos": [v for v in t.videos if (out / v).is_file()], "rows": comps,
                      "notes": list(rec.outcome.notes), "files": sorted(rec.outputs.items()),
-                     "n_rows": sum(c.ok is not None for c in comps), "n_agree": sum(c.ok is True for c in comps)})
+                     "n_rows": len(paper), "n_agree": sum(c.ok for c in paper),
+                     "n_checks": len(ours), "n_checks_ok": sum(c.ok for c in ours)})
     env = jinja2.Environment(loader=jinja2.PackageLoader("flutterswim.reproduce", "templates"),
                              autoescape=jinja2.select_autoescape(["html", "j2"]), undefined=jinja2.StrictUndefined)
     html = env.get_template("report.html.j2").render(
@@ -71,6 +76,7 @@ def write_report(out: Path, records: dict, mode: str, *, name: str = "report.htm
         n_ok=sum(r["status"] == "ok" for r in rows), n_skipped=sum(r["status"] == "skipped" for r in rows),
         n_failed=sum(r["status"] == "failed" for r in rows), n_reran=sum(r["reran"] for r in rows),
         n_agree=sum(r["n_agree"] for r in rows), n_disagree=sum(r["n_rows"] - r["n_agree"] for r in rows),
+        n_checks=sum(r["n_checks"] for r in rows), n_checks_ok=sum(r["n_checks_ok"] for r in rows),
         environment=environment())
     path = out / name
     with atomic_path(path) as tmp:

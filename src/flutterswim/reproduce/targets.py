@@ -23,7 +23,7 @@ from .io import sha256_file, write_json
 from .manifest import Manifest, code_hashes, input_key
 
 __all__ = ["Settings", "Comparison", "Outcome", "Target", "Context", "TargetRecord", "build_targets",
-           "MODES"]
+           "MODES", "compare", "cross_check", "verdict"]
 
 MODES = ("quick", "full")
 
@@ -52,7 +52,11 @@ class Settings:
 @dataclass(frozen=True)
 class Comparison:
     """One row of a figure's table: what the paper says, its number (or None), ours, and the
-    agreement (relative difference, or a verdict) with ``ok`` True/False/None (not applicable)."""
+    agreement (relative difference, or a verdict) with ``ok`` True/False/None (not applicable).
+    ``from_paper``: compared with a number or statement printed in the paper; False for a number
+    of ours alone (no paper value, or a :func:`cross_check` against another number of ours, then
+    in ``paper_value``), which the report shows as ours only and does not count among the
+    agreements with the paper."""
 
     quantity: str
     paper: str
@@ -61,20 +65,33 @@ class Comparison:
     ok: bool | None = None
     paper_value: float | None = None
     our_value: float | None = None
+    from_paper: bool = True
 
 
 def compare(quantity: str, paper_value: float | None, our_value: float, *, unit: str = "",
             rtol: float | None = None, paper_text: str | None = None, fmt: str = "{:.4g}") -> Comparison:
-    """A numeric comparison row; relative difference and ok = |rel| <= rtol when both given."""
+    """A row comparing our number with the paper's (``paper_value``, printed in the paper; None:
+    the paper states none, the row is ours only); relative difference and ok = |rel| <= rtol
+    when both given."""
     u = f" {unit}" if unit else ""
     ours = fmt.format(our_value) + u
     if paper_value is None:
-        return Comparison(quantity, paper_text or "not stated", ours, "-", None, None, float(our_value))
+        return Comparison(quantity, paper_text or "not stated", ours, "-", None, None, float(our_value),
+                          from_paper=False)
     rel = (our_value - paper_value) / abs(paper_value) if paper_value != 0 else float("nan")
     ok = None if rtol is None else bool(abs(rel) <= rtol)
     agree = f"{rel * 100:+.1f} %" + ("" if rtol is None else f" ({'within' if ok else 'outside'} {rtol * 100:g} %)")
     return Comparison(quantity, paper_text or (fmt.format(paper_value) + u), ours, agree, ok,
                       float(paper_value), float(our_value))
+
+
+def cross_check(quantity: str, reference_value: float, our_value: float, *, reference: str, unit: str = "",
+                rtol: float | None = None, fmt: str = "{:.4g}") -> Comparison:
+    """A row comparing our number with another of ours (``reference_value``, e.g. a simulation
+    against the periodic orbit, the discrete model against the linear theory), said in
+    ``reference``: agreement as :func:`compare`'s, but ours only (not an agreement with the paper)."""
+    return replace(compare(quantity, reference_value, our_value, unit=unit, rtol=rtol, paper_text=reference,
+                           fmt=fmt), from_paper=False)
 
 
 def verdict(quantity: str, paper_text: str, ours: str, ok: bool) -> Comparison:
