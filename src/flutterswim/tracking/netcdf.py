@@ -1,7 +1,10 @@
 """A tracked movie as CF-style NetCDF (units on every variable) and back to a :class:`Track`.
 
 Dimensions: frame (every frame of the movie, failed ones included) and point (arc-length
-samples). Failed frames have NaN coordinates, ``tracked = 0`` and their ``failure_reason``.
+samples). Failed frames have NaN positions, ``tracked = 0`` and their ``failure_reason``.
+The dataset goes through :func:`flutterswim._cf.cf_dataset`, as every other NetCDF file
+flutterswim writes: the coordinates (time, frame, s) hold no missing values and carry no
+``_FillValue``.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ def to_xarray(tr: Track):
     import xarray as xr
 
     from .. import __version__
+    from .._cf import cf_dataset
 
     info = tr.meta.get("frames")
     if info is None:
@@ -52,14 +56,15 @@ def to_xarray(tr: Track):
                                {"units": "mm", "long_name": "mean point distance to the last good frame"}),
         },
         coords={
-            "time": ("frame", np.asarray(info["t"], float), {"units": "s", "long_name": "time of the frame (index / fps)"}),
+            "time": ("frame", np.asarray(info["t"], float), {"units": "s", "long_name": "time of the frame (index / fps)",
+                                                             "standard_name": "time"}),
             "frame": ("frame", np.arange(ok.size), {"units": "1", "long_name": "frame index"}),
             "s": ("point", np.asarray(tr.s, float), {"units": "mm", "long_name": "arc length from the s = 0 end"}),
         },
     )
     m = tr.meta
     ds.attrs.update({
-        "Conventions": "CF-1.8",
+        "Conventions": "CF-1.10",
         "title": TRACK_TITLE,
         "source": f"flutterswim {__version__} tracking of {m.get('source', '?')}",
         "input": str(m.get("source", "")),
@@ -80,7 +85,7 @@ def to_xarray(tr: Track):
     if "template_coef_se" in m:  # the periodic template's coefficient noise at (s = 0, s = l)
         ds.attrs.update({"template_coef_se": np.asarray(m["template_coef_se"], float),
                          "template_coef_se_units": "mm"})
-    return ds
+    return cf_dataset(ds)
 
 
 #: the NetCDF title of a track (a command writing tracks replaces only these)
