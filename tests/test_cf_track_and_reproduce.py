@@ -1,9 +1,9 @@
-"""CF conventions of the tracked-movie file (``flutterswim track --out track.nc``): opened
-with xarray, every data variable and coordinate has ``units`` and ``long_name``, no coordinate
-has a ``_FillValue`` (CF coordinates hold no missing data), the file has ``title`` and
-``Conventions``; a 0/1 variable says its flags. The track file still reads back into the same
-:class:`Track` (the same ``describe`` numbers) and keeps the title that lets ``track`` replace
-only tracks."""
+"""CF conventions of the tracked-movie file (``flutterswim track --out track.nc``) and of the
+reproduction's figure data: opened with xarray, every data variable and coordinate has
+``units`` and ``long_name``, no coordinate has a ``_FillValue`` (CF coordinates hold no missing
+data), the file has ``title`` and ``Conventions``; a 0/1 variable says its flags. The track file
+still reads back into the same :class:`Track` (the same ``describe`` numbers) and keeps the
+title that lets ``track`` replace only tracks."""
 
 from __future__ import annotations
 
@@ -12,6 +12,8 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+
+import flutterswim as fs
 
 xr = pytest.importorskip("xarray")
 
@@ -81,3 +83,44 @@ def test_track_file_is_cf_and_reads_back_to_the_same_description(tracked, tmp_pa
     assert main(["describe", str(p), "--json"]) == 0
     assert json.loads(capsys.readouterr().out) == json.loads(json.dumps(want))
     save_track(tracked, p)  # its own kind of file: replaced
+
+
+# --- the reproduction's figure data --------------------------------------------------------
+def test_reproduce_refuses_to_write_a_file_without_a_title(tmp_path):
+    from flutterswim.reproduce.io import write_netcdf
+
+    ds = xr.Dataset({"a": ("n", np.arange(3.0), {"units": "1", "long_name": "a"})},
+                    coords={"n": ("n", np.arange(3.0), {"units": "1", "long_name": "index"})})
+    with pytest.raises(ValueError, match="title"):
+        write_netcdf(tmp_path / "a.nc", ds)
+    assert not (tmp_path / "a.nc").exists()
+    ds.attrs["title"] = "flutterswim reproduce: a test"
+    assert_cf_file(write_netcdf(tmp_path / "a.nc", ds))
+
+
+def test_linear_theory_and_steering_targets_write_cf_files(tmp_path, monkeypatch):
+    """b_readings, Fig. 6a (map and neutral curve), 6b, 6c-d and 5 built directly (coarse grids):
+    each file titled, CF, units and a long name on everything. Fig. 4c-e (which read the
+    representative run) are checked on the reproduction built in test_reproduce_figures."""
+    pytest.importorskip("matplotlib")
+    from flutterswim.reproduce import figures_stability as st
+    from flutterswim.reproduce import figures_steering as sg
+    from flutterswim.reproduce.targets import Context, Settings
+
+    prm = fs.PAPER.to_dict()
+    monkeypatch.setattr(st, "b_params", lambda s: {"params": prm, "n_segments": 12, "step": 0.1})
+    monkeypatch.setattr(st, "fig6a_params", lambda s: {"step": 5.0, "neutral_step": 5.0, "params": prm})
+    monkeypatch.setattr(st, "fig6b_params", lambda s: {"step": 5.0, "params": prm})
+    monkeypatch.setattr(st, "fig6cd_params", lambda s: {"n_points": 101, "params": prm})
+    ctx = Context(tmp_path, Settings("quick"), {})
+    for build in (st.build_b_readings, st.build_fig6a, st.build_fig6b, st.build_fig6cd, sg.build_fig5):
+        build(ctx)
+    files = {"b_readings.nc": (), "fig6a_map.nc": (), "fig6a_neutral.nc": (), "fig6b.nc": (), "fig6cd.nc": (),
+             "fig5.nc": ("avg_in_fit",)}
+    titles = set()
+    for name, flags in files.items():
+        attrs = assert_cf_file(tmp_path / name, flags)
+        assert attrs["title"].startswith("flutterswim reproduce: "), name
+        assert attrs["source"].startswith("flutterswim ") and attrs["source"].endswith(" reproduce"), name
+        titles.add(attrs["title"])
+    assert len(titles) == len(files)  # each file says what it holds

@@ -89,6 +89,20 @@ def test_paper_orbit_is_cf_netcdf_and_what_the_later_targets_read(built):
     assert np.hypot(ds["multiplier_real"], ds["multiplier_imag"]).max() == pytest.approx(1.0, abs=1e-6)  # trivial one
 
 
+def test_every_data_file_is_titled_cf_netcdf(built):
+    """b_readings, Fig. 4c, 4d-e, 5 and 6a-d had no title: every NetCDF file of the run is CF
+    with a title, units and a long name on everything and no _FillValue on a coordinate (the
+    title is what tells a flutterswim file's kind)."""
+    names = [f for r in built.records.values() if r.status == "ok" for f in r.target.data if f.endswith(".nc")]
+    assert {"b_readings.nc", "fig4c.nc", "fig4de.nc", "fig5.nc", "fig6a_map.nc", "fig6a_neutral.nc", "fig6b.nc",
+            "fig6cd.nc"} <= set(names)
+    for name in names:
+        with _open(built, name) as ds:
+            _assert_cf(ds, name)
+            for c in ds.coords:
+                assert ds[c].encoding.get("_FillValue") is None, (name, c)
+
+
 def test_b_readings_match_the_formula_and_the_curves(built):
     from flutterswim.params import PAPER
 

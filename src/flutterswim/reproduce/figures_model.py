@@ -112,7 +112,9 @@ def build_fig4c(ctx: Context) -> Outcome:
     amp = {k: float(np.ptp(tr.y[(tr.t >= a) & (tr.t <= b), it])) for k, (a, b) in wins.items()}
     ds = xr.Dataset(data, coords={"t": ("t", tr.t, {"units": "s", "long_name": "time"}),
                                   "s": ("s", tr.s, {"units": "m", "long_name": "arc length"})},
-                    attrs={"onset_window_s": list(wins["onset"]), "limit_window_s": list(wins["limit"]),
+                    attrs={"title": "flutterswim reproduce: Fig. 4c, from onset to the limit cycle (trailing tip, "
+                                    "shapes drawn)",
+                           "onset_window_s": list(wins["onset"]), "limit_window_s": list(wins["limit"]),
                            "onset_time_s": float(cyc.onset_time)})
     write_netcdf(ctx.path("fig4c.nc"), ds)
     rows = (verdict("small oscillations near onset grow to the limit cycle", "growing oscillations, then steady",
@@ -166,7 +168,8 @@ def build_fig4de(ctx: Context) -> Outcome:
         attrs[f"{k}_window_s"] = [a, b]
         attrs[f"{k}_average_velocity_m_s"] = v
         attrs[f"{k}_path_angle_rad"] = ang
-    ds = xr.Dataset(data, attrs={**attrs, "orbit_speed_m_s": orb["speed"]})
+    ds = xr.Dataset(data, attrs={"title": "flutterswim reproduce: Fig. 4d-e, kymographs along the mean path near onset "
+                                          "and at the limit cycle", **attrs, "orbit_speed_m_s": orb["speed"]})
     write_netcdf(ctx.path("fig4de.nc"), ds)
     v_on, v_lim = vel["onset"][0], vel["limit"][0]
     rows = (

@@ -114,7 +114,8 @@ def build_b_readings(ctx: Context) -> Outcome:
                                  f"angular frequency Im omega_max, b read as the {n}")
            for k, n in (("semi", "semi-axis"), ("full", "full width"))},
         coords={"kappa_E_ratio": ("kappa_E_ratio", ratios, {"units": "1", "long_name": "kappa_E / kappa_E,fit"})},
-        attrs={f"onset_ratio_{k}": out[n]["onset_ratio"] for k, n in (("semi", "semi-axis"), ("full", "full width"))},
+        attrs={"title": "flutterswim reproduce: the two readings of b in ln(2l/b), growth rate of the straight state",
+               **{f"onset_ratio_{k}": out[n]["onset_ratio"] for k, n in (("semi", "semi-axis"), ("full", "full width"))}},
     )
     write_netcdf(ctx.path("b_readings.nc"), ds)
     fig = plot_b_readings(ratios, growth, out, PAPER_ONSET_RATIO)
@@ -143,13 +144,17 @@ def build_fig6a(ctx: Context) -> Outcome:
     nc = neutral_curve(step=prm["neutral_step"])
     ds = smap.to_dataset()
     ds.attrs.pop("check_max_rel_diff", None)
+    ds.attrs.pop("source", None)  # write_netcdf's: flutterswim <version> reproduce
+    ds.attrs["title"] = "flutterswim reproduce: Fig. 6a, stability map (leading eigenvalue of the straight state)"
     ds.attrs["operating_eta_perp"], ds.attrs["operating_chi"] = g.eta_perp, g.chi
     enc = {k: {"zlib": True, "complevel": 4, "shuffle": True, "dtype": "float32" if not ctx.settings.quick else "float64"}
            for k in ("re_omega", "im_omega")}
-    _write_encoded(ctx.path("fig6a_map.nc"), ds, enc)
+    write_netcdf(ctx.path("fig6a_map.nc"), ds, encoding=enc)
     nds = xr.Dataset({"chi_cr": _var(("eta_perp",), nc.chi_cr, "1", "critical chi (Hopf), chi > 0 branch"),
                       "beta": _var(("eta_perp",), nc.beta, "1/tau", "angular frequency at onset")},
-                     coords={"eta_perp": ("eta_perp", nc.eta_perp, {"units": "1", "long_name": "normal drag group eta_perp"})})
+                     coords={"eta_perp": ("eta_perp", nc.eta_perp, {"units": "1", "long_name": "normal drag group eta_perp"})},
+                     attrs={"title": "flutterswim reproduce: Fig. 6a, neutral curve (critical chi of the Hopf onset "
+                                     "against eta_perp)"})
     write_netcdf(ctx.path("fig6a_neutral.nc"), nds)
     fig = plot_map(smap, neutral=nc, operating_point=(g.eta_perp, g.chi))
     fig.axes[0].set_title("Fig. 6a: stability map (leading eigenvalue of the straight state)", fontsize=9)
@@ -188,16 +193,6 @@ def build_fig6a(ctx: Context) -> Outcome:
     return Outcome("ok", rows, (f"Grid step {prm['step']} in eta_perp and chi (the paper: 0.1).",), values)
 
 
-def _write_encoded(path, ds, encoding):
-    from .. import __version__
-    from .._paths import atomic_path
-
-    ds = ds.copy()
-    ds.attrs["source"] = f"flutterswim {__version__} reproduce"
-    with atomic_path(path) as tmp:
-        ds.to_netcdf(tmp, engine="h5netcdf", encoding=encoding)
-
-
 def _close(fig):
     import matplotlib.pyplot as plt
 
@@ -226,7 +221,8 @@ def build_fig6b(ctx: Context) -> Outcome:
         "im_omega_vs_eta_perp": _var(("eta_perp",), b2.omega.imag, "1/tau", f"Im omega_max at chi = {g.chi:.6g}"),
     }, coords={"chi": ("chi", b1.values, {"units": "1", "long_name": "activity group chi = kappa_E l"}),
                "eta_perp": ("eta_perp", b2.values, {"units": "1", "long_name": "normal drag group eta_perp"})},
-        attrs={"fixed_eta_perp": g.eta_perp, "fixed_chi": g.chi})
+        attrs={"title": "flutterswim reproduce: Fig. 6b, leading eigenvalue against chi and against eta_perp",
+               "fixed_eta_perp": g.eta_perp, "fixed_chi": g.chi})
     write_netcdf(ctx.path("fig6b.nc"), ds)
     fig = plot_bifurcation([b1, b2])
     for ax, x0 in zip(fig.axes, (g.chi, g.eta_perp)):
@@ -298,7 +294,8 @@ def build_fig6cd(ctx: Context) -> Outcome:
     g = PAPER.groups
     modes = eigenmodes(g.chi, g.eta_perp, n_points=n)
     s = modes[0].s
-    data, attrs = {}, {"chi": g.chi, "eta_perp": g.eta_perp}
+    data, attrs = {}, {"title": "flutterswim reproduce: Fig. 6c-d, first and second eigenmodes at the operating point",
+                       "chi": g.chi, "eta_perp": g.eta_perp}
     names = {"r": ("1", "lateral displacement r_2(s) / max|r_2|"), "r_s": ("1", "d r/ds"), "r_ss": ("1", "d2 r/ds2 (curvature theta_s)"),
              "r_sss": ("1", "d3 r/ds3"), "r_ssss": ("1", "d4 r/ds4"), "kappa": ("1", "spontaneous curvature kappa(s) l"),
              "kappa_s": ("1", "d kappa/ds")}

@@ -89,10 +89,13 @@ def build_fig5(ctx: Context) -> Outcome:
         "field_angle": _var(("t",), run.field_angle, "rad", "field direction phi_E"),
         "avg_x": _var(("t_avg",), xa, "m", "centroid averaged over one period, x"),
         "avg_y": _var(("t_avg",), ya, "m", "centroid averaged over one period, y"),
-        "avg_in_fit": _var(("t_avg",), sel.astype("i1"), "1", "point used in the circle fit (0/1)"),
+        "avg_in_fit": (("t_avg",), sel.astype("i1"), {"units": "1", "long_name": "point used in the circle fit (0/1)",
+                                                      "flag_values": np.array([0, 1], "i1"),
+                                                      "flag_meanings": "not_fitted fitted"}),
     }, coords={"t": ("t", run.t, {"units": "s", "long_name": "time"}),
                "t_avg": ("t_avg", ta, {"units": "s", "long_name": "centre of the averaging window"})},
-        attrs={"rate_rad_s": rate, "start_s": start, "orbit_speed_m_s": orb.speed, "orbit_period_s": orb.period,
+        attrs={"title": "flutterswim reproduce: Fig. 5, steering by a rotating field",
+               "rate_rad_s": rate, "start_s": start, "orbit_speed_m_s": orb.speed, "orbit_period_s": orb.period,
                "circle_xc_m": circle[0], "circle_yc_m": circle[1], "circle_radius_m": circle[2],
                "predicted_radius_m": predicted})
     write_netcdf(ctx.path("fig5.nc"), ds)

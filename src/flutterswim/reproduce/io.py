@@ -64,9 +64,10 @@ def read_json(path: str | os.PathLike) -> Any:
     return json.loads(Path(path).read_text())
 
 
-def write_netcdf(path: str | os.PathLike, ds) -> Path:
+def write_netcdf(path: str | os.PathLike, ds, *, encoding: dict | None = None) -> Path:
     """CF-style NetCDF through h5netcdf (HDF5 object times are not tracked, so the bytes depend
-    only on the data), atomic. Every variable must carry ``units`` and ``long_name``."""
+    only on the data), atomic. Every variable must carry ``units`` and ``long_name``, the
+    dataset a ``title``. ``encoding``: as :meth:`xarray.Dataset.to_netcdf`'s (compression)."""
     from .. import __version__
     from .._cf import cf_dataset
     from .._paths import atomic_path
@@ -75,11 +76,13 @@ def write_netcdf(path: str | os.PathLike, ds) -> Path:
         missing = [a for a in ("units", "long_name") if a not in var.attrs]
         if missing:
             raise ValueError(f"variable {name!r} lacks the attributes {missing}")
+    if not ds.attrs.get("title"):
+        raise ValueError("the dataset has no title (global attribute)")
     ds = cf_dataset(ds.copy())
     ds.attrs = {"Conventions": "CF-1.10", "source": f"flutterswim {__version__} reproduce", **ds.attrs}
     p = Path(path)
     with atomic_path(p) as tmp:
-        ds.to_netcdf(tmp, engine="h5netcdf")
+        ds.to_netcdf(tmp, engine="h5netcdf", encoding=encoding)
     return p
 
 
