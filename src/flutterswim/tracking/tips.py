@@ -50,7 +50,10 @@ def _fit_end(img: np.ndarray, spl, s_end: float, q0: float, outward: int, sigma0
              inner: float, outer: float, pivot: float, saturation: float | None = None,
              plane: np.ndarray | None = None) -> tuple[float, float, float]:
     """Fitted end parameter q_end (same parametrisation as ``spl``), sigma and the bend c
-    about the hinge at q0 - outward * pivot; NaN if the fit fails. ``outward`` = +1 for the s_end end, -1 for the s = 0 end."""
+    about the hinge at q0 - outward * pivot; NaN if the fit fails. ``outward`` = +1 for the s_end end, -1 for the s = 0 end.
+    Pixels at ``saturation`` (clipped) count as light of at least that: the model is clipped
+    there too (leaving them out, a line clipped tenfold had its ends 5-12 px off in 4 of 20
+    frames, its few unclipped pixels fitted by a line of any height)."""
     H, W = img.shape
     # dense polyline of the curve near the end (the inner part and the tangent extension)
     lo, hi = (q0 - inner - 4, q0 + outer + 4) if outward > 0 else (q0 - outer - 4, q0 + inner + 4)
@@ -74,24 +77,28 @@ def _fit_end(img: np.ndarray, spl, s_end: float, q0: float, outward: int, sigma0
     u = outward * (q - q0)
     sel = (np.abs(d) <= 3.0 * sigma0) & (u >= -inner) & (u <= outer) & (j > 0) & (j < qq.size - 1)
     v = img[r0:r1, c0:c1].ravel()
-    if saturation is not None:  # clipped pixels: the light was at least that, not that
-        sel &= v < saturation
     if np.count_nonzero(sel) < 30:
         return math.nan, math.nan, 0.0
     v = v[sel].astype(float)
+    ceiling = None if saturation is None else np.full(v.shape, float(saturation))
     if plane is not None:  # the frame's background plane (refine_tips)
         v -= plane[r0:r1, c0:c1].ravel()[sel]
+        if ceiling is not None:
+            ceiling -= plane[r0:r1, c0:c1].ravel()[sel]
     q, d, u = q[sel], d[sel], u[sel]
     hinge = np.maximum(u + pivot, 0.0)
 
-    return _levenberg_marquardt(q, d, hinge, v, q0, sigma0, outward)
+    return _levenberg_marquardt(q, d, hinge, v, q0, sigma0, outward, ceiling=ceiling)
 
 
 def _levenberg_marquardt(q: np.ndarray, d: np.ndarray, h: np.ndarray, v: np.ndarray, q0: float,
-                         sigma0: float, o: int, iters: int = 30) -> tuple[float, float, float]:
+                         sigma0: float, o: int, iters: int = 30, ceiling: np.ndarray | None = None
+                         ) -> tuple[float, float, float]:
     """Least squares of v ~ b + A exp(-(d - c h)^2 / 2 sg^2) Phi(o (qe - q) / sg) over
     (qe, sg, c, A, b) by Levenberg-Marquardt with the analytic Jacobian; returns (qe, sg, c)
-    or NaNs if the fit ends on the edge of the trust box (|qe - q0| < 6, sigma0/2 < sg < 2 sigma0)."""
+    or NaNs if the fit ends on the edge of the trust box (|qe - q0| < 6, sigma0/2 < sg < 2 sigma0).
+    ``ceiling``: each pixel's clipping level; the model is clipped there (a clipped pixel only
+    says the light reached it: its residual and slope vanish while the model is above it)."""
     from scipy.special import ndtr
 
     def parts(p):
@@ -101,14 +108,16 @@ def _levenberg_marquardt(q: np.ndarray, d: np.ndarray, h: np.ndarray, v: np.ndar
         z = o * (qe - q) / sg
         Ph = ndtr(z)
         ph = np.exp(-0.5 * z * z) / math.sqrt(2 * math.pi)
-        r = b + A * E * Ph - v
-        return e, E, z, Ph, ph, r
+        m = b + A * E * Ph
+        free = None if ceiling is None else m < ceiling
+        r = (m if free is None else np.where(free, m, ceiling)) - v
+        return e, E, z, Ph, ph, free, r
 
     # start: A, b linear at (q0, sigma0, 0)
     g = np.exp(-0.5 * (d / sigma0) ** 2) * ndtr(o * (q0 - q) / sigma0)
     (A0, b0), *_ = np.linalg.lstsq(np.stack([g, np.ones_like(g)], -1), v, rcond=None)
     p = np.array([q0, sigma0, 0.0, A0, b0])
-    e, E, z, Ph, ph, r = parts(p)
+    e, E, z, Ph, ph, free, r = parts(p)
     cost = float(r @ r)
     lam = 1e-3
     for _ in range(iters):
@@ -117,6 +126,8 @@ def _levenberg_marquardt(q: np.ndarray, d: np.ndarray, h: np.ndarray, v: np.ndar
                       A * E * (Ph * e * e / sg**3 - ph * z / sg),
                       A * E * Ph * e * h / sg**2,
                       E * Ph, np.ones_like(v)], -1)
+        if free is not None:
+            J = J * free[:, None]
         JtJ, Jtr = J.T @ J, J.T @ r
         improved = False
         for _ in range(8):
@@ -133,7 +144,7 @@ def _levenberg_marquardt(q: np.ndarray, d: np.ndarray, h: np.ndarray, v: np.ndar
             parts_n = parts(pn)
             cn = float(parts_n[-1] @ parts_n[-1])
             if cn < cost:
-                p, (e, E, z, Ph, ph, r) = pn, parts_n
+                p, (e, E, z, Ph, ph, free, r) = pn, parts_n
                 done = abs(cost - cn) <= 1e-10 * cost or np.max(np.abs(step[:3])) < 1e-5
                 cost, lam, improved = cn, max(lam / 10, 1e-9), True
                 break
@@ -153,14 +164,64 @@ def _fit_end_twice(img: np.ndarray, spl, s_end: float, q0: float, outward: int, 
     moved the end by more than 2 px (a skeleton tip may be several px short). Returns
     (q_end, c, hinge parameter)."""
     qe, _, c = _fit_end(img, spl, s_end, q0, outward, sigma0, inner, outer, pivot, saturation, plane)
-    if saturation is not None and not np.isfinite(qe):
-        # clipped so heavily that the unclipped pixels do not hold the end: fit them all
-        return _fit_end_twice(img, spl, s_end, q0, outward, sigma0, inner, outer, pivot, None, plane)
     if np.isfinite(qe) and abs(qe - q0) > 2.0:
         q2, _, c2 = _fit_end(img, spl, s_end, qe, outward, sigma0, inner, outer, pivot, saturation, plane)
         if np.isfinite(q2):
             return q2, c2, qe - outward * pivot
     return qe, c, q0 - outward * pivot
+
+
+def _angle_end(u: np.ndarray, z: np.ndarray, fit: np.ndarray, degree: int, span: float, start: tuple,
+               iters: int = 12) -> np.ndarray | None:
+    """The curve whose tangent angle is a polynomial of ``degree`` in arc length, fitted by
+    least squares to the points z (complex x + i y) at the nodes u (ascending, equally spaced)
+    where ``fit``; returns it at every node (None if the fit fails). ``start``: the x and y
+    polynomials (numpy.polyfit coefficients in u) over the same points, for the first guess.
+
+    Positions are the integral of exp(i theta) by Simpson's rule on the nodes and their
+    midpoints (exact to ~1e-8 px here), the Jacobian the integral of i u^k exp(i theta), by
+    Gauss-Newton from the tangent angles of the x, y polynomials."""
+    cx, cy = start
+    u0 = float(u[fit][0])
+    w = np.empty(2 * u.size - 1)
+    w[0::2] = u
+    w[1::2] = 0.5 * (u[1:] + u[:-1])
+    w = (w - u0) / span
+    h = float(u[1] - u[0])
+    V = np.vander(w, degree + 1, increasing=True).T  # (degree + 1, 2 n - 1)
+    uf = u[fit]
+    th = np.unwrap(np.arctan2(np.polyval(np.polyder(cy), uf), np.polyval(np.polyder(cx), uf)))
+    a = np.polyfit((uf - u0) / span, th, degree)[::-1]
+    r0 = int(np.argmax(fit))  # the fitted node nearest the tip: the curve's anchor z0
+    z0 = complex(np.polyval(cx, u0), np.polyval(cy, u0))
+    zf = z[fit]
+
+    def integrals(a: np.ndarray) -> np.ndarray:
+        """(degree + 2, n): the positions' integral and its derivatives in a, from the anchor."""
+        E = np.exp(1j * (a @ V))
+        f = np.vstack([E, 1j * V * E])
+        c = np.zeros((f.shape[0], u.size), complex)
+        c[:, 1:] = np.cumsum(h / 6.0 * (f[:, 0:-1:2] + 4.0 * f[:, 1::2] + f[:, 2::2]), axis=1)
+        return c - c[:, r0:r0 + 1]
+
+    for _ in range(iters):
+        c = integrals(a)
+        r = z0 + c[0, fit] - zf
+        J = np.column_stack([np.ones(uf.size), 1j * np.ones(uf.size), c[1:, fit].T])
+        JtJ = (J.conj().T @ J).real
+        try:
+            step = -np.linalg.solve(JtJ, (J.conj().T @ r).real)
+        except np.linalg.LinAlgError:
+            return None
+        if not np.all(np.isfinite(step)):
+            return None
+        z0 += complex(step[0], step[1])
+        a = a + step[2:]
+        if np.max(np.abs(step)) < 1e-7:
+            break
+    else:
+        return None
+    return z0 + integrals(a)[0]
 
 
 def resample(x: np.ndarray, y: np.ndarray, q_a: float, q_b: float, n_points: int,
@@ -183,26 +244,29 @@ def resample(x: np.ndarray, y: np.ndarray, q_a: float, q_b: float, n_points: int
     return np.interp(su, sa, P[:, 0]), np.interp(su, sa, P[:, 1])
 
 
-# the end polynomial's span against the frame's ridge contrast (matched-filter ridge over the
-# filtered noise's SD; about 2.4 x the renderer's peak SNR at 3, 2.2 x at 5): its bias and its
-# noise trade. Fitted over 40 px the quartic misses a well-resolved end's curvature (noise-free,
-# the stroke at 48 segments: leading end -0.29 % on the paper's, -0.49 % at 2 x threshold,
-# -0.64 % at 20 um/px); over 20 px by -0.28..+0.05 %, but its scatter, and a noise-induced
-# outward shift, grow: at SNR 3 (contrast ~7) the leading end's RMS over 6 strokes was 0.31-1.12 %
-# at 40 px and 0.42-2.84 % at 20 px, at SNR 5 (contrast ~11) 0.42-0.70 % at 40 px (12 of 20 movies
-# outside 0.5 %) and 0.22-0.83 % at 20 px (3 of 19): 40 px up to contrast 8, 20 px from 10.5,
-# linear between (benchmarks/RESULTS.md, stop 31). The contrast is taken at the PSF of 1.2 px
-# these were measured with: the ridge's noise across the line grows as sigma / contrast (the
-# contrast of a line of peak SNR p is about p sqrt(sigma)), so a blurred frame counts as
-# contrast x 1.2 / sigma (defocus to 1.92 px at SNR 5: contrast 9.4, as noisy as 5.9 in focus;
-# over 20-25 px its tips were 0.33-0.38 px RMS and two frames flagged, over 40 px 0.23-0.26 px)
-_SPAN_NOISY, _SPAN_CLEAN = 40.0, 20.0
-_CONTRAST_NOISY, _CONTRAST_CLEAN = 8.0, 10.5
+# the end curve's span against the frame's ridge contrast (matched-filter ridge over the
+# filtered noise's SD; about 2.4 x the renderer's peak SNR at 3, 2.2 x at 5, 1.9 x at 10): its
+# bias and its noise trade. The end is a curve whose tangent angle is a cubic in arc length
+# (:func:`_angle_end`), which follows an end bent by tens of degrees over the span; the x, y
+# quartic it replaced (stop 37) did not, and needed 20 px on clean frames (noise-free, the stroke
+# at 48 segments: leading end -0.29 % over 40 px), where its scatter grew (SNR 5: 3 of 8 movies
+# of the paper's 24-segment stroke outside 0.5 %). Over 50 px the cubic-angle curve leaves
+# -0.18..-0.25 % on well-resolved strokes without noise (the free end's shape changes within
+# ~l / 5), over 30 px within 0.06 %. On 101-frame movies of 4 strokes at 14 um/px, 8 seeds,
+# leading end outside 0.5 %: SNR 3 12 of 32 (the quartic over 40 px: 12), SNR 5 4 of 32 (the
+# quartic's contrast rule: 10), SNR 10 none (benchmarks/RESULTS.md, stop 37). Hence 50 px up
+# to contrast 12.5 (SNR 5 and below), 30 px from 18 (SNR 10 and above), linear between. The
+# contrast is taken at the PSF of 1.2 px these were measured with: the ridge's noise across the
+# line grows as sigma / contrast (the contrast of a line of peak SNR p is about p sqrt(sigma)),
+# so a blurred frame counts as contrast x 1.2 / sigma (defocus to 1.92 px at SNR 5: contrast
+# 9.4, as noisy as 5.9 in focus)
+_SPAN_NOISY, _SPAN_CLEAN = 50.0, 30.0
+_CONTRAST_NOISY, _CONTRAST_CLEAN = 12.5, 18.0
 _SIGMA_REF = 1.2
 
 
 def end_span(contrast: float, sigma: float = _SIGMA_REF) -> float:
-    """The span [px] of the end polynomial for a frame of this ridge contrast and PSF sigma
+    """The span [px] of the end curve for a frame of this ridge contrast and PSF sigma
     [px] (NaN contrast: the noisy span)."""
     c = contrast * _SIGMA_REF / sigma
     if not math.isfinite(c) or c <= _CONTRAST_NOISY:
@@ -213,7 +277,7 @@ def end_span(contrast: float, sigma: float = _SIGMA_REF) -> float:
 
 def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float = 1.2,
                 inner: float = 14.0, outer: float = 6.0, pivot: float | None = None, trim: float = 5.0,
-                span: float = 40.0, hook: float = 6.0, hook_deg: float = 25.0, degree: int = 4,
+                span: float = 50.0, hook: float = 6.0, hook_deg: float = 25.0, degree: int = 3,
                 saturation: float | None = None, plane: np.ndarray | None = None
                 ) -> tuple[np.ndarray, np.ndarray, float, float]:
     """Move both ends of the centreline (x, y) (P,) [px] to the line ends fitted on the raw
@@ -222,25 +286,26 @@ def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float =
     a pivot 7 px from the end (sigma 1.2 px) had less tip error across the body than one at
     14 px on rendered strokes, 0.46-0.54 px RMS at SNR 3 against 0.57-0.63, and less bias
     without noise). The last ``trim`` px at each end (twice that for an end hooked by more
-    than ``hook_deg`` over its last ``hook`` px) are first rebuilt by the polynomial of
-    ``degree`` in arc length fitted over the next ``span`` px (at most the body's length / 5): a skeleton spline is least
-    certain, and often hooked, at a noisy tip. At least cubic: a free end carries no bending
-    moment, B (theta_s - kappa) = 0, so its curvature is the spontaneous curvature there, not
-    zero (on the paper's stroke kappa l is about 9 RMS at one end, 5 at the other, 7.5 in the
-    middle), and it changes along the end; a quadratic overshoots the lateral excursions by
-    ~0.5 %; quartic over 40 px had the least bias on rendered strokes of 24 segments at SNR 3 (a
-    well-resolved end, or a clean frame, wants 20 px: :func:`end_span`, which
-    :func:`~flutterswim.tracking.track.track_frame` passes by the frame's contrast). Returns (x, y) resampled at P equal steps
+    than ``hook_deg`` over its last ``hook`` px) are first rebuilt by the curve whose tangent
+    angle is a polynomial of ``degree`` in arc length, fitted over the next ``span`` px (at most
+    the body's length / 5; :func:`_angle_end`): a skeleton spline is least certain, and often
+    hooked, at a noisy tip. A free end carries no bending moment, B (theta_s - kappa) = 0, so
+    its curvature is the spontaneous curvature there, not zero (on the paper's stroke kappa l is
+    about 9 RMS at one end, 5 at the other, 7.5 in the middle), and it changes along the end:
+    the angle needs a cubic (a quadratic, curvature linear along the end, left -0.62 % over
+    40 px without noise), and a polynomial in x and y does not follow an end turning by tens
+    of degrees. A clean frame wants a shorter span than a noisy one: :func:`end_span`, which
+    :func:`~flutterswim.tracking.track.track_frame` passes by the frame's contrast. Returns (x, y) resampled at P equal steps
     between the refined ends, and the two end corrections along the curve [px] (NaN where a
     fit failed; that end is then kept). ``saturation``: the value at which the frame is clipped;
-    pixels at it are left out of the end fits. ``plane``: the frame's background plane
+    the end fits count pixels at it as light of at least that. ``plane``: the frame's background plane
     (:func:`~flutterswim.tracking.segment.background_plane`), when already known."""
     n = x.size
     x = np.asarray(x, float)
     y = np.asarray(y, float)
     L0 = float(np.sum(np.hypot(np.diff(x), np.diff(y))))
     # on a body shorter in pixels (coarser pixels) the span is at most L0 / 5, which leaves the
-    # paper's 264 px body at 14 um/px its 40 px: the polynomial must follow the end, not a third
+    # paper's 264 px body at 14 um/px its 50 px: the curve must follow the end, not a third
     # of the body (benchmarks/RESULTS.md: 20-40 um/px)
     span = min(float(span), L0 / 5.0)
     if L0 < 2 * (2 * trim + span) + 4:
@@ -253,7 +318,8 @@ def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float =
         return abs(math.atan2(u[0] * v[1] - u[1] * v[0], u @ v))
 
     # the last few px of a skeleton spline are its least certain part: rebuild each end by
-    # a polynomial in arc length fitted over [trim, trim + span] from the end, extrapolated
+    # the cubic-angle curve fitted over [trim, trim + span] from the end, extrapolated (started
+    # from the x, y quartic over the same points)
     ta = 2 * trim if turn(P[0], P[1], P[2]) > math.radians(hook_deg) else trim
     tb = 2 * trim if turn(P[3], P[4], P[5]) > math.radians(hook_deg) else trim
     q = np.arange(0.0, L0 + 1e-9, 1.0)
@@ -261,10 +327,17 @@ def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float =
     for t_, end in ((ta, 0), (tb, 1)):
         u = q if end == 0 else L0 - q
         fit = (u >= t_) & (u <= t_ + span)
-        cx = np.polyfit(u[fit], D[fit, 0], degree)
-        cy = np.polyfit(u[fit], D[fit, 1], degree)
+        cx = np.polyfit(u[fit], D[fit, 0], 4)
+        cy = np.polyfit(u[fit], D[fit, 1], 4)
         rep = u < t_
-        D[rep, 0], D[rep, 1] = np.polyval(cx, u[rep]), np.polyval(cy, u[rep])
+        near = np.nonzero(rep | fit)[0]
+        order = near[np.argsort(u[near])]
+        zc = _angle_end(u[order], D[order, 0] + 1j * D[order, 1], fit[order], degree, span, (cx, cy))
+        if zc is not None:
+            k = rep[order]
+            D[order[k], 0], D[order[k], 1] = zc[k].real, zc[k].imag
+        else:  # no convergence (a frame near the noise floor): the x, y quartic
+            D[rep, 0], D[rep, 1] = np.polyval(cx, u[rep]), np.polyval(cy, u[rep])
     x2, y2 = D[:, 0], D[:, 1]
     s, spl = _curve(x2, y2)
     L = float(s[-1])

@@ -702,7 +702,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     }
     if n_clipped:
         warnings.warn(f"input={frames.source!r}: {n_clipped} of {T} frames have pixels clipped at their largest "
-                      "value (saturated); the line ends are fitted without them, but a clipped line's blur is "
+                      "value (saturated); the line ends are fitted with them as at least that value, but a clipped line's blur is "
                       "measured too wide: lower the exposure, or give the blur (sigma, --sigma)", stacklevel=2)
     unchanged = still.fraction()
     if unchanged > _MAX_UNCHANGED:
