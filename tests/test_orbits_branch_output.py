@@ -55,6 +55,11 @@ def test_leading_end_is_the_end_ahead_along_the_swim_direction(mirrored):
         le = ds.leading_end
         assert list(le.attrs["flag_values"]) == [0, 1] and len(le.attrs["flag_meanings"].split()) == 2
         assert le.attrs["units"] == "1"
+        # every 0/1 variable (int8) says what its values mean (CF flags)
+        for name, v in ds.data_vars.items():
+            if v.dtype == np.int8:
+                assert list(v.attrs.get("flag_values", [])) == [0, 1], name
+                assert len(v.attrs["flag_meanings"].split()) == 2, name
         ahead = [_end_ahead(o, d) for o, d in zip(br.orbits, ds.swim_direction.values)]
         assert list(le.values) == ahead
         seen |= set(ahead)

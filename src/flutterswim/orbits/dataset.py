@@ -62,6 +62,7 @@ def orbits_dataset(orbs, *, si: bool, orbit_long_name: str = "orbit number"):
     )
     ds["multiplier_real"] = (("orbit", "multiplier"), mults.real, {"units": "1", "long_name": "Floquet multipliers (largest moduli), real part"})
     ds["multiplier_imag"] = (("orbit", "multiplier"), mults.imag, {"units": "1", "long_name": "Floquet multipliers (largest moduli), imaginary part"})
-    ds["leading_end"].attrs.update({"flag_values": np.array([0, 1], dtype="i1"),
-                                    "flag_meanings": "s_equals_0 s_equals_l"})
+    flags = {"leading_end": "s_equals_0 s_equals_l", "self_intersecting": "no yes", "stable": "unstable stable"}
+    for k, meanings in flags.items():
+        ds[k].attrs.update({"flag_values": np.array([0, 1], dtype="i1"), "flag_meanings": meanings})
     return ds.assign_coords(multiplier=("multiplier", np.arange(N_MULTIPLIERS), {"units": "1", "long_name": "rank by modulus"}))
