@@ -263,6 +263,12 @@ def resample(x: np.ndarray, y: np.ndarray, q_a: float, q_b: float, n_points: int
 _SPAN_NOISY, _SPAN_CLEAN = 50.0, 30.0
 _CONTRAST_NOISY, _CONTRAST_CLEAN = 12.5, 18.0
 _SIGMA_REF = 1.2
+# below this span [px] (a body shorter than ~120 px: coarser than ~30 um/px at the paper's
+# length) the ends are rebuilt by the x, y quartic: over 21 px (35 um/px) the cubic-angle curve
+# kept frames whose ends the quartic's fit could not find, with the lateral excursions 3-9 %
+# short, and at 50-60 um/px returned tracks with ends 2-4 px off where the quartic's frames fail
+# and the movie is refused (a review's movies); from 25 px (30 um/px) it was as good or better
+_ANGLE_MIN_SPAN = 24.0
 
 
 def end_span(contrast: float, sigma: float = _SIGMA_REF) -> float:
@@ -332,11 +338,12 @@ def refine_tips(img: np.ndarray, x: np.ndarray, y: np.ndarray, *, sigma: float =
         rep = u < t_
         near = np.nonzero(rep | fit)[0]
         order = near[np.argsort(u[near])]
-        zc = _angle_end(u[order], D[order, 0] + 1j * D[order, 1], fit[order], degree, span, (cx, cy))
+        zc = (_angle_end(u[order], D[order, 0] + 1j * D[order, 1], fit[order], degree, span, (cx, cy))
+              if span >= _ANGLE_MIN_SPAN else None)
         if zc is not None:
             k = rep[order]
             D[order[k], 0], D[order[k], 1] = zc[k].real, zc[k].imag
-        else:  # no convergence (a frame near the noise floor): the x, y quartic
+        else:  # a short span (coarse pixels) or no convergence: the x, y quartic
             D[rep, 0], D[rep, 1] = np.polyval(cx, u[rep]), np.polyval(cy, u[rep])
     x2, y2 = D[:, 0], D[:, 1]
     s, spl = _curve(x2, y2)
