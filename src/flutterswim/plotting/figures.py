@@ -217,7 +217,7 @@ def draw_kymographs(axs, obj: Any, window: tuple[float, float] | None = None, *,
         ax.set_xlabel("t (s)")
         ax.set_ylabel(ylab)
         ax.set_xlim(tr.t[0], tr.t[-1])
-    axs[1].figure.colorbar(sc, ax=axs[1], label="s / l")
+    axs[1].figure.colorbar(sc, ax=axs[1], label="s / l of the crossing point (both panels)")
     bk = body_kymograph(tr)
     kap = bk.kappa / f  # 1/mm
     lim = float(np.max(np.abs(kap))) or 1.0
