@@ -75,3 +75,30 @@ def test_kymograph_windows():
     on, lim = w["onset"], w["limit"]
     assert lim[1] <= tr.t[-1] and lim[1] - lim[0] == pytest.approx(1.2, rel=1e-2)
     assert on[1] < lim[0]
+
+
+def test_body_kymograph_shows_the_shapes_curvature_not_a_given_spontaneous_one():
+    # a simulation's Track carries the model's spontaneous curvature, which lags the shape's
+    # and is not the shape's at the free end joints; the map must show the shape's (as for a
+    # tracked movie), here a circle arc of radius R with a spontaneous curvature of 0 and a
+    # jump at the end joint
+    R = 0.7
+    x, y = c_shape(101, radius=R)
+    given = np.zeros((2, x.size))
+    given[:, 0] = -3.0
+    tr = Track(t=[0, 1], x=np.stack([x, x]), y=np.stack([y, y]), kappa=given)
+    assert np.allclose(tr.curvature()[1], given)  # the track keeps what it was given
+    assert np.allclose(body_kymograph(tr).kappa, 1 / R, rtol=1e-3)
+
+
+def test_body_kymograph_of_a_simulation_is_theta_s():
+    # the map of a simulated stroke: the shape's theta_s at the interior joints (second-order
+    # differences of the segments' angles), whatever its spontaneous curvature
+    import flutterswim as fs
+
+    r = fs.simulate(fs.PAPER, 4.5, n_segments=24, frame_dt=0.05)
+    bk = body_kymograph(r)
+    h = np.diff(r.s)
+    theta_s = np.diff(r.theta, axis=1) / h[None, 1:]
+    assert np.allclose(bk.kappa[:, 1:-1], theta_s, rtol=1e-6, atol=1e-6 * np.abs(theta_s).max())
+    assert not np.allclose(bk.kappa[:, 0], r.kappa[:, 0], rtol=0.05)

@@ -11,7 +11,7 @@ import numpy as np
 
 from .._validate import ParameterError
 from .cycles import Cycles, detect_cycles
-from .track import Track, as_track
+from .track import Track, as_track, polyline_curvature
 
 __all__ = ["LineKymograph", "BodyKymograph", "line_kymograph", "body_kymograph", "kymograph_windows"]
 
@@ -39,8 +39,8 @@ class LineKymograph:
 
 @dataclass(frozen=True, eq=False)
 class BodyKymograph:
-    """Body-frame maps: kappa (T, P) at s (P,), theta (T, N) at s_mid (N,) (the rigid rotation,
-    i.e. the mean of theta along s, removed when ``body_frame``)."""
+    """Body-frame maps: kappa (T, P) the shape's curvature theta_s at s (P,), theta (T, N) at s_mid
+    (N,) (the rigid rotation, i.e. the mean of theta along s, removed when ``body_frame``)."""
 
     t: np.ndarray
     s: np.ndarray
@@ -95,9 +95,16 @@ def line_kymograph(obj: Any, orientation: str = "horizontal", level: float | Non
 
 
 def body_kymograph(obj: Any, *, body_frame: bool = True) -> BodyKymograph:
-    """Curvature kappa(s, t) and tangent angle theta(s, t) (given, or from the polyline)."""
+    """Curvature of the shape kappa = theta_s(s, t), from the centreline (:func:`polyline_curvature`),
+    and tangent angle theta(s, t) (given, or from the polyline).
+
+    The curvature is the shape's for a simulation and a tracked movie alike, so that their maps
+    compare. A simulation's spontaneous curvature (``Track.kappa``, the model's active state)
+    lags it inside the body, and at the free end joints, where it does not enter the bending
+    moment, it follows the end segment's angle half a segment in (0.5 /mm below the shape's
+    there on the paper's onset at 32 segments)."""
     tr: Track = as_track(obj)
-    s, k = tr.curvature()
+    s, k = tr.s, polyline_curvature(tr.x, tr.y)
     s_mid, th = tr.tangent_angle()
     if body_frame:
         th = th - th.mean(axis=1, keepdims=True)

@@ -192,7 +192,7 @@ def path_sections(obj: Any):
 def draw_kymographs(axs, obj: Any, window: tuple[float, float] | None = None, *, h_level=None, v_level=None) -> None:
     """Fill four axes with: crossings of the swimmer's mean path (positions along it against t),
     of the section across the path moving with the centroid (positions across the path), the
-    body-frame curvature kappa(s, t) and tangent angle theta(s, t). With ``h_level`` /
+    curvature of the shape theta_s(s, t) and body-frame tangent angle theta(s, t). With ``h_level`` /
     ``v_level`` the sections are the fixed lab lines y = h_level and x = v_level instead."""
     tr = as_track(obj)
     if window is not None:
@@ -223,10 +223,10 @@ def draw_kymographs(axs, obj: Any, window: tuple[float, float] | None = None, *,
     lim = float(np.max(np.abs(kap))) or 1.0
     im = axs[2].pcolormesh(bk.t, bk.s / tr.length, kap.T, cmap="RdBu_r", vmin=-lim, vmax=lim, shading="nearest",
                            rasterized=True)
-    axs[2].figure.colorbar(im, ax=axs[2], label="κ (1/mm)")
+    axs[2].figure.colorbar(im, ax=axs[2], label="κ = θ_s (1/mm)")
     axs[2].set_ylabel("s / l")
     axs[2].set_xlabel("t (s)")
-    axs[2].set_title("curvature", fontsize=8)
+    axs[2].set_title("curvature of the shape", fontsize=8)
     lim = float(np.max(np.abs(bk.theta))) or 1.0
     im = axs[3].pcolormesh(bk.t, bk.s_mid / tr.length, bk.theta.T, cmap="PuOr_r", vmin=-lim, vmax=lim,
                            shading="nearest", rasterized=True)
