@@ -13,7 +13,9 @@ the named groups ``voltage`` and ``sample`` (default :data:`DEFAULT_PATTERN`, e.
 
 Columns (the last, tracked_by, signs the file as ours): advance_mm is the advance per cycle along the field (its magnitude); lateral_mm is
 the lateral peak-to-peak of the trailing end (the fitting's default), leading_lateral_mm that
-of the leading end. A trial that cannot be tracked (any error) or has no voltage and sample
+of the leading end, lateral_se_mm and leading_lateral_se_mm their standard errors within the
+trial (``Descriptors.*_lateral_p2p_se_mm``: the noise the trial's frames leave, not the spread
+between trials). A trial that cannot be tracked (any error) or has no voltage and sample
 (no sidecar and a name the pattern does not match, a voltage that is no finite number) is left
 out of the CSV and listed, with its reason, in ``<out stem>_failed.csv`` (an old one of ours is
 removed when none failed); the batch goes on. When none is tracked, no CSV of descriptors is
@@ -41,7 +43,7 @@ __all__ = ["DEFAULT_PATTERN", "CSV_COLUMNS", "Trial", "failures_path", "find_tri
 
 DEFAULT_PATTERN = r"(?P<voltage>\d+(?:[.p]\d+)?)\s*V.*?sample[-_ ]?(?P<sample>[A-Za-z0-9]+)"
 CSV_COLUMNS = ("voltage_V", "sample", "period_s", "advance_mm", "lateral_mm", "leading_lateral_mm",
-               "period_std_s", "advance_std_mm", "n_cycles", "body_length_mm", "body_length_spread",
+               "lateral_se_mm", "leading_lateral_se_mm", "period_std_s", "advance_std_mm", "n_cycles", "body_length_mm", "body_length_spread",
                "n_frames", "n_failed_frames", "trial", "tracked_by")
 #: Columns of the failures file (``failures_path``).
 FAILED_COLUMNS = ("trial", "reason", "tracked_by")
@@ -241,7 +243,8 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
         rows.append({
             "voltage_V": tr_.voltage_V, "sample": tr_.sample, "period_s": d.period_s,
             "advance_mm": abs(d.advance_per_cycle_mm), "lateral_mm": d.trailing_lateral_p2p_mm,
-            "leading_lateral_mm": d.leading_lateral_p2p_mm, "period_std_s": d.period_std_s,
+            "leading_lateral_mm": d.leading_lateral_p2p_mm, "lateral_se_mm": d.trailing_lateral_p2p_se_mm,
+            "leading_lateral_se_mm": d.leading_lateral_p2p_se_mm, "period_std_s": d.period_std_s,
             "advance_std_mm": d.advance_per_cycle_std_mm, "n_cycles": d.n_cycles_used,
             "body_length_mm": tk.length, "body_length_spread": m["length_spread"], "n_frames": m["n_frames"],
             "n_failed_frames": m["n_failed"], "trial": str(tr_.path), "tracked_by": f"flutterswim {__version__}",

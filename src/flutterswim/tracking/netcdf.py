@@ -85,6 +85,9 @@ def to_xarray(tr: Track):
     if "template_coef_se" in m:  # the periodic template's coefficient noise at (s = 0, s = l)
         ds.attrs.update({"template_coef_se": np.asarray(m["template_coef_se"], float),
                          "template_coef_se_units": "mm"})
+    if "template_coef_stderr" in m:  # the same with its degrees of freedom and serial correlation
+        ds.attrs.update({"template_coef_stderr": np.asarray(m["template_coef_stderr"], float),
+                         "template_coef_stderr_units": "mm"})
     return cf_dataset(ds)
 
 
@@ -130,5 +133,7 @@ def load_track(path: str | os.PathLike) -> Track:
         meta["unchanged_fraction"] = float(a["unchanged_fraction"])
     if "template_coef_se" in a:
         meta["template_coef_se"] = [float(v) for v in np.atleast_1d(a["template_coef_se"])]
+    if "template_coef_stderr" in a:
+        meta["template_coef_stderr"] = [float(v) for v in np.atleast_1d(a["template_coef_stderr"])]
     return Track(t=ds["time"].values[ok], x=ds["x"].values[ok], y=ds["y"].values[ok], s=ds["s"].values,
                  field_angle=float(a["field_angle"]), length=float(a["body_length"]), units="mm", meta=meta)

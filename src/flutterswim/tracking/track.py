@@ -725,6 +725,11 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         # every cycle shares (describe tests the harmonics it borrows against it)
         meta["template_coef_se"] = [float(r * math.sqrt(2.0 / template["template_frames"]) * scale)
                                     for r in template["end_residual_px"]]
+        # the same with the template's degrees of freedom and the ends' correlation from frame to
+        # frame, in the lab frame (registration noise included): for the descriptors' standard
+        # errors (the harmonic tests keep the plain scale above, which they were set against)
+        if "end_coef_stderr_px" in template:
+            meta["template_coef_stderr"] = [float(v * scale) for v in template["end_coef_stderr_px"]]
     return Track(t=t_all[ok], x=X[ok] * scale, y=Y[ok] * scale, s=np.linspace(0.0, L_px * scale, n_points),
                  field_angle=field_angle, length=L_px * scale, units="mm", meta=meta)
 
