@@ -77,6 +77,8 @@ def test_track_file_is_cf_and_reads_back_to_the_same_description(tracked, tmp_pa
     np.testing.assert_array_equal(back.t, tracked.t)
     np.testing.assert_array_equal(back.x, tracked.x)
     np.testing.assert_array_equal(back.s, tracked.s)
+    for key in ("template_coef_se", "template_coef_stderr"):  # the template's noise, for describe
+        np.testing.assert_allclose(back.meta[key], tracked.meta[key], rtol=1e-12)
     want = describe(tracked).to_dict()
     assert describe(back).to_dict() == want
     capsys.readouterr()
