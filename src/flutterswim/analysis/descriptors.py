@@ -256,7 +256,8 @@ def _template_p2p_se(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, har
     H = min(need, own) if own else 0
     if H < 1 or n - len(steady) < 2 * H + 1:
         return math.nan
-    keep = _template_harmonics(steady, H, se_test) if H >= 2 else None  # the harmonics the waveform keeps
+    # the harmonics the cycles' fits keep (tested as _lateral_p2p tests them, over min(harmonics, 5))
+    keep = _template_harmonics(steady, need, se_test) if need >= 2 else None
     h = np.arange(1, H + 1)[np.ones(H, bool) if keep is None else keep[:H]]
     who, harm, q = _pooled_design(steady, h)
     coef = _pooled_lstsq(who, harm, q, len(steady))[0][len(steady):]
