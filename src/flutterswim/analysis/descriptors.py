@@ -236,7 +236,8 @@ def _steady(series: list, st: np.ndarray) -> list:
             for k, c in enumerate(series)]
 
 
-def _template_p2p_se(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmonics: int) -> float:
+def _template_p2p_se(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmonics: int,
+                     borrowed: dict | None = None) -> float:
     """Standard error of a templated movie's lateral peak-to-peak at point ``i_end`` from the
     periodic template's coefficient noise, which every cycle shares (so the cycles' spread does
     not show it); 0 without a template.
@@ -245,20 +246,25 @@ def _template_p2p_se(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, har
     2 pi h phi moves with the coefficients by cos 2 pi h phi+ - cos 2 pi h phi-, and sin alike:
     for coefficients of standard error se each, over the harmonics kept, its standard error
     is se sqrt(sum_h (2 - 2 cos 2 pi h (phi+ - phi-))), 2 se for a sine (each odd harmonic
-    kept adds as much again)."""
+    kept adds as much again). ``borrowed``: {a cycle's own harmonic count: the count the pooled
+    cycles lend it} from :func:`_lateral_p2p`; those harmonics count too."""
     se, se_test = _template_se(tr, i_end, "template_coef_stderr"), _template_se(tr, i_end)
     if not se > 0 or st.size < 2:
         return 0.0
     steady = [c for c in _steady(_lateral_series(tr, st, i_end, ang), st) if c is not None]
     need = min(int(harmonics), _POOLED_HARMONICS)
     n = sum(c[0].size for c in steady)
-    own = min((fourier_harmonics(c[0].size, harmonics) for c in steady), default=0)
+    owns = [fourier_harmonics(c[0].size, harmonics) for c in steady]
+    own = max(set(owns), key=owns.count) if owns else 0  # the cycles' usual count
     H = min(need, own) if own else 0
     if H < 1 or n - len(steady) < 2 * H + 1:
         return math.nan
-    # the harmonics the cycles' fits keep (tested as _lateral_p2p tests them, over min(harmonics, 5))
+    # the harmonics the cycles' fits keep (tested as _lateral_p2p tests them, over min(harmonics, 5)),
+    # and those beyond their own count that the pooled cycles lend them (all, up to top)
     keep = _template_harmonics(steady, need, se_test) if need >= 2 else None
     h = np.arange(1, H + 1)[np.ones(H, bool) if keep is None else keep[:H]]
+    top = (borrowed or {}).get(own, H)
+    h = np.concatenate([h, np.arange(H + 1, top + 1)])
     who, harm, q = _pooled_design(steady, h)
     coef = _pooled_lstsq(who, harm, q, len(steady))[0][len(steady):]
     ph = np.linspace(0.0, 1.0, 2048, endpoint=False)
@@ -268,7 +274,8 @@ def _template_p2p_se(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, har
     return se * math.sqrt(float(np.sum(2.0 - 2.0 * np.cos(2 * np.pi * h * d))))
 
 
-def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmonics: int) -> np.ndarray:
+def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmonics: int,
+                 borrowed: dict | None = None) -> np.ndarray:
     """Per cycle: peak-to-peak of point ``i_end`` across direction ang[k] (Fourier fit of the
     cycle's frames, at most (frames - 1) / 4 harmonics). A cycle of too few frames for
     min(harmonics, 5) harmonics (below 21 frames per stroke) gets the share of the
@@ -311,6 +318,8 @@ def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmoni
                     factor[h] = full / low
             for k, h in enumerate(own):
                 out[k] *= factor.get(h, 1.0)  # in proportion: a growing stroke keeps its shape
+            if borrowed is not None:  # the harmonics each cycle's own count borrows (own -> top)
+                borrowed.update({h: top for h in factor})
     return out
 
 
@@ -399,8 +408,9 @@ class Descriptors:
     # on a tracked movie with a periodic template its coefficient noise, which all cycles share
     # and the spread cannot show (the cycles' std understated it up to tenfold). On movies rendered
     # from four strokes at SNR 3 (12 each; one at SNR 5 and one at 10: 8) the errors over it had RMS
-    # 0.75-1.8 per stroke and end, 1.24 over the 128 ends of the 64 movies: the noise's bias is not in it (twice the threshold's
-    # kappa_E: -0.45 % at the leading end, -0.27 % at the trailing one, at SNR 3)
+    # 0.75-1.65 per stroke and end, 1.17 over the 128 ends of the 64 movies: the noise's bias is
+    # not in it (twice the threshold's kappa_E: -0.45 % at the leading end, -0.27 % at the
+    # trailing one, at SNR 3)
     leading_lateral_p2p_se_mm: float = math.nan
     trailing_lateral_p2p_se_mm: float = math.nan
     # a turning field (NaN otherwise): cycle-averaged path, see flutterswim.steering.turning
@@ -632,14 +642,12 @@ def describe(
     ang_k = np.broadcast_to(np.asarray(pc_angle, float), (sub.starts.size - 1,))
     for e_name in ("start", "end"):
         i_e = tip_index(tr, e_name)
-        if i_e == sub.tip:
-            pe = pc["tip_p2p"]  # the same end across the same directions: already measured
-        else:
-            pe = _lateral_p2p(tr, sub.starts, i_e, ang_k, harmonics)[use]
+        lent: dict = {}  # what the pooled cycles lend the cycles' own harmonics, for the error
+        pe = _lateral_p2p(tr, sub.starts, i_e, ang_k, harmonics, lent)[use]
         fin = pe[np.isfinite(pe)]
         p2p_end[e_name] = float(np.mean(fin)) if fin.size else math.nan
         spread = _std(fin) / math.sqrt(fin.size) if fin.size > 1 else math.nan
-        shared = _template_p2p_se(tr, sub.starts, i_e, ang_k, harmonics) if fin.size else math.nan
+        shared = _template_p2p_se(tr, sub.starts, i_e, ang_k, harmonics, lent) if fin.size else math.nan
         se_end[e_name] = math.hypot(spread, shared) if fin.size > 1 else shared if shared > 0 else math.nan
     lead, trail = ("start", "end") if ahead > 0 else ("end", "start")
     settled = bool(cyc.limit_cycle)
