@@ -54,3 +54,66 @@ def test_an_odd_harmonic_that_the_waveform_holds_doubles_the_variance():
     se = 1e-4 * describe(tr3, n_last=100).leading_lateral_p2p_mm
     d = describe(_templated(tr3, se), n_last=100)
     assert math.isclose(d.leading_lateral_p2p_se_mm, 2 * math.sqrt(2) * se, rel_tol=0.02)
+
+
+def _g(h, delta):
+    return 2.0 - 2.0 * np.cos(2 * np.pi * np.asarray(h) * delta)
+
+
+def test_an_asymmetric_waveform_and_the_harmonics_beyond_the_tested_ones():
+    # 40 frames per stroke: each cycle fits 6 harmonics, the 6th untested (always kept). A 2nd
+    # harmonic puts the waveform's maximum and minimum delta apart (not half a period): the
+    # error is se sqrt(sum_h 2 - 2 cos 2 pi h delta) over h = 1, 2 (held) and 6 (kept untested)
+    tr = wave_track(period=0.4, n_frames=401, duration=4.0, n_points=41)
+    w = 2 * np.pi / 0.4
+    y = tr.y + 0.02 * np.sin(2 * w * tr.t + 0.7)[:, None]
+    tr2 = dataclasses.replace(tr, y=y)
+    # delta from the leading (s = l) end's own waveform, on a fine grid of one period
+    t = np.linspace(0.0, 0.4, 40001, endpoint=False)
+    A_end = 0.1 * (0.4 + 0.6)  # wave_track's amplitude at s = l
+    q = A_end * np.sin(2 * np.pi * 1.0 / 0.8 - w * t) + 0.02 * np.sin(2 * w * t + 0.7)
+    delta = (t[np.argmax(q)] - t[np.argmin(q)]) / 0.4
+    assert abs(abs(delta) - 0.5) > 0.05  # not half a period apart
+    se = 1e-4 * describe(tr2, n_last=100).leading_lateral_p2p_mm
+    d = describe(_templated(tr2, se), n_last=100)
+    assert d.leading_end == "s=l"
+    want = se * math.sqrt(float(np.sum(_g([1, 2, 6], delta))))
+    assert math.isclose(d.leading_lateral_p2p_se_mm, want, rel_tol=0.01)
+
+
+def test_harmonics_the_pooled_cycles_lend_count_too():
+    # 20 frames per stroke: a cycle fits 4 harmonics of its own and borrows the 5th from all
+    # the cycles together; with a 5th harmonic in the waveform, both the 1st and the 5th move
+    # the peak-to-peak: 2 sqrt(2) se (without the loan, 2 se)
+    tr = wave_track(period=0.4, n_frames=201, duration=4.0, n_points=41)
+    y = tr.y + 0.01 * np.sin(5 * 2 * np.pi * tr.t / 0.4)[:, None]
+    tr5 = dataclasses.replace(tr, y=y)
+    se = 1e-4 * describe(tr5, n_last=100).leading_lateral_p2p_mm
+    d = describe(_templated(tr5, se), n_last=100)
+    assert math.isclose(d.leading_lateral_p2p_se_mm, 2 * math.sqrt(2) * se, rel_tol=0.02)
+
+
+def test_unknown_error_of_one_cycle_and_a_missing_stderr():
+    tr = wave_track(period=0.4, n_frames=201, duration=4.0, n_points=41)
+    one = describe(_templated(tr.window(0.3, 1.2), 1e-3), n_last=100)
+    assert one.n_cycles_used == 1 and math.isnan(one.leading_lateral_p2p_se_mm)
+    # a NaN template_coef_stderr falls back to template_coef_se (a sine: 2 se)
+    se = 1e-3 * describe(tr, n_last=100).leading_lateral_p2p_mm
+    t = _templated(tr, se)
+    t = dataclasses.replace(t, meta={**t.meta, "template_coef_stderr": [math.nan, math.nan]})
+    assert math.isclose(describe(t, n_last=100).leading_lateral_p2p_se_mm, 2 * se, rel_tol=1e-3)
+
+
+def test_a_header_only_batch_csv_written_before_the_standard_errors_is_still_ours(tmp_path):
+    # a batch whose trials all failed wrote only its header; the columns before the standard
+    # errors must still be recognised, so that a rerun may replace the file
+    from flutterswim._paths import is_ours
+    from flutterswim.tracking.batch import CSV_COLUMNS
+
+    old = [c for c in CSV_COLUMNS if c not in ("lateral_se_mm", "leading_lateral_se_mm")]
+    assert len(old) == len(CSV_COLUMNS) - 2
+    p = tmp_path / "trials.csv"
+    p.write_text(",".join(old) + "\n", encoding="utf-8")
+    assert is_ours(p)
+    p.write_text(",".join(old[:-2] + ["tracked_by"]) + "\n", encoding="utf-8")  # not a header we wrote
+    assert not is_ours(p)

@@ -85,9 +85,9 @@ def _csv_ours(p: Path) -> bool:
             if len(r) > k and r[k].startswith("flutterswim "):
                 return True
     # no signed row: ours only if it is exactly the header of a batch whose trials all failed
-    from .tracking.batch import CSV_COLUMNS, FAILED_COLUMNS
+    from .tracking.batch import CSV_COLUMNS, CSV_COLUMNS_BEFORE_SE, FAILED_COLUMNS
 
-    return header_only and tuple(head) in (CSV_COLUMNS, FAILED_COLUMNS)
+    return header_only and tuple(head) in (CSV_COLUMNS, CSV_COLUMNS_BEFORE_SE, FAILED_COLUMNS)
 
 
 def _png_ours(p: Path) -> bool:

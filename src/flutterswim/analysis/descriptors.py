@@ -221,7 +221,9 @@ def _template_se(tr: Track, i_end: int, key: str = "template_coef_se") -> float:
     tests use, or "template_coef_stderr", with the template's degrees of freedom and the
     ends' correlation from frame to frame (for standard errors; the former where absent)."""
     meta = getattr(tr, "meta", None) or {}
-    se = meta.get(key, meta.get("template_coef_se"))
+    se = meta.get(key)
+    if se is None or len(se) != 2 or not all(math.isfinite(float(v)) for v in se):
+        se = meta.get("template_coef_se")  # (a track written before template_coef_stderr)
     if se is None or len(se) != 2:
         return 0.0
     n = np.shape(tr.x)[1]
@@ -247,7 +249,13 @@ def _template_p2p_se(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, har
     for coefficients of standard error se each, over the harmonics kept, its standard error
     is se sqrt(sum_h (2 - 2 cos 2 pi h (phi+ - phi-))), 2 se for a sine (each odd harmonic
     kept adds as much again). ``borrowed``: {a cycle's own harmonic count: the count the pooled
-    cycles lend it} from :func:`_lateral_p2p`; those harmonics count too."""
+    cycles lend it} from :func:`_lateral_p2p`; those harmonics count too.
+
+    It runs a little low: a harmonic at the noise level is kept just when its noise happens to be
+    large (F > 2), so kept harmonics carry more than their nominal variance (Monte Carlo of a
+    sine with noise in every harmonic: the p2p's scatter 1.04-1.26 times this), and the
+    template's error uses the noise's correlation from frame to frame at zero frequency for
+    every harmonic (:func:`flutterswim.tracking.periodic._coef_stderr`)."""
     se, se_test = _template_se(tr, i_end, "template_coef_stderr"), _template_se(tr, i_end)
     if not se > 0 or st.size < 2:
         return 0.0
@@ -257,14 +265,17 @@ def _template_p2p_se(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, har
     owns = [fourier_harmonics(c[0].size, harmonics) for c in steady]
     own = max(set(owns), key=owns.count) if owns else 0  # the cycles' usual count
     H = min(need, own) if own else 0
-    if H < 1 or n - len(steady) < 2 * H + 1:
+    if H < 1:
         return math.nan
-    # the harmonics the cycles' fits keep (tested as _lateral_p2p tests them, over min(harmonics, 5)),
-    # and those beyond their own count that the pooled cycles lend them (all, up to top)
+    # the harmonics the cycles' fits keep: of 1..min(harmonics, 5) those tested as _lateral_p2p
+    # tests them, all beyond (a cycle of 25 frames or more fits the 6th), and those beyond a
+    # coarsely sampled cycle's own count that the pooled cycles lend it (all, up to top)
     keep = _template_harmonics(steady, need, se_test) if need >= 2 else None
     h = np.arange(1, H + 1)[np.ones(H, bool) if keep is None else keep[:H]]
     top = (borrowed or {}).get(own, H)
-    h = np.concatenate([h, np.arange(H + 1, top + 1)])
+    h = np.concatenate([h, np.arange(need + 1, own + 1), np.arange(H + 1, top + 1)])
+    if n - len(steady) < 2 * h.size + 1:
+        return math.nan
     who, harm, q = _pooled_design(steady, h)
     coef = _pooled_lstsq(who, harm, q, len(steady))[0][len(steady):]
     ph = np.linspace(0.0, 1.0, 2048, endpoint=False)
@@ -648,7 +659,8 @@ def describe(
         p2p_end[e_name] = float(np.mean(fin)) if fin.size else math.nan
         spread = _std(fin) / math.sqrt(fin.size) if fin.size > 1 else math.nan
         shared = _template_p2p_se(tr, sub.starts, i_e, ang_k, harmonics, lent) if fin.size else math.nan
-        se_end[e_name] = math.hypot(spread, shared) if fin.size > 1 else shared if shared > 0 else math.nan
+        # (one cycle: its spread is unknown, and so is the error)
+        se_end[e_name] = math.hypot(spread, shared) if fin.size > 1 else math.nan
     lead, trail = ("start", "end") if ahead > 0 else ("end", "start")
     settled = bool(cyc.limit_cycle)
     note = "" if settled else (

@@ -45,6 +45,8 @@ DEFAULT_PATTERN = r"(?P<voltage>\d+(?:[.p]\d+)?)\s*V.*?sample[-_ ]?(?P<sample>[A
 CSV_COLUMNS = ("voltage_V", "sample", "period_s", "advance_mm", "lateral_mm", "leading_lateral_mm",
                "lateral_se_mm", "leading_lateral_se_mm", "period_std_s", "advance_std_mm", "n_cycles", "body_length_mm", "body_length_spread",
                "n_frames", "n_failed_frames", "trial", "tracked_by")
+#: The columns before the standard errors (a header-only CSV of an older batch is still ours).
+CSV_COLUMNS_BEFORE_SE = tuple(c for c in CSV_COLUMNS if not c.endswith("_se_mm"))
 #: Columns of the failures file (``failures_path``).
 FAILED_COLUMNS = ("trial", "reason", "tracked_by")
 

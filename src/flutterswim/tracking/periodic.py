@@ -301,7 +301,9 @@ def _coef_stderr(d: np.ndarray, m: int, lags: int = 3) -> float:
     template: its variance per coordinate with the m fitted coefficients' degrees of freedom,
     times the long-run factor 1 + 2 sum_k (1 - k / (lags + 1)) rho_k of its correlation from
     frame to frame (Bartlett weights; an end's along-body position is smoothed over frames, and
-    its lag-1 correlation is about 0.2 at SNR 3), never below 1, over n / 2."""
+    its lag-1 correlation is about 0.2 at SNR 3), never below 1, over n / 2. The factor is the
+    noise's at zero frequency, for every harmonic: at a lag-1 correlation of 0.4 it is right for
+    the 1st harmonic (Monte Carlo, test) and 26 % high for the 5th of a stroke of 18.9 frames."""
     n = d.shape[0]
     if n <= m + lags:
         return math.nan
