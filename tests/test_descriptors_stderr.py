@@ -5,6 +5,7 @@ import dataclasses
 import math
 
 import numpy as np
+import pytest
 
 from flutterswim.analysis.descriptors import describe
 from flutterswim.analysis.synthetic import wave_track
@@ -117,3 +118,21 @@ def test_a_header_only_batch_csv_written_before_the_standard_errors_is_still_our
     assert is_ours(p)
     p.write_text(",".join(old[:-2] + ["tracked_by"]) + "\n", encoding="utf-8")  # not a header we wrote
     assert not is_ours(p)
+
+
+@pytest.mark.parametrize("noise", [1e-3, 5e-3])
+def test_a_noisy_record_of_a_filament_that_does_not_swim_is_still(noise):
+    # no advance, positions with noise and no movie's pixel size to judge it by: the cycles'
+    # displacements point every which way, so there is no swimming direction, and the lateral
+    # excursions are measured across the body axis (as without noise), not across a direction
+    # set by the noise (they read 483 / 455 mm for 200 / 80 at noise 1e-3)
+    clean = describe(wave_track(period=0.4, n_frames=201, duration=4.0, speed=0.0), n_last=100)
+    d = describe(wave_track(period=0.4, n_frames=201, duration=4.0, speed=0.0, noise=noise, seed=1), n_last=100)
+    assert "no net swimming" in d.note
+    assert math.isclose(d.leading_lateral_p2p_mm, clean.leading_lateral_p2p_mm, rel_tol=0.01)
+    assert math.isclose(d.trailing_lateral_p2p_mm, clean.trailing_lateral_p2p_mm, rel_tol=0.05)
+    # while the same record swimming slowly, in any direction, swims (turning swimmers: the
+    # steering tests)
+    for kw in ({"speed": 0.05}, {"speed": 0.05, "field_angle": 0.3}):
+        s = describe(wave_track(period=0.4, n_frames=201, duration=4.0, noise=noise, seed=1, **kw), n_last=100)
+        assert "no net swimming" not in s.note

@@ -118,6 +118,9 @@ def _lateral_series(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray) -> l
 _STILL_BL = 1e-6
 _FADED = 1e-3  # described cycles this small beside the record's largest: the stroke stopped
 _STILL_PX = 0.05
+# and one whose cycles' displacements turn from one cycle to the next by angles so unalike that
+# the mean of the turns as unit vectors is below this (steady swimming or turning: 1)
+_ALIGNED_TURNS = 0.5
 # a swimmer more than about 5.7 degrees off the field's line (the advance along it 0.5 %
 # short of the advance along the path) is noted: the field's direction given is likely wrong
 # (the paper's swims within 0.001 degree of it), or the field turns
@@ -620,6 +623,15 @@ def describe(
     if movie:
         floor = max(floor, _STILL_PX * 1e-3 / (float(tr.meta["px_per_mm"]) * tr.scale_m))
     still = not drift >= floor
+    # nor does a track whose cycles' displacements turn every which way from one cycle to the
+    # next (a noisy record of a filament that does not swim, given without a movie's pixel size
+    # to judge its noise by): a swimmer's turn alike, by 0 when it swims straight and by the
+    # same angle when it turns steadily (the mean of the turns as unit vectors about 1; for
+    # noise about 1 / sqrt(n))
+    dxy = np.diff(np.stack(at_starts, axis=1), axis=0)
+    if not still and dxy.shape[0] >= 3:
+        z = (dxy[:, 0] + 1j * dxy[:, 1]) / np.maximum(np.hypot(dxy[:, 0], dxy[:, 1]), 1e-300)
+        still = abs(complex(np.mean(z[1:] * np.conj(z[:-1])))) < _ALIGNED_TURNS
     if still:
         swim = body_axis_angle(w)
     inter = self_intersections(w) > 0
