@@ -1,5 +1,6 @@
 """Standard errors of the lateral peak-to-peak: the cycles' spread, and a tracked movie's
-periodic-template noise that every cycle shares (which the spread cannot show)."""
+periodic-template noise that every cycle shares (which the spread cannot show); and a noisy
+record of a filament that does not swim, whose excursions are measured across its body axis."""
 
 import dataclasses
 import math
