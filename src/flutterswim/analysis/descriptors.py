@@ -241,8 +241,7 @@ def _steady(series: list, st: np.ndarray) -> list:
             for k, c in enumerate(series)]
 
 
-def _template_p2p_se(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmonics: int,
-                     borrowed: dict | None = None) -> float:
+def _template_p2p_se(tr: Track, i_end: int, harmonics: int, fit: dict) -> float:
     """Standard error of a templated movie's lateral peak-to-peak at point ``i_end`` from the
     periodic template's coefficient noise, which every cycle shares (so the cycles' spread does
     not show it); 0 without a template.
@@ -251,31 +250,32 @@ def _template_p2p_se(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, har
     2 pi h phi moves with the coefficients by cos 2 pi h phi+ - cos 2 pi h phi-, and sin alike:
     for coefficients of standard error se each, over the harmonics kept, its standard error
     is se sqrt(sum_h (2 - 2 cos 2 pi h (phi+ - phi-))), 2 se for a sine (each odd harmonic
-    kept adds as much again). ``borrowed``: {a cycle's own harmonic count: the count the pooled
-    cycles lend it} from :func:`_lateral_p2p`; those harmonics count too.
+    kept adds as much again). ``fit``: what :func:`_lateral_p2p` filled in for this end (the
+    cycles on one steady phase, the harmonics kept, each cycle's own count, and the count the
+    pooled cycles lend a cycle of each own count); the lent harmonics count too.
 
     It runs a little low: a harmonic at the noise level is kept just when its noise happens to be
     large (F > 2), so kept harmonics carry more than their nominal variance (Monte Carlo of a
     sine with noise in every harmonic: the p2p's scatter 1.04-1.26 times this), and the
     template's error uses the noise's correlation from frame to frame at zero frequency for
     every harmonic (:func:`flutterswim.tracking.periodic._coef_stderr`)."""
-    se, se_test = _template_se(tr, i_end, "template_coef_stderr"), _template_se(tr, i_end)
-    if not se > 0 or st.size < 2:
+    se = _template_se(tr, i_end, "template_coef_stderr")
+    if not se > 0:
         return 0.0
-    steady = [c for c in _steady(_lateral_series(tr, st, i_end, ang), st) if c is not None]
+    steady = [c for c in fit["steady"] if c is not None]
     need = min(int(harmonics), _POOLED_HARMONICS)
     n = sum(c[0].size for c in steady)
-    owns = [fourier_harmonics(c[0].size, harmonics) for c in steady]
+    owns = [h for h, c in zip(fit["own"], fit["steady"]) if c is not None]
     own = max(set(owns), key=owns.count) if owns else 0  # the cycles' usual count
     H = min(need, own) if own else 0
     if H < 1:
         return math.nan
-    # the harmonics the cycles' fits keep: of 1..min(harmonics, 5) those tested as _lateral_p2p
-    # tests them, all beyond (a cycle of 25 frames or more fits the 6th), and those beyond a
-    # coarsely sampled cycle's own count that the pooled cycles lend it (all, up to top)
-    keep = _template_harmonics(steady, need, se_test) if need >= 2 else None
+    # the harmonics the cycles' fits keep: of 1..min(harmonics, 5) those the template's test
+    # kept, all beyond (a cycle of 25 frames or more fits the 6th), and those beyond a coarsely
+    # sampled cycle's own count that the pooled cycles lend it (all, up to top)
+    keep = fit["keep"]
     h = np.arange(1, H + 1)[np.ones(H, bool) if keep is None else keep[:H]]
-    top = (borrowed or {}).get(own, H)
+    top = fit["lent"].get(own, H)
     h = np.concatenate([h, np.arange(need + 1, own + 1), np.arange(H + 1, top + 1)])
     if n - len(steady) < 2 * h.size + 1:
         return math.nan
@@ -289,7 +289,7 @@ def _template_p2p_se(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, har
 
 
 def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmonics: int,
-                 borrowed: dict | None = None) -> np.ndarray:
+                 fit: dict | None = None) -> np.ndarray:
     """Per cycle: peak-to-peak of point ``i_end`` across direction ang[k] (Fourier fit of the
     cycle's frames, at most (frames - 1) / 4 harmonics). A cycle of too few frames for
     min(harmonics, 5) harmonics (below 21 frames per stroke) gets the share of the
@@ -300,7 +300,8 @@ def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmoni
     fits), and a factor within 1/1.25 .. 1.25. At 25 fps the paper's trailing end was 5.8 % short,
     at 50 fps 0.36 % (4 harmonics); now both within 0.1 % of 200 fps. On a tracked movie with a
     periodic template, the cycles' fits keep only the harmonics the pooled cycles hold above the
-    template's noise (:func:`_template_harmonics`)."""
+    template's noise (:func:`_template_harmonics`). ``fit``: a dict to fill in with what
+    :func:`_template_p2p_se` needs ("steady", "keep", "own", "lent")."""
     series = _lateral_series(tr, st, i_end, ang)
     steady = _steady(series, st)  # pooled on one steady phase over the cycles
     need = min(int(harmonics), _POOLED_HARMONICS)
@@ -308,6 +309,9 @@ def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmoni
     keep = _template_harmonics(steady, need, se) if se > 0 else None
     out = np.array([_fourier_p2p(*c, harmonics, keep) if c is not None else np.nan for c in series])
     own = [fourier_harmonics(c[0].size, harmonics) if c is not None else need for c in series]
+    lent: dict = {}  # {a cycle's own harmonic count: the count the pooled cycles lend it}
+    if fit is not None:
+        fit.update(steady=steady, keep=keep, own=own, lent=lent)
     if min(own, default=need) < need:
         # as many harmonics as the pooled phases resolve: a whole number n of frames per
         # stroke puts them on n phases, which resolve (n - 1) / 2 harmonics
@@ -332,8 +336,7 @@ def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmoni
                     factor[h] = full / low
             for k, h in enumerate(own):
                 out[k] *= factor.get(h, 1.0)  # in proportion: a growing stroke keeps its shape
-            if borrowed is not None:  # the harmonics each cycle's own count borrows (own -> top)
-                borrowed.update({h: top for h in factor})
+            lent.update({h: top for h in factor})
     return out
 
 
@@ -665,12 +668,12 @@ def describe(
     ang_k = np.broadcast_to(np.asarray(pc_angle, float), (sub.starts.size - 1,))
     for e_name in ("start", "end"):
         i_e = tip_index(tr, e_name)
-        lent: dict = {}  # what the pooled cycles lend the cycles' own harmonics, for the error
-        pe = _lateral_p2p(tr, sub.starts, i_e, ang_k, harmonics, lent)[use]
+        fit: dict = {}  # (the section tip's end again: the standard error needs the fit's details)
+        pe = _lateral_p2p(tr, sub.starts, i_e, ang_k, harmonics, fit)[use]
         fin = pe[np.isfinite(pe)]
         p2p_end[e_name] = float(np.mean(fin)) if fin.size else math.nan
         spread = _std(fin) / math.sqrt(fin.size) if fin.size > 1 else math.nan
-        shared = _template_p2p_se(tr, sub.starts, i_e, ang_k, harmonics, lent) if fin.size else math.nan
+        shared = _template_p2p_se(tr, i_e, harmonics, fit) if fin.size > 1 else math.nan
         # (one cycle: its spread is unknown, and so is the error)
         se_end[e_name] = math.hypot(spread, shared) if fin.size > 1 else math.nan
     lead, trail = ("start", "end") if ahead > 0 else ("end", "start")
