@@ -20,7 +20,7 @@ xr = pytest.importorskip("xarray")
 pytest.importorskip("jinja2")
 pytest.importorskip("matplotlib")
 
-FAST = ["table1", "b_readings", "fig6a", "fig6b", "fig6cd", "paper_run", "fig4b", "fig4c", "fig4de", "fig5", "fig3e"]
+FAST = ["table1", "b_readings", "fig6a", "fig6b", "fig6cd", "paper_run", "fig4b", "fig4c", "fig4de", "fig5", "fig3e", "video_s4"]
 
 
 @pytest.fixture(scope="module")
@@ -288,5 +288,10 @@ def test_report_renders_in_headless_chromium(built):
     m = re.search(r'data-images-loaded="(\d+)"\s+data-images-total="(\d+)"', dom)
     assert m, f"the page's load script did not run: {proc.stderr[-500:]}"
     assert int(m.group(1)) == int(m.group(2)) == n_img  # every image decoded (naturalWidth > 0)
+    # the videos play inline: each one's metadata loaded with a duration (they were links only)
+    n_vid = html.read_text().count("<video ")
+    assert n_vid >= 1
+    mv = re.search(r'data-videos-total="(\d+)"\s+data-videos-loaded="(\d+)"', dom)
+    assert mv and int(mv.group(1)) == int(mv.group(2)) == n_vid, proc.stderr[-500:]
     text = re.sub(r"<[^>]+>", " ", re.sub(r"<(script|style)[^>]*>.*?</\1>", " ", dom, flags=re.S))
     assert len(text.split()) > 500 and "0.65" in text  # not blank; the b readings are there
