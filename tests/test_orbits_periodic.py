@@ -73,7 +73,7 @@ def test_floquet_multipliers_trivial_one_and_stable(paper_orbit):
 
 def test_newton_from_a_simulated_guess_converges_fast():
     sysm = ShapeSystem.of(fs.PAPER.groups, N)
-    u0, T0 = seed_from_simulation(sysm)
+    u0, T0, _ = seed_from_simulation(sysm)
     residuals = []
     u, T, fl, res, it = solve_orbit(sysm, u0, T0, steps=32, tol=1e-10)
     assert res < 1e-10 and it <= 8

@@ -12,8 +12,9 @@ Outcomes, each with its reason:
 - ``limit_cycle``: a stable periodic orbit; ``reached`` says whether the run came within 1 % of
   it (period and end-angle peak-to-peak of every later cycle) before ``t_max``; if not (near
   the Hopf point the approach is slow), the orbit comes from continuation from the Hopf point;
-- ``not_periodic``: a steady oscillation that is not a (stable) periodic orbit;
-- ``capped``: nothing decided by ``t_max``;
+- ``not_periodic``: an oscillation that is not a (stable) periodic orbit: its maxima wander;
+- ``capped``: nothing decided by ``t_max`` (among them an oscillation on which Newton has not
+  converged yet and whose maxima do not wander: it may still be on its way to a stroke);
 - ``failed``: the solver failed (the reason says why).
 
 Time to the limit cycle: the start of the first cycle from which every cycle's period and
@@ -154,6 +155,21 @@ class _Watch:
                 p2p.append(ev[m].max() - ev[m].min())
         return np.array(starts), np.array(periods), np.array(p2p)
 
+    def irregular(self, n_peaks: int = 10) -> str | None:
+        """What makes the last ``n_peaks`` maxima of q irregular, or None (too few, or regular):
+        :func:`flutterswim.orbits.periodic.irregular_maxima`."""
+        from .orbits.periodic import irregular_maxima
+
+        ev = np.array(self.ext_v)
+        if ev.size < 2 * n_peaks + 1:
+            return None
+        i = np.nonzero((ev[1:-1] > ev[:-2]) & (ev[1:-1] >= ev[2:]))[0] + 1
+        if i.size < n_peaks:
+            return None
+        # (a twentieth of the swing: the chunked run's maxima are refined to 1e-3 of it, and a
+        # transient on its way to the stroke moves them one way, without turns)
+        return irregular_maxima(ev[i[-n_peaks:]], float(np.ptp(ev[i[-n_peaks]:])), spread=0.05)
+
     def growth_rate(self) -> float:
         """Exponential rate of the envelope of q over the early, small-amplitude part
         (past the first two cycles, until the half-range first reaches 10 % of the largest:
@@ -288,7 +304,7 @@ def _orbit_p2p(orbit) -> float:
 def _refine(params, parts, watch: _Watch, n_segments: int, steps: int | None):
     """Newton shooting from the state at the last upward crossing; None if it fails or
     finds an unstable or trivial orbit."""
-    from .orbits.periodic import DEFAULT_STEPS, OrbitNotFound, orbit_from_flow, solve_orbit
+    from .orbits.periodic import DEFAULT_STEPS, OrbitNotFound, _checked_steps, orbit_from_flow, solve_orbit
     from .orbits.system import ShapeSystem
     from .orbits.shooting import StepFailure
 
@@ -303,6 +319,7 @@ def _refine(params, parts, watch: _Watch, n_segments: int, steps: int | None):
     u0 = ua + f * (ub - ua)
     T0 = float(np.median(np.diff(watch.up_t[-3:])))
     sysm = ShapeSystem.of(params, n)
+    check = steps is None
     steps = DEFAULT_STEPS if steps is None else steps
     try:
         u, T, fl, res, it = solve_orbit(sysm, u0, T0, steps=steps, max_newton=10)
@@ -311,7 +328,8 @@ def _refine(params, parts, watch: _Watch, n_segments: int, steps: int | None):
     orb = orbit_from_flow(params, sysm, fl, res, it, steps)
     if orb.amplitude < 1e-6 or not orb.stable:
         return None
-    return orb
+    # as periodic_orbit: the steps per period doubled until the period and advance hold
+    return _checked_steps(params, sysm, orb, 1e-10, 10).compact() if check else orb
 
 
 def _at_cap(params, groups, orbit, watch: _Watch, lam: complex, n_segments: int, steps, t_cap_tau: float,
@@ -356,9 +374,16 @@ def _at_cap(params, groups, orbit, watch: _Watch, lam: complex, n_segments: int,
         except Exception as exc:  # noqa: BLE001 - the cap outcome below says what happened
             return ("capped", f"still growing at t_max={t_cap_tau:g} tau and continuation from the Hopf "
                     f"point failed ({exc})", None)
+    irregular = watch.irregular()
+    if amps and amps[-1] > SWIM_AMPLITUDE and irregular:
+        return ("not_periodic", f"an oscillation (half-range {amps[-1]:.3g} rad) that is not a stable periodic "
+                f"orbit: {irregular}", None)
     if amps and amps[-1] > SWIM_AMPLITUDE:
-        return ("not_periodic", f"a steady oscillation (half-range {amps[-1]:.3g} rad) that is not a stable "
-                "periodic orbit (Newton shooting did not converge on it)", None)
+        # a motion that may still be on its way to a stroke (eta_perp = 30 < eta_par: reached at
+        # 110 tau) is not called "not periodic" at the cap
+        return ("capped", f"undecided at t_max={t_cap_tau:g} tau: an oscillation (half-range {amps[-1]:.3g} rad) "
+                "on which Newton shooting has not converged yet, and whose maxima are not irregular; a longer "
+                "t_max may reach the stroke", None)
     return ("capped", f"undecided at t_max={t_cap_tau:g} tau (oscillation half-range "
             f"{amps[-1] if amps else math.nan:.3g} rad)", None)
 

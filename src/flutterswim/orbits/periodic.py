@@ -29,6 +29,19 @@ __all__ = ["PeriodicOrbit", "OrbitNotFound", "periodic_orbit", "solve_orbit", "D
 #: about 4e-8 and the advance's 2e-6, relative (measured by halving, 32 -> 64 -> 128 steps);
 #: elsewhere the advance's reached 6e-6 (Groups(150, 250, 60.14), N = 24; 1.8e-7 at 64 steps).
 DEFAULT_STEPS = 32
+#: A stroke found from scratch with the default steps is solved again with twice the steps,
+#: doubling until the period and the advance per cycle change by less than these (relative;
+#: the advance relative to max(|advance|, 1e-3 l)): half of what an orbit must meet against a
+#: long simulation (1e-6 and 1e-5). 32 steps pass at the paper's point (2e-6 in the advance);
+#: a strongly bent stroke (eta_perp / eta_par = 2.5, chi 3x its threshold) needs 64 (1.8e-5).
+STEP_TOLERANCE = (5e-7, 5e-6)
+MAX_STEPS = 512
+#: Simulated onsets that seed a stroke, tried in turn until Newton finds a stable orbit:
+#: (tilt of the straight start [degree], simulated time [tau], a fresh start (else going on
+#: from the previous attempt's end)); each stops early once the end angle's swing is steady
+SEED_TIME = 80.0
+SEED_PLAN = ((1.0, SEED_TIME, True), (1.0, 2 * SEED_TIME, False),
+             (0.01, 2 * SEED_TIME, True), (0.01, 4 * SEED_TIME, False))
 DEFAULT_SEGMENTS = 48
 #: Growth rate / frequency of the straight state below which a stroke is seeded from the Hopf
 #: point (continuation) rather than from a simulation of the onset.
@@ -37,6 +50,10 @@ NEAR_ONSET = 0.02
 
 class OrbitNotFound(RuntimeError):
     """Newton's method did not converge to a periodic orbit; the message says why."""
+
+
+class _AtRest(OrbitNotFound):
+    """The simulated onset came to rest (in a bent equilibrium): no stroke to seed from."""
 
 
 @dataclass(frozen=True)
@@ -73,6 +90,10 @@ class PeriodicOrbit:
     units: str = "SI"
     #: field direction (radians) the orbit was computed at; its swim_direction is in the same frame
     phi: float = 0.0
+    #: relative change of the period or the advance (the larger) when the steps per period are
+    #: doubled: the time discretisation's error, estimated (NaN where not checked: an orbit
+    #: from a neighbour, or with ``steps`` given)
+    step_error: float = math.nan
     #: the converged flow (stages, step matrices, monodromy, parameter sensitivity): a warm
     #: start for a neighbouring orbit (``periodic_orbit(params, guess=this)``). It holds the
     #: step matrices (about 2 MB at N = 24, 9 MB at N = 48): :meth:`compact` drops it, and
@@ -90,7 +111,7 @@ class PeriodicOrbit:
         return state
 
     def __setstate__(self, state):
-        state = {"phi": 0.0, **state}  # (orbits pickled before phi was recorded: phi = 0)
+        state = {"phi": 0.0, "step_error": math.nan, **state}  # (orbits pickled before these were recorded)
         for k, v in state.items():
             object.__setattr__(self, k, v)
 
@@ -114,7 +135,7 @@ class PeriodicOrbit:
         """The stroke descriptors as a JSON-ready dict."""
         keys = ("period", "advance", "speed", "swim_direction", "lateral_leading", "lateral_trailing",
                 "leading_end", "nonreciprocity", "self_intersecting", "amplitude", "stable",
-                "trivial_multiplier_error", "residual", "n_newton")
+                "trivial_multiplier_error", "step_error", "residual", "n_newton")
         out = {k: getattr(self, k) for k in keys}
         out["max_multiplier"] = self.max_multiplier
         return {k: (bool(v) if isinstance(v, (bool, np.bool_)) else v if isinstance(v, str) else
@@ -386,6 +407,7 @@ def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = 
     :class:`OrbitNotFound` if the straight state is stable (no stroke to find), the onset
     simulated from it is irregular (no stroke to seed from), or Newton fails."""
     _check_params(params)
+    check_steps = guess is None and steps is None
     if isinstance(guess, PeriodicOrbit):
         n_segments = guess.n_segments if n_segments is None else n_segments
         steps = guess.steps if steps is None else steps
@@ -412,8 +434,19 @@ def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = 
                 raise OrbitNotFound(f"no stroke at chi={g.chi:.6g}, eta_perp={g.eta_perp:.6g}: the continuation "
                                     f"from the Hopf point does not reach it ({exc})") from None
             u0, T = br.orbits[-1].u0, br.orbits[-1].period_dimensionless
+            if not br.orbits[-1].stable:
+                # the branch from the Hopf point is unstable here (it can be with l1 < 0, where
+                # eta_perp < eta_par: a real multiplier above 1): the stroke a run settles into
+                # is another, found from a simulation
+                try:
+                    orb = _from_simulation(params, system, steps, tol, max_newton)
+                except OrbitNotFound:
+                    orb = None
+                if orb is not None and orb.stable:
+                    return _checked_steps(params, system, orb, tol, max_newton) if check_steps else orb
         else:
-            u0, T = seed_from_simulation(system)
+            orb = _from_simulation(params, system, steps, tol, max_newton)
+            return _checked_steps(params, system, orb, tol, max_newton) if check_steps else orb
     else:
         if not isinstance(guess, PeriodicOrbit):
             raise ParameterError(f"guess={guess!r} must be a PeriodicOrbit or None")
@@ -431,7 +464,7 @@ def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = 
     # where Newton stalls, the closing residual relative to the state's scale is enough, as in
     # continuation (continuation._scaled: an absolute 1e-10 can be below the round-off floor of
     # strongly bent strokes; chi = 150 at N = 12 stalled at 4e-9)
-    floor = tol * (1.0 + float(np.max(np.abs(u0))))
+    floor = _floor(tol, u0)
     try:
         u, T, fl, res, it = solve_orbit(system, u0, T, steps=steps, tol=tol, max_newton=max_newton, warm=warm,
                                         sensitivity=True, floor=floor)
@@ -441,8 +474,83 @@ def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = 
         # the predictor and chord from the neighbour failed (near a fold, say): Newton from its shape
         u, T, fl, res, it = solve_orbit(system, u0, T, steps=steps, tol=tol, max_newton=max_newton,
                                         sensitivity=True, floor=floor)
+    orb = _packaged(params, system, fl, res, it, steps)
+    return _checked_steps(params, system, orb, tol, max_newton) if check_steps else orb
+
+
+def _packaged(params, system: ShapeSystem, fl: Flow, res: float, it: int, steps: int) -> PeriodicOrbit:
+    """The orbit with its converged flow kept as a warm start."""
     return replace(orbit_from_flow(params, system, fl, res, it, steps),
                    warm_start=replace(fl, matrices=fl.matrices.without_jacobians()))
+
+
+def _floor(tol: float, u: np.ndarray) -> float:
+    return tol * (1.0 + float(np.max(np.abs(u))))
+
+
+def _from_simulation(params, system: ShapeSystem, steps: int, tol: float, max_newton: int) -> PeriodicOrbit:
+    """Newton from a simulated onset, in up to SEED_PLAN's attempts. Where Newton fails, or
+    closes on an unstable orbit (the run still in its transient), the simulation goes on from
+    where it stopped for twice as long (past an unstable orbit without stopping at a steady
+    stretch: it lingers near that orbit); then it starts again from the straight state tilted
+    0.01 degree instead of 1 (a larger tilt speeds the onset up but can trap it: in a bent
+    equilibrium, or, where eta_perp < eta_par, an oscillating hooked end that is no stroke).
+    The last attempt's orbit is returned even if unstable (its ``stable`` says so)."""
+    start, settle_check, last = None, True, None
+    for tilt, t_len, fresh in SEED_PLAN:
+        if fresh:
+            start, settle_check = None, True
+        elif start is None:
+            continue  # (the attempt it continues came to rest)
+        try:
+            u0, T, start = seed_from_simulation(system, t_max=t_len, start=start, stop_settled=settle_check,
+                                                tilt=tilt)
+        except _AtRest as exc:
+            start, last = None, exc
+            continue
+        try:
+            u, T, fl, res, it = solve_orbit(system, u0, T, steps=steps, tol=tol, max_newton=max_newton,
+                                            sensitivity=True, floor=_floor(tol, u0))
+        except OrbitNotFound as exc:
+            last, settle_check = exc, True
+            continue
+        orb = _packaged(params, system, fl, res, it, steps)
+        if orb.stable:
+            return orb
+        last, settle_check = orb, False
+    if isinstance(last, PeriodicOrbit):
+        return last
+    raise last
+
+
+def _checked_steps(params, system: ShapeSystem, orb: PeriodicOrbit, tol: float, max_newton: int) -> PeriodicOrbit:
+    """``orb`` solved again with twice its steps per period, doubling until the period and the
+    advance agree to STEP_TOLERANCE; the coarsest that agrees is returned (a neighbour seeded
+    from it keeps its steps), with ``step_error`` the change measured. Past MAX_STEPS, the
+    finest is returned with a warning."""
+    length = _scales(orb.params)[1]
+    steps = orb.steps
+    while True:
+        try:
+            u, T, fl, res, it = solve_orbit(system, orb.u0, orb.period_dimensionless, steps=2 * steps, tol=tol,
+                                            max_newton=max_newton, sensitivity=True, floor=_floor(tol, orb.u0))
+        except OrbitNotFound:
+            return orb  # (not checked: step_error stays NaN)
+        fine = _packaged(params, system, fl, res, it, 2 * steps)
+        e_T = abs(fine.period / orb.period - 1.0)
+        e_a = abs(fine.advance - orb.advance) / max(abs(fine.advance), 1e-3 * length)
+        err = max(e_T, e_a)
+        if e_T <= STEP_TOLERANCE[0] and e_a <= STEP_TOLERANCE[1]:
+            return replace(orb, step_error=err)
+        steps *= 2
+        if 2 * steps > MAX_STEPS:
+            import warnings
+
+            warnings.warn(f"the stroke's period and advance still change by {err:.2g} (relative) between "
+                          f"{steps // 2} and {steps} Radau steps per period (tolerance {STEP_TOLERANCE[1]:g}); "
+                          f"the orbit with {steps} is returned", RuntimeWarning, stacklevel=3)
+            return replace(fine, step_error=err)
+        orb = fine
 
 
 def _leading_pair(groups: Groups, n_segments: int) -> complex:
@@ -456,9 +564,13 @@ def _leading_pair(groups: Groups, n_segments: int) -> complex:
         raise OrbitNotFound(f"no stroke at chi={groups.chi:.6g}, eta_perp={groups.eta_perp:.6g}: {exc}") from None
 
 
-def seed_from_simulation(system: ShapeSystem, *, t_max: float = 80.0) -> tuple[np.ndarray, float]:
-    """A point near the stroke and its period, from a simulation of the onset (tau units):
-    the last upward crossing of the trailing segment's angle through its mean."""
+def seed_from_simulation(system: ShapeSystem, *, t_max: float = SEED_TIME, start: np.ndarray | None = None,
+                         stop_settled: bool = True, tilt: float = 1.0) -> tuple[np.ndarray, float, np.ndarray]:
+    """A point near the stroke, its period and the simulation's final state, from a simulation
+    of the onset (tau units) over ``t_max``: the last upward crossing of the trailing segment's
+    angle through its mean. ``start``: the full state to go on from (a previous call's last),
+    else the straight state tilted by ``tilt`` degrees; ``stop_settled``: stop once the end angle's
+    oscillation is steady (else run the whole ``t_max``)."""
     from ..integrators import integrate
 
     fil = system.filament
@@ -468,14 +580,23 @@ def seed_from_simulation(system: ShapeSystem, *, t_max: float = 80.0) -> tuple[n
                             f"{lam.real:.4g}{lam.imag:+.4g}i per tau): no stroke grows from it; "
                             "pass a neighbouring orbit as guess to look for one elsewhere")
     n = fil.n
-    y0 = np.zeros(fil.size)
-    y0[2 : n + 2] = system.phi + math.radians(1.0)
+    if start is None:
+        y0 = np.zeros(fil.size)
+        y0[2 : n + 2] = system.phi + math.radians(tilt)
+    else:
+        y0 = np.array(start, float)
+        y0[:2] = 0.0  # (the position drops out)
     t_eval = np.arange(0.0, t_max, 0.02)
     sol = integrate(lambda t, y: system.rhs_full(y), lambda t, y: fil.jacobian(y, system.phi, 1.0),
                     (0.0, t_max), y0, t_eval, rtol=1e-6, atol=1e-8,
-                    check=_settled_check(n, system.phi))
+                    check=_settled_check(n, system.phi) if stop_settled else None)
     q = sol.y[:, 2] - system.phi
-    mean = q[q.size // 2 :].mean()
+    tail = q[q.size // 2 :]
+    if np.ptp(tail) < 1e-6 and sol.t[-1] >= t_max - 0.04:
+        raise _AtRest(f"no periodic stroke from the onset at chi={fil.chi:.6g}, eta_perp={fil.eta_perp:.6g}: the "
+                      f"filament comes to rest (the end angle's last half spans {np.ptp(tail):.2g} rad, at "
+                      f"{math.degrees(tail[-1]):.3g} degrees from the field: a bent equilibrium)")
+    mean = tail.mean()
     up = np.nonzero((q[:-1] - mean < 0) & (q[1:] - mean >= 0))[0]
     if up.size < 3:
         raise OrbitNotFound(f"no periodic stroke within {t_max:g} tau of the onset")
@@ -489,23 +610,28 @@ def seed_from_simulation(system: ShapeSystem, *, t_max: float = 80.0) -> tuple[n
     frac = lambda k: (mean - q[k]) / (q[k + 1] - q[k])  # noqa: E731
     t_i, t_j = sol.t[i] + frac(i) * 0.02, sol.t[j] + frac(j) * 0.02
     u = sol.y[j, 2:] + frac(j) * (sol.y[j + 1, 2:] - sol.y[j, 2:])
-    return u, float(t_j - t_i)
+    return u, float(t_j - t_i), sol.y[-1].copy()
 
 
 def _irregular_peaks(q: np.ndarray, n_peaks: int = 10) -> str | None:
-    """What makes the last ``n_peaks`` maxima of the end angle ``q`` irregular, or None: they
-    differ by more than a fifth of the swing, rise and fall in turn more than twice (an onset
-    still growing or decaying towards its stroke moves them one way) and do not repeat every
-    1-4 maxima (a stroke with several maxima per period)."""
+    """What makes the last ``n_peaks`` maxima of the end angle ``q`` irregular, or None
+    (:func:`irregular_maxima`)."""
     i = np.nonzero((q[1:-1] > q[:-2]) & (q[1:-1] >= q[2:]))[0] + 1
-    pk = q[i[-n_peaks:]]
-    if pk.size < n_peaks:
+    if i.size < n_peaks:
         return None
-    swing = float(np.ptp(q[i[-n_peaks]:]))
+    return irregular_maxima(q[i[-n_peaks:]], float(np.ptp(q[i[-n_peaks]:])))
+
+
+def irregular_maxima(pk: np.ndarray, swing: float, spread: float = 0.2) -> str | None:
+    """What makes the maxima ``pk`` of an oscillation of range ``swing`` irregular, or None:
+    they differ by more than ``spread`` times the swing, rise and fall in turn more than twice
+    (an onset still growing or decaying towards its stroke moves them one way) and do not
+    repeat every 1-4 maxima (a stroke with several maxima per period)."""
+    n_peaks = pk.size
     if any(np.max(np.abs(pk[m:] - pk[:-m])) < 0.02 * swing for m in range(1, 5)):
         return None  # a stroke of m maxima per period (period doubled, say)
     turns = int(np.count_nonzero(np.diff(np.sign(np.diff(pk))) != 0))
-    if swing > 0 and np.ptp(pk) > 0.2 * swing and turns > 2:
+    if swing > 0 and np.ptp(pk) > spread * swing and turns > 2:
         return (f"the end angle's last {n_peaks} maxima still range over {np.ptp(pk):.3g} rad of its "
                 f"{swing:.3g} rad swing, rising and falling {turns} times")
     return None
