@@ -29,17 +29,20 @@ def test_straight_below_and_stroke_above_the_threshold(rc):
     for r in (1.0, 1.5):
         p = ds.sel(kappa_E_ratio=r)
         assert bool(p["reached_limit_cycle"]) and bool(p["stable"]) and float(p["advance_per_cycle_bl"]) > 0.01
-    # the growth rate measured from the run has the sign of the linear one, and its size where
-    # the leading mode dominates the end angle (near and above the threshold: within 5 %, the
-    # onset being fitted up to 10 % of the stroke's amplitude, where the nonlinearity lowers the
-    # rate by about 1 %); just below the threshold the oscillation stays below 2e-4 rad, where
-    # the sweep's atol (1e-6) limits the measured rate to about 50 %
+    # the growth rate measured from the run: above the threshold within 5 % of the linear one
+    # (the onset fitted up to 10 % of the stroke's amplitude, where the nonlinearity lowers the
+    # rate by about 1 %); below it, where the decaying oscillation stays within a few hundred
+    # times the sweep's atol (1e-6), NaN (not measurable) or within 10 % plus the damping of the
+    # integrator at the sweep's rtol 1e-4 (0.003-0.008 per tau; 1e-7 removes it). Fitted whole,
+    # the envelope's floor made it 0.044 per tau at kappa_E ratio 0.65.
+    tau = PAPER.tau
     for r in ratios:
         p = ds.sel(kappa_E_ratio=r)
         lin, got = float(p["growth_rate_linear_per_s"]), float(p["growth_rate_measured_per_s"])
-        assert np.sign(got) == np.sign(lin)
-        if r > 0.5:
-            assert abs(got - lin) < (0.5 if r < 1.0 else 0.05) * abs(lin)
+        if r > 1.0 - 1e-9:
+            assert abs(got - lin) < 0.05 * abs(lin)
+        else:
+            assert np.isnan(got) or abs(got - lin) < 0.1 * abs(lin) + 0.01 / tau, (r, got, lin)
 
 
 def test_near_onset_points_lie_on_the_square_root_branch(rc):

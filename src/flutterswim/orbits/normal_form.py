@@ -41,7 +41,7 @@ class NormalForm:
     """c1 and l1 = Re(c1)/omega; ``amplitude2_slope`` = d((2|z|)^2)/d(parameter) on the
     branch, for the amplitude 2|z| along the unit eigenvector q (it scales like N, as c1's
     1/N); ``amplitude2_slope_rms`` = amplitude2_slope / (2N + 1), the slope of the orbits'
-    ``amplitude``^2 (:attr:`PeriodicOrbit.amplitude`, whose scale is independent of N; the slope converges with N at order 2, 23.7, 20.9, 20.1 at N = 24, 48, 96 for Groups(70, 120, chi)); ``supercritical`` if l1 < 0 (the branch is stable and exists on the unstable side).
+    ``amplitude``^2 (:attr:`PeriodicOrbit.amplitude`, whose scale is independent of N; the slope converges with N at order 2, 23.7, 20.9, 20.1 at N = 24, 48, 96 for Groups(70, 120, chi)); ``supercritical`` if l1 < 0: the branch exists on the side where the straight state is unstable, and its small orbits are stable within the plane of the Hopf pair. That alone does not make them stable: the straight state also has a neutral real mode (the family of bent equilibria, eigenvalue 0), whose Floquet multiplier, 1 at the Hopf point, moves with the amplitude either way. Where eta_perp < eta_par (eta_par = 41.5, chi = 70.7) it rises above 1 (1.06 on the first orbit, up to 2.9) although l1 < 0; the orbits' multipliers (:attr:`PeriodicOrbit.stable`) decide.
     c1 and l1 are for q of unit Euclidean norm over the 2N + 1 shape components, so they scale
     like 1/N (N l1 converges: -6.05e-5, -3.24e-5, -1.66e-5 at N = 24, 48, 96 at the paper's
     point); their sign is the model's, and the amplitude law does not depend on it."""
