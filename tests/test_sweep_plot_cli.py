@@ -157,3 +157,46 @@ def test_a_continuation_sweep_draws_both_branches_and_its_jumps():
     import matplotlib.pyplot as plt
 
     plt.close(fig)
+
+
+OUT_VARS_DIR = [*OUT_VARS, "swim_direction_deg"]
+
+
+def fake_reversal(task):
+    """Strokes from 0.7 on; past 1.5 they swim against the field (180 degrees); those at 0.9
+    and 1.0 are orbits by continuation (the run had not settled)."""
+    r = task["values"]["kappa_E_ratio"]
+    swim = r >= 0.7
+    out = {k: 0.0 for k in OUT_VARS[:5]}
+    out["straight" if not swim else "limit_cycle"] = 1.0
+    out.update({"self_intersecting": 0.0 if swim else math.nan,
+                "reached_limit_cycle": float(swim and not 0.85 < r < 1.05),
+                "advance_per_cycle_bl": 0.1 * r if swim else math.nan, "period_s": 0.4 / r if swim else math.nan,
+                "swim_direction_deg": (180.0 if r > 1.5 else 0.0) if swim else math.nan})
+    return out
+
+
+fake_reversal.variables = OUT_VARS_DIR
+fake_reversal.required = ["straight", "limit_cycle"]
+
+
+def test_reversed_and_unsettled_strokes_are_marked_where_they_are():
+    """A held-out review: past the fold of the kappa_E branch the stroke swims the other way and
+    the figure did not show it; and the markers of orbits by continuation were placed by the
+    int8 flags used as positions (x[0], x[1], where the period is NaN: never visible)."""
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ds = sweep(["kappa_E_ratio=0.5:2:16"], backend="serial", point_fn=fake_reversal, progress=False)
+    ds["failed"] = ds["failed"].astype("int8")  # as xarray.open_zarr gives it from the store (plot-sweep)
+    fig = plot_sweep(ds)
+    x = ds.kappa_E_ratio.values
+    back = [l for l in fig.axes[0].lines if "against the field" in l.get_label()]
+    assert len(back) == 1
+    np.testing.assert_allclose(back[0].get_xdata(), x[x > 1.5])
+    circles = [l for l in fig.axes[1].lines if "continuation" in l.get_label()]
+    assert len(circles) == 1
+    np.testing.assert_allclose(circles[0].get_xdata(), x[(x > 0.85) & (x < 1.05)])
+    np.testing.assert_allclose(circles[0].get_ydata(), 0.4 / x[(x > 0.85) & (x < 1.05)])
+    plt.close(fig)

@@ -92,7 +92,8 @@ _OTHER_OUTCOMES = (("bent_equilibrium", "v", "tab:purple", "bent equilibrium (no
 def _branch_values(ds, advance: str, period: str):
     """(swimming, straight, advance drawn (0 where straight), period) of a 1-d sweep."""
     # settle-engine sweeps flag "limit_cycle" (descriptors from the periodic orbit)
-    swim = ds["limit_cycle" if "limit_cycle" in ds else "swimming"].values.astype(bool) & ~ds["failed"].values
+    # (failed is stored as int8: ~ of it is -1 / -2, and bool & int8 an int8 that indexes by position)
+    swim = ds["limit_cycle" if "limit_cycle" in ds else "swimming"].values.astype(bool) & ~ds["failed"].values.astype(bool)
     straight = ds["straight"].values.astype(bool)
     adv = np.where(swim, ds[advance].values, np.where(straight, 0.0, np.nan))
     per = np.where(swim, ds[period].values, np.nan)
@@ -173,6 +174,13 @@ def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str
         failed = d["failed"].values.astype(bool)
         if failed.any():
             axs[0].plot(xv[failed], np.zeros(failed.sum()), "x", color="0.5", label="failed")
+        if "swim_direction_deg" in d:
+            # past the fold of the kappa_E branch (ratio > 2.1) the stroke swims the other way;
+            # the advance drawn is its size: marked, so that the reversal is not hidden
+            back = swim & (np.cos(np.radians(np.asarray(d["swim_direction_deg"].values, float))) < 0)
+            if back.any():
+                axs[0].plot(xv[back], adv[back], "v", color="tab:purple", ms=6, mfc="none",
+                            label="swims against the field (advance drawn as its size)")
         reached = d["reached_limit_cycle" if "reached_limit_cycle" in d else "limit_cycle_reached"].values.astype(bool)
         unsettled = (~reached) & swim
         if unsettled.any():
