@@ -544,3 +544,24 @@ def test_cli_says_why_a_fit_did_not_converge(tmp_path, monkeypatch, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert err[-1] == "flutterswim fit: failed: not converged: not a fit: stopped at the edge"
     assert json.loads((tmp_path / "f.json").read_text())["convergence"]["converged"] is False
+
+
+def test_shape_fit_from_ten_percent_off(model):
+    """The shape fit started 10 % off in each parameter (a held-out review: NotSwimming from 5 %
+    off, its first trust region 6 log units wide; then, over 6.6 cycles, a phase-slipped
+    minimum at kappa_E -30 %). Its tau now starts from the data's own period (the upward
+    crossings), and its steps are taken from the start: the truth within 3 sigma, and the same
+    minimum as from 2 % off."""
+    from flutterswim.fitting.richer import data_period
+
+    truth = (1.94e-14, 0.375, 19.1e3)
+    x = to_identifiable(BASE, *truth)
+    t = np.arange(0.0, 2.5, 0.02)
+    data = shape_data_from_model(model, x, t, 24, 0.05, t0=0.013, rng=np.random.default_rng(4))
+    period = model.orbit(*np.exp(x[:2])).period * truth[1]
+    assert data_period(data) == pytest.approx(period, rel=5e-3)  # the crossings' period: the model's
+    far, sig = fit_shapes(model, data, x + np.log([1.1, 0.9, 1.1]))
+    near, _ = fit_shapes(model, data, x + np.log([1.02, 0.98, 1.01]))
+    got = np.log(to_physical(BASE, far[:3]))
+    assert np.all(np.abs(got - np.log(truth)) < 3 * sig), (got - np.log(truth), sig)
+    np.testing.assert_allclose(far[:3], near[:3], atol=1e-3 * float(np.min(sig)) + 1e-6)
