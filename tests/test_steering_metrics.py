@@ -124,3 +124,18 @@ def test_a_figure_eight_is_followed_through_its_crossing():
     d = np.array([np.min(np.hypot(P[:, 0] - x, P[:, 1] - y)) for x, y in zip(ax, ay)])
     assert m["cross_track_max_bl"] == pytest.approx(d.max() / L, rel=1e-3)
 
+
+def test_the_default_figure_eight_is_wider_than_the_controllers_tightest_turn():
+    """The lemniscate x = a sin u, y = a/2 sin 2u (a: half the CLI's default size) bends with the
+    radius (x'^2 + y'^2)^(3/2) / |x' y'' - y' x''|; its smallest must not be below the
+    controller's tightest turn U / (0.8 Omega_max) at the paper's point (the default of 10 body
+    lengths bent down to 1.04 against 1.39: steer warned that its own default cannot be followed)."""
+    from flutterswim.steering.cli import SIZE_OPTION
+
+    size = float(SIZE_OPTION["figure8"][1])
+    a = size / 2
+    u = np.linspace(0.0, 2 * math.pi, 200_000, endpoint=False) + 1e-6  # (the tangent is never zero)
+    xp, yp, xpp, ypp = a * np.cos(u), a * np.cos(2 * u), -a * np.sin(u), -2 * a * np.sin(2 * u)
+    r_path = np.min((xp ** 2 + yp ** 2) ** 1.5 / np.abs(xp * ypp - yp * xpp))
+    U, omega_max = 1.0582e-3, 0.2578  # identified at the paper's point (0.2578-0.2606 rad/s, N = 24)
+    assert r_path >= U / (0.8 * omega_max) / L
