@@ -17,7 +17,7 @@ def register(subparsers) -> None:
     p.add_argument("--path", choices=("square", "circle", "figure8", "waypoints"), default="square")
     p.add_argument("--side", default=None, help="square side: body lengths, or with a unit (37mm, 3.7cm, 2bl); default 10")
     p.add_argument("--radius", default=None, help="circle radius: body lengths or with a unit (default 2)")
-    p.add_argument("--size", default=None, help="figure-eight length: body lengths or with a unit (default 10)")
+    p.add_argument("--size", default=None, help="figure-eight length: body lengths or with a unit (default 14: its tightest bend, 1.46 body lengths, is wider than the controller's turn, 1.39)")
     p.add_argument("--waypoints", default=None, help="CSV of x, y [body lengths, or the unit a header names: x_mm,y_mm] for --path waypoints")
     p.add_argument("--open-loop", action="store_true", help="pre-planned field schedule instead of feedback")
     p.add_argument("--noise-px", type=float, default=0.2)
@@ -61,7 +61,7 @@ def length(name: str, text, body_length: float) -> float:
 
 
 #: the option that sets the size of each path, and its default
-SIZE_OPTION = {"square": ("side", "10"), "circle": ("radius", "2"), "figure8": ("size", "10"),
+SIZE_OPTION = {"square": ("side", "10"), "circle": ("radius", "2"), "figure8": ("size", "14"),
                "waypoints": ("waypoints", None)}
 
 

@@ -208,11 +208,114 @@ def _open_loop_plan(path: RefPath, reduced: ReducedModel, t0: float, rate_fracti
     return plan
 
 
+def _distance_to_path(path: RefPath, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The signed distance of the points ``q`` (Q, 2) to the polyline through the path's points
+    (positive: left of the path direction) and the index of the nearest path point: a global
+    nearest-point search (a k-d tree of every path point), refined onto the two segments
+    beside that point. At a vertex (the nearest point of both segments) the sign is taken
+    against the mean of the two directions, so the outer side of a corner is the outer side."""
+    from scipy.spatial import cKDTree
+
+    pts = path.points
+    n = len(pts)
+    _, i = cKDTree(pts).query(q)
+    i = np.asarray(i, int)
+    if path.closed:  # the last point is the first again
+        prev = np.where(i == 0, n - 2, i - 1)
+        nxt = np.where(i == n - 1, 1, i + 1)
+    else:
+        prev, nxt = np.maximum(i - 1, 0), np.minimum(i + 1, n - 1)
+    best = np.full(len(q), np.inf)
+    sign = np.zeros(len(q))
+    at_vertex = np.ones(len(q), bool)
+    for a, b in ((prev, i), (i, nxt)):
+        d = pts[b] - pts[a]
+        dd = np.einsum("ij,ij->i", d, d)
+        r = q - pts[a]
+        u = np.clip(np.einsum("ij,ij->i", r, d) / np.where(dd > 0, dd, 1.0), 0.0, 1.0)
+        foot = pts[a] + u[:, None] * d
+        dist = np.hypot(*(q - foot).T)
+        inside = (u > 0.0) & (u < 1.0) & (dd > 0)
+        better = dist < best
+        best = np.where(better, dist, best)
+        cross = d[:, 0] * (q[:, 1] - foot[:, 1]) - d[:, 1] * (q[:, 0] - foot[:, 0])
+        sign = np.where(better & inside, np.sign(cross), sign)
+        at_vertex = np.where(better, ~inside, at_vertex)
+    # nearest point a vertex of the polyline: the side against the mean direction there
+    d0, d1 = pts[i] - pts[prev], pts[nxt] - pts[i]
+    t = (d0 / (np.hypot(*d0.T)[:, None] + 1e-300) + d1 / (np.hypot(*d1.T)[:, None] + 1e-300))
+    r = q - pts[i]
+    sign = np.where(at_vertex, np.sign(t[:, 0] * r[:, 1] - t[:, 1] * r[:, 0]), sign)
+    return sign * best, i
+
+
+def _progress(path: RefPath, q: np.ndarray, back: float, ahead: float, slack: float) -> np.ndarray:
+    """The arc length along ``path`` reached by the points ``q`` (Q, 2) in order, unwrapped on a
+    closed path (laps counted on, from the path's start: a swimmer just behind the start is
+    behind it, not a lap ahead).
+
+    Each point's is that of its nearest path point from ``back`` behind the arc length before to
+    ``ahead`` beyond it, or, if further, to the middle of the edge after the next corner: a corner
+    cut on the inside is passed where the nearest point jumps from one edge to the next (on the
+    corner's bisector), however sharp the corner, while a part of the path crossing this one
+    (a figure eight's other branch) is not taken for it. Should a point anywhere on the path be
+    nearer by more than ``slack`` (the search lost the path), that point is taken, in the lap
+    nearest the arc length before."""
+    from scipy.spatial import cKDTree
+
+    pts, s = path.points, path.s
+    L = path.length
+    cs = np.sort(s[path.corners]).astype(float)
+    if path.closed:
+        back, ahead = min(back, L / 6), min(ahead, L / 3)  # (a path shorter than the window)
+        core = slice(0, len(pts) - 1)  # the last point is the first again
+        ext_p = np.concatenate([pts[core]] * 3)
+        ext_s = np.concatenate([s[core] - L, s[core], s[core] + L])
+        cs = np.concatenate([cs + k * L for k in (-1, 0, 1, 2)])
+    else:
+        ext_p, ext_s = pts, s
+        cs = np.r_[cs, L]  # the last edge ends at the path's end
+    _, g = cKDTree(pts).query(q)
+
+    def nearest_lap(sv: float, ref: float) -> float:
+        return sv + L * round((ref - sv) / L) if path.closed else sv
+
+    out = np.empty(len(q))
+    S = 0.0  # the path starts where control starts (a figure eight at its crossing)
+    for k, p in enumerate(q):
+        base = L * math.floor(S / L) if path.closed else 0.0
+        here = S - base
+        end = here + ahead
+        n = int(np.searchsorted(cs, here, side="right"))
+        if n + 1 < cs.size:  # on through the next corner to the middle of the edge after it
+            end = max(end, 0.5 * (cs[n] + cs[n + 1]))
+        if path.closed:
+            end = min(end, here + 0.5 * L)
+        lo, hi = np.searchsorted(ext_s, [here - back, end])
+        w = slice(lo, max(hi, lo + 1))
+        d = np.hypot(ext_p[w, 0] - p[0], ext_p[w, 1] - p[1])
+        j = int(np.argmin(d))
+        if d[j] <= math.hypot(*(pts[g[k]] - p)) + slack:
+            S = base + float(ext_s[lo + j])
+        else:
+            S = nearest_lap(float(s[g[k]]), S)
+        out[k] = S
+    return out
+
+
 def metrics(run, path: RefPath, reduced: ReducedModel, t0: float, body_length: float) -> dict:
     """Cross-track error of the true cycle-averaged centroid after control starts (RMS, max;
     mm and body lengths), corner overshoot (largest outward excursion near a corner), time to
     reacquire (|error| < 0.1 body length until 1.5 body lengths before the next corner) after each
-    corner (NaN: not reacquired), waypoint arrivals, trapped."""
+    corner (NaN: not reacquired), waypoint arrivals (at each corner; an open path's end in
+    ``end_arrival_s``, NaN if not reached), trapped. An open path is scored up to where its end
+    is reached (the run goes on past it).
+
+    The cross-track error is the distance to the path (its nearest point anywhere: a corner is
+    cut on the inside, where the nearest point jumps from one edge to the next). Progress along
+    the path (arrivals, the corners' zones, the fraction covered) is the arc length of the
+    nearest point, counted on continuously from where control starts (laps counted; see
+    ``_progress``): a corner is reached when the swimmer passes its bisector."""
     from .turning import _moving_average
 
     cx, cy = _centroid(run)
@@ -220,54 +323,67 @@ def metrics(run, path: RefPath, reduced: ReducedModel, t0: float, body_length: f
     _, ay = _moving_average(run.t, cy, reduced.period)
     m = ts >= t0
     ts, ax, ay = ts[m], ax[m], ay[m]
-    errs, idx = [], []
-    near = 0
-    for p in zip(ax, ay):
-        i, e = path.project(np.array(p), near=near)
-        near = i
-        idx.append(i)
-        errs.append(e)
-    e, idx = np.array(errs), np.array(idx)
+    q = np.stack([ax, ay], axis=1)
     bl = body_length
-    over, reacq = [], []
-    s_corners = list(path.s[path.corners]) + [math.inf]
-    for c, s_next in zip(path.corners, s_corners[1:]):
-        w = np.abs(path.s[idx] - path.s[c]) < 1.5 * bl
-        if not w.any():
-            continue
+    # the whole run's speed: trapped is whether the run ended stalled
+    speed_all = np.hypot(np.gradient(ax, ts), np.gradient(ay, ts)) if ts.size > 1 else np.zeros(ts.size)
+    # progress along the path, on from where control starts (laps counted)
+    prog = _progress(path, q, back=0.5 * bl, ahead=2.0 * bl, slack=0.5 * bl)
+    end_arrival = math.nan
+    if not path.closed:
+        # an open path is scored up to where the swimmer reaches its end (then swims on past it)
+        done = np.nonzero(prog >= path.s[-1])[0]
+        if done.size:
+            end_arrival = float(ts[done[0]])
+            ts, ax, ay, q, prog = ts[:done[0] + 1], ax[:done[0] + 1], ay[:done[0] + 1], q[:done[0] + 1], prog[:done[0] + 1]
+    e, _ = _distance_to_path(path, q)
+    Ls = path.length
+    s_c = path.s[path.corners].astype(float)
+    # each corner's first pass after control starts, in the order they are passed
+    start = prog[0] if prog.size else 0.0
+    if path.closed:
+        s_c = s_c + Ls * np.ceil((start - s_c) / Ls)
+    order = np.argsort(s_c, kind="stable")
+    passes = s_c[order]
+    nxt = np.r_[passes[1:], passes[0] + Ls if path.closed and passes.size else math.inf]
+    over, reacq, arrivals = {}, {}, {}
+    for c, sc, s_next in zip(order, passes, nxt):
         # outward: to the right of a left turn (e < 0), to the left of a right turn
-        d0, d1 = path.points[c] - path.points[c - 1], path.points[c + 1] - path.points[c]
+        v = path.corners[c]
+        d0, d1 = path.points[v] - path.points[v - 1], path.points[v + 1] - path.points[v]
         left = d0[0] * d1[1] - d0[1] * d1[0] > 0
-        over.append(float(max(0.0, -e[w].min() if left else e[w].max())))
+        # (every pass of a closed path's corner)
+        rel = prog - sc
+        if path.closed:
+            rel = (rel + Ls / 2) % Ls - Ls / 2
+        w = np.abs(rel) < 1.5 * bl
+        if w.any():
+            over[c] = float(max(0.0, -e[w].min() if left else e[w].max()))
         # time from passing the vertex until the error stays below 0.1 body length, up to where
         # the next corner's zone begins (there the swimmer cuts that corner, on purpose)
-        after = np.nonzero((path.s[idx] > path.s[c]) & (path.s[idx] < s_next - 1.5 * bl))[0]
+        after = np.nonzero((prog > sc) & (prog < s_next - 1.5 * bl))[0]
         if after.size:
             bad = np.nonzero(np.abs(e[after]) >= 0.1 * bl)[0]
             if bad.size == 0:
-                reacq.append(0.0)
+                reacq[c] = 0.0
             elif bad[-1] + 1 < after.size:
-                reacq.append(float(ts[after[bad[-1] + 1]] - ts[after[0]]))
+                reacq[c] = float(ts[after[bad[-1] + 1]] - ts[after[0]])
             else:
-                reacq.append(math.nan)
-    arrivals = []  # when the averaged position passes each vertex along the path, within 1 body length
-    for c in path.corners:
-        hit = np.nonzero((path.s[idx] >= path.s[c]) & (np.abs(e) < bl))[0]
-        arrivals.append(float(ts[hit[0]]) if hit.size else math.nan)
-    speed = np.hypot(np.gradient(ax, ts), np.gradient(ay, ts))
-    # progress along the path, laps counted on a closed one (its arc length starts again)
-    prog = path.s[idx].astype(float)
-    if path.closed and prog.size > 1:
-        prog = prog + path.length * np.concatenate([[0], np.cumsum(np.diff(prog) < -0.5 * path.length)
-                                                    - np.cumsum(np.diff(prog) > 0.5 * path.length)])
-    covered = float(prog.max() - prog[0]) if idx.size else 0.0
+                reacq[c] = math.nan
+        # arrival: the averaged position passes the corner, within 1 body length of the path
+        hit = np.nonzero((prog >= sc) & (np.abs(e) < bl))[0]
+        arrivals[c] = float(ts[hit[0]]) if hit.size else math.nan
+    speed = np.hypot(np.gradient(ax, ts), np.gradient(ay, ts)) if ts.size > 1 else np.zeros(ts.size)
+    covered = float(prog.max() - prog[0]) if prog.size else 0.0
     return {
         "cross_track_rms_mm": float(np.sqrt(np.mean(e ** 2)) * 1e3), "cross_track_rms_bl": float(np.sqrt(np.mean(e ** 2)) / bl),
         "cross_track_max_mm": float(np.abs(e).max() * 1e3), "cross_track_max_bl": float(np.abs(e).max() / bl),
-        "corner_overshoot_bl": float(max(over) / bl) if over else 0.0,
-        "corner_overshoot_mm": float(max(over) * 1e3) if over else 0.0,
-        "reacquire_after_corner_s": reacq, "waypoint_arrival_s": arrivals,
-        "path_covered_fraction": covered / path.length,
+        "corner_overshoot_bl": float(max(over.values()) / bl) if over else 0.0,
+        "corner_overshoot_mm": float(max(over.values()) * 1e3) if over else 0.0,
+        "reacquire_after_corner_s": [reacq[c] for c in range(len(path.corners)) if c in reacq],
+        "waypoint_arrival_s": [arrivals[c] for c in range(len(path.corners))],
+        "path_covered_fraction": covered / Ls,
         "mean_speed_mm_s": float(np.mean(speed) * 1e3),
-        "trapped": bool(np.mean(speed[-max(1, speed.size // 10):]) < 0.2 * reduced.U),
+        "end_arrival_s": end_arrival,
+        "trapped": bool(np.mean(speed_all[-max(1, speed_all.size // 10):]) < 0.2 * reduced.U),
     }
