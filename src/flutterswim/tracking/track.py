@@ -484,7 +484,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     smooth_frames: window [frames] of the along-body position of the ends, smoothed in time
     through the middle of the body (:func:`~flutterswim.tracking.temporal.smooth_offsets`;
     0: off; the ends' paths are never smoothed); periodic: when the movie is verified periodic
-    (a settled stroke: >= 3 strokes, no drift of the shape in the body frame), every frame
+    (a settled stroke: >= 2.5 strokes, no drift of the shape in the body frame), every frame
     becomes the stroke's shape template at its phase (fitted over all cycles), placed by the
     frame's own rigid motion (:func:`flutterswim.tracking.periodic.periodic_shape`; the raw
     per-frame lengths stay in the record; ``meta["temporal"]["periodic"]`` says whether and
