@@ -17,6 +17,10 @@ the raw pixels). A frame is flagged, never kept, when:
 - length: the body length differs from the median of the good frames by more than
   ``length_tol`` (a partial or merged body), or at most half of the good frames agree on a
   length within it (no consensus: every frame is flagged);
+- too short: the ridge's longest skeleton path is too short to fit a centreline (a speck, or
+  a body seen end-on);
+- tips not found: the ridge's intensity along the curve and its extension does not fall to
+  half its plateau at both ends, or the half-maximum tips lie closer than the shortest body;
 - tip not found: the line-end fit failed at an end;
 - jump: the centreline moved more than ``jump_tol`` body lengths since the last good frame,
   or head and tail cannot be told apart (both assignments about equally close, by the whole
@@ -498,10 +502,11 @@ def _frame_times(times: Any, n_frames: int) -> np.ndarray:
                              f"({n_frames} frames)")
     if not np.all(np.isfinite(t)):
         k = int(np.nonzero(~np.isfinite(t))[0][0])
-        raise ParameterError(f"times[{k}]={t[k]!r} must be finite (seconds)")
+        raise ParameterError(f"times[{k}]={float(t[k])!r} must be finite (seconds)")
     if t.size > 1 and not np.all(np.diff(t) > 0):
         k = int(np.nonzero(~(np.diff(t) > 0))[0][0])
-        raise ParameterError(f"times must increase strictly; times[{k + 1}]={t[k + 1]!r} follows times[{k}]={t[k]!r}")
+        raise ParameterError(f"times must increase strictly; times[{k + 1}]={float(t[k + 1])!r} follows "
+                             f"times[{k}]={float(t[k])!r}")
     return t
 
 
