@@ -137,3 +137,22 @@ def test_a_noisy_record_of_a_filament_that_does_not_swim_is_still(noise):
     for kw in ({"speed": 0.05}, {"speed": 0.05, "field_angle": 0.3}):
         s = describe(wave_track(period=0.4, n_frames=201, duration=4.0, noise=noise, seed=1, **kw), n_last=100)
         assert "no net swimming" not in s.note
+
+
+def test_a_coarsely_sampled_cycle_borrows_a_3rd_harmonic_the_template_holds():
+    # about 10 frames per stroke: each cycle fits 2 harmonics and the pooled cycles lend the
+    # 3rd to 5th. A real 3rd harmonic (3 % of the leading end's amplitude) held well above the
+    # template's coefficient noise (its rss drop 8 times the noise's, n se^2) is lent although
+    # the 4th and 5th hold nothing (their mean with it is under the threshold of 5): the
+    # peak-to-peak is that of the true waveform
+    period, n_frames, duration = 0.4027, 101, 4.0
+    tr = wave_track(period=period, n_frames=n_frames, duration=duration, n_points=41)
+    w = 2 * np.pi / period
+    a3 = 0.003
+    tr3 = dataclasses.replace(tr, y=tr.y + a3 * np.sin(3 * w * tr.t)[:, None])
+    t = np.linspace(0.0, period, 40001, endpoint=False)
+    A_end = 0.1  # wave_track's amplitude at s = l, the leading end
+    q = A_end * np.sin(2 * np.pi * 1.0 / 0.8 - w * t) + a3 * np.sin(3 * w * t)
+    truth = float(q.max() - q.min())
+    d = describe(_templated(tr3, a3 / 4 * tr3.scale_m * 1e3), n_last=100)
+    assert abs(d.leading_lateral_p2p_mm / (truth * tr3.scale_m * 1e3) - 1) < 1e-3

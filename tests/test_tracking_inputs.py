@@ -382,3 +382,36 @@ def test_batch_of_which_no_trial_is_tracked_writes_no_csv_of_descriptors(movie, 
     before = out.read_bytes()
     assert main(["track-batch", str(folder), "--px-per-mm", str(movie.px_per_mm), "--out", str(out), "--quiet"]) == 1
     assert out.read_bytes() == before and "an earlier run's" in capsys.readouterr().err
+
+
+def test_a_bad_time_is_named_as_a_plain_number():
+    """The frames' times checked: the value in the message is the number given, not a numpy
+    repr (``np.float64(-0.02)``)."""
+    from flutterswim._validate import ParameterError
+    from flutterswim.tracking.track import _frame_times
+
+    with pytest.raises(ParameterError) as e:
+        _frame_times([0.0, -0.02, 0.04], 3)
+    assert "times[1]=-0.02 follows times[0]=0.0" in str(e.value) and "np." not in str(e.value)
+    with pytest.raises(ParameterError) as e:
+        _frame_times(np.array([0.0, np.nan]), 2)
+    assert "times[1]=nan must be finite" in str(e.value)
+
+
+def test_every_reason_the_centreline_fit_gives_is_listed_in_the_failure_list():
+    """A frame's reason is the centreline fit's own where track_frame does not reword it ("too
+    short", "tips not found"): each is in the module docstring's list of failures."""
+    import inspect
+    import re
+
+    from flutterswim.tracking import centreline
+
+    track_module = importlib.import_module("flutterswim.tracking.track")  # (the package's track is the function)
+
+    src = inspect.getsource(centreline.fit_centreline)
+    reasons = set(re.findall(r'False, "([^"]+)"\)', src))
+    assert {"too short", "tips not found"} <= reasons
+    reworded = {"gap in the ridge", "lost ridge"}  # track_frame's "gap: ..." and "lost contrast: ..."
+    assert reworded <= reasons
+    for r in reasons - reworded:
+        assert f"- {r.split(' (')[0]}:" in track_module.__doc__, r

@@ -427,3 +427,44 @@ def test_lateral_standard_errors_cover_the_errors_of_tracked_movies(run):
     rms = math.sqrt(np.mean(np.square(z)))
     assert 0.5 <= rms <= 1.6, z
     assert math.sqrt(np.mean(np.square(z_spread))) > 2.5 * rms, z_spread
+
+
+def test_a_slowly_turning_swimmer_is_refused_the_template(run):
+    """The settled swimmer in a field that turns at 5 degrees per second (about 2 degrees per
+    stroke; 2 s continued from the settled run): each stroke's shape differs a little from the
+    last, so the template, which the drift and residual gates accepted, misses every frame by
+    more than a tracker's noise. Its misfit across the body changes smoothly from frame to frame
+    while the noise does not: refused, and the frames kept, whether without noise or with the
+    tracker-like errors (where the frames' own ends too are closer to the truth than the
+    template's, which the gate's override shows)."""
+    w = math.radians(5.0)
+    t1 = float(run.t[-1])
+    r = fs.simulate(fs.PAPER, t1 + 2.02, t_start=t1, initial=run.final_state(), n_segments=24, frame_dt=1.0 / FPS,
+                    field=fs.Field(direction=lambda t: w * (t - t1)))
+    X, Y = _pixels(r, slice(r.t.size - 101, r.t.size))
+    ok = np.ones(X.shape[0], bool)
+    for Xi, Yi in ((X, Y), _noisy(X, Y, np.random.default_rng(3), sd_slide=0.1, sd_end=0.1, sd_point=0.05)):
+        Xp, Yp, info = _periodic(Xi, Yi)
+        assert not info["done"] and "change smoothly" in info["reason"], info["reason"]
+        assert np.array_equal(Xp, Xi) and np.array_equal(Yp, Yi)
+        assert info["smooth_misfit_px"] > info["frame_noise_px"]
+        # the gate overridden: the template is farther from the truth than the frames it replaced
+        Xq, Yq, iq = periodic_shape(Xi, Yi, ok, frames_per_stroke(Xi, Yi, ok), max_smooth_ratio=math.inf)
+        assert iq["done"]
+        assert _ends_rms(Xq, Yq, X, Y) > 2.0 * max(_ends_rms(Xi, Yi, X, Y), 0.1)
+
+
+@pytest.mark.parametrize("n_frames", [50, 57])
+def test_a_movie_of_2_5_to_3_strokes_gets_the_template(settled, n_frames):
+    """A movie rendered with "3 cycles" of frames (57 at 50 fps: its good frames span 56
+    intervals, 2.97 strokes) and one of 2.6 strokes (50 frames): the template is used, unbiased
+    without noise, and with the injected tracker-like errors its ends are at least twice as
+    close to the truth (a gate at 3 strokes refused both)."""
+    X, Y = settled[0][-n_frames:], settled[1][-n_frames:]
+    Xp, Yp, info = _periodic(X, Y)
+    assert info["done"], info["reason"]
+    assert np.hypot(Xp - X, Yp - Y).max() < 0.05
+    Xn, Yn = _noisy(X, Y, np.random.default_rng(5))
+    Xq, Yq, info = _periodic(Xn, Yn)
+    assert info["done"], info["reason"]
+    assert _ends_rms(Xq, Yq, X, Y) < 0.5 * _ends_rms(Xn, Yn, X, Y)

@@ -328,9 +328,14 @@ def _lateral_p2p(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray, harmoni
                 # only harmonics the data hold (nested F test), not noise or timing jitter
                 F = ((rss_h - rss) / (2 * (top - h))) / (rss / dof) if rss > 0 else math.inf
                 # nor the noise of a tracked movie's periodic template, which every cycle shares:
-                # each added harmonic's rss drop, n/2 (a^2 + b^2), against its coefficients'
-                # variance se^2 (mean 1 for noise alone)
-                F_se = (rss_h - rss) / ((top - h) * n_pooled * se**2) if se > 0 else math.inf
+                # an added harmonic's rss drop, n/2 (a^2 + b^2), against its coefficients'
+                # variance se^2 (mean 1 for noise alone), for the strongest of them (their mean
+                # let a real 3rd harmonic be outvoted by the 4th and 5th's noise: a 2.5 mm swimmer
+                # at 10 frames per stroke, the leading end's 3rd 0.9 % of its p2p, read 0.87 % RMS
+                # short at SNR 6 instead of 0.62 %; the paper's stroke: unchanged)
+                hs = np.arange(1, top + 1)
+                F_se = max((_pooled_rss(steady, hs[hs != j])[0] - rss) / (n_pooled * se**2)
+                           for j in range(h + 1, top + 1)) if se > 0 else math.inf
                 if (F >= _POOLED_MIN_F and F_se >= _POOLED_MIN_F_TEMPLATE and low > 0
                         and 1 / _POOLED_MAX_FACTOR <= full / low <= _POOLED_MAX_FACTOR):
                     factor[h] = full / low

@@ -17,11 +17,20 @@ the raw pixels). A frame is flagged, never kept, when:
 - length: the body length differs from the median of the good frames by more than
   ``length_tol`` (a partial or merged body), or at most half of the good frames agree on a
   length within it (no consensus: every frame is flagged);
+- too short: the ridge's longest skeleton path is too short to fit a centreline (a speck, or
+  a body seen end-on);
+- tips not found: the ridge's intensity along the curve and its extension does not fall to
+  half its plateau at both ends, or the half-maximum tips lie closer than the shortest body;
 - tip not found: the line-end fit failed at an end;
 - jump: the centreline moved more than ``jump_tol`` body lengths since the last good frame,
   or head and tail cannot be told apart (both assignments about equally close, by the whole
   curves and by the two ends alone: after lost frames a strongly bending body can change too
-  much for the curves, while its ends have moved far less than their distance apart);
+  much for the curves, while its ends have moved far less than their distance apart), or,
+  after more than half a stroke of lost frames, the frames that follow match the shapes before
+  them (rigid motion removed) about as well in both orders: a body that turned by about 180 - a
+  degrees while it was lost looks reversed and turned by a against the last good frame. Every
+  later frame is flagged then; when the shapes tell (one order twice as close), the later frames
+  are put in that order;
 - tip outlier: an end leaves the path of its neighbouring frames (across the body, by more
   than ``tip_k`` robust standard deviations and ``tip_floor_px``), see
   :mod:`flutterswim.tracking.temporal`.
@@ -355,6 +364,60 @@ def orient(x: np.ndarray, y: np.ndarray, ref_x: np.ndarray, ref_y: np.ndarray) -
     return (d_flip < d_keep), min(d_keep, d_flip), max(d_keep, d_flip)
 
 
+def _aligned_rms(x: np.ndarray, y: np.ndarray, ref_x: np.ndarray, ref_y: np.ndarray) -> float:
+    """RMS distance [px] between the samples of (x, y) and those of the reference centreline
+    after the rigid motion that best maps one onto the other (least squares, Kabsch)."""
+    p = np.stack([ref_x - ref_x.mean(), ref_y - ref_y.mean()])
+    q = np.stack([x - x.mean(), y - y.mean()])
+    c = p @ q.T
+    a = math.atan2(c[0, 1] - c[1, 0], c[0, 0] + c[1, 1])
+    ca, sa = math.cos(a), math.sin(a)
+    r = np.array([[ca, -sa], [sa, ca]]) @ p - q
+    return float(np.sqrt(np.mean(np.sum(r * r, axis=0))))
+
+
+def _unlinked(links: list, X: np.ndarray, Y: np.ndarray, good: np.ndarray, per_stroke: float
+              ) -> tuple[list[int], tuple[int, str] | None]:
+    """Head and tail across runs of lost frames longer than half a stroke. Over such a run the
+    body's shape is unrelated to the last good frame's (a strongly bending stroke's reads 20-50
+    degrees of rigid turn against it at half a stroke), and a body turned by 180 - a degrees with
+    head and tail swapped looks as close as one turned by a (the field turned 60 degrees per
+    second: 140 degrees across 18 lost frames, and every later frame swapped). So the good frames
+    after the run (up to a stroke of them, to the next run) are compared, rigid motion removed,
+    with every good frame before it, in both orders (a frame at its phase of an earlier stroke
+    matches its shape): their best matches in one order must be at least twice as close (RMS
+    over them) as in the other. links: (frame, frames since the last good one); X, Y, good: the
+    frames as tracked before the later checks (X, Y reversed in place from a frame found
+    reversed). Returns the frames from which every later frame is reversed, and the first frame
+    from which head and tail cannot be told apart with the reason (or None)."""
+    flips: list[int] = []
+    if not (math.isfinite(per_stroke) and per_stroke > 0):
+        return flips, None
+    starts = [i for i, _ in links]
+    for n, (i, gap) in enumerate(links):
+        if gap <= 0.5 * per_stroke:
+            continue
+        before = np.nonzero(good[:i])[0]
+        end = min(starts[n + 1] if n + 1 < len(starts) else good.size, i + int(math.ceil(per_stroke)))
+        after = np.nonzero(good[i:end])[0] + i
+        if before.size == 0 or after.size == 0:
+            continue
+        e = np.array([[[_aligned_rms(X[k, ::o], Y[k, ::o], X[j], Y[j]) for j in before] for o in (1, -1)]
+                      for k in after]).min(axis=2)  # (after, order): the best match's RMS [px]
+        e_keep, e_flip = np.sqrt(np.mean(e**2, axis=0))
+        if e_flip >= 2.0 * e_keep:
+            continue
+        if e_keep >= 2.0 * e_flip:  # the frames since the run were followed reversed
+            X[i:], Y[i:] = X[i:, ::-1].copy(), Y[i:, ::-1].copy()
+            flips.append(i)
+            continue
+        return flips, (i, f"jump: head and tail cannot be told apart after {gap - 1:g} lost frames before frame {i} "
+                          f"({gap / per_stroke:.2f} strokes): rigid motion removed, the {after.size} frame(s) after "
+                          f"them match the frames before {e_keep:.1f} px RMS in their order and {e_flip:.1f} px "
+                          "reversed")
+    return flips, None
+
+
 # more than this share of a movie's pixels keeping their exact value between frames is a codec's
 # skipped blocks, not a camera: H.264 at CRF 25 on a line 3 noise SD high with noise of 6 grey
 # levels kept 70-78 % (the noise gone, the ends moved 4-6 %, 7-14 of 101 frames flagged); the same
@@ -439,10 +502,11 @@ def _frame_times(times: Any, n_frames: int) -> np.ndarray:
                              f"({n_frames} frames)")
     if not np.all(np.isfinite(t)):
         k = int(np.nonzero(~np.isfinite(t))[0][0])
-        raise ParameterError(f"times[{k}]={t[k]!r} must be finite (seconds)")
+        raise ParameterError(f"times[{k}]={float(t[k])!r} must be finite (seconds)")
     if t.size > 1 and not np.all(np.diff(t) > 0):
         k = int(np.nonzero(~(np.diff(t) > 0))[0][0])
-        raise ParameterError(f"times must increase strictly; times[{k + 1}]={t[k + 1]!r} follows times[{k}]={t[k]!r}")
+        raise ParameterError(f"times must increase strictly; times[{k + 1}]={float(t[k + 1])!r} follows "
+                             f"times[{k}]={float(t[k])!r}")
     return t
 
 
@@ -484,7 +548,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     smooth_frames: window [frames] of the along-body position of the ends, smoothed in time
     through the middle of the body (:func:`~flutterswim.tracking.temporal.smooth_offsets`;
     0: off; the ends' paths are never smoothed); periodic: when the movie is verified periodic
-    (a settled stroke: >= 3 strokes, no drift of the shape in the body frame), every frame
+    (a settled stroke: >= 2.5 strokes, no drift of the shape in the body frame), every frame
     becomes the stroke's shape template at its phase (fitted over all cycles), placed by the
     frame's own rigid motion (:func:`flutterswim.tracking.periodic.periodic_shape`; the raw
     per-frame lengths stay in the record; ``meta["temporal"]["periodic"]`` says whether and
@@ -534,6 +598,8 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         bar = tqdm(total=T, unit="frame", desc="track", leave=False)
     tic = time.perf_counter()
     ref: tuple[np.ndarray, np.ndarray] | None = None
+    ref_i = -1
+    links: list[tuple[int, float]] = []  # (frame, frames since the last good one): checked after the loop
     blur_known = sigma is not None
     n_clipped = 0
     static = static_objects(frames, negate=dark_line)
@@ -586,9 +652,13 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
                                                        f"frame (> {jump_tol:g} body lengths)")
                     elif d_other < 2.0 * d_best:
                         r["ok"], r["reason"] = False, "jump: head and tail cannot be told apart from the last good frame"
+                if r["ok"] and ref is not None:
+                    gap = (i - ref_i) if pos is None else float(pos[i] - pos[ref_i])
+                    if gap > 1.5:  # across lost frames: checked once the stroke's period is known
+                        links.append((i, gap))
                 if r["ok"]:
                     X[i], Y[i], length[i] = x, y, r["length"]
-                    ref = (x, y)
+                    ref, ref_i = (x, y), i
             ok[i] = r["ok"]
             reason[i] = r["reason"]
             if bar is not None:
@@ -597,6 +667,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         if bar is not None:
             bar.close()
     wall = time.perf_counter() - tic
+    X_loop, Y_loop, ok_loop = X.copy(), Y.copy(), ok.copy()
     if 0 < np.count_nonzero(repeated) <= (T - 1) // 2:
         # a camera's noise never repeats a frame: a codec or a grabber duplicated it (in place of
         # one it dropped), so its content is of an earlier time. All frames repeating is a
@@ -626,6 +697,16 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     from .temporal import frames_per_stroke, smoothing_allowed
 
     per_stroke = frames_per_stroke(X, Y, ok)
+    flips, unsure = _unlinked(links, X_loop, Y_loop, ok_loop, per_stroke)
+    for i in flips:
+        X[i:], Y[i:] = X[i:, ::-1].copy(), Y[i:, ::-1].copy()
+    if unsure is not None:
+        for k in np.nonzero(ok[unsure[0]:])[0] + unsure[0]:
+            ok[k], reason[k] = False, unsure[1]
+        X[~ok] = np.nan
+        Y[~ok] = np.nan
+    if flips or unsure is not None:
+        per_stroke = frames_per_stroke(X, Y, ok)
     temporal: dict[str, Any] = {"frames_per_stroke": per_stroke, "tip_check": "off", "smoothing": "off",
                                 "periodic": "off"}
     if tip_check and not per_stroke >= 12:
