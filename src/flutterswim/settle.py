@@ -319,7 +319,7 @@ def _orbit_p2p(orbit) -> float:
 def _refine(params, parts, watch: _Watch, n_segments: int, steps: int | None):
     """Newton shooting from the state at the last upward crossing; None if it fails or
     finds an unstable or trivial orbit."""
-    from .orbits.periodic import DEFAULT_STEPS, OrbitNotFound, _checked_steps, orbit_from_flow, solve_orbit
+    from .orbits.periodic import DEFAULT_STEPS, OrbitNotFound, _checked_steps, _packaged, orbit_from_flow, solve_orbit
     from .orbits.system import ShapeSystem
     from .orbits.shooting import StepFailure
 
@@ -340,11 +340,16 @@ def _refine(params, parts, watch: _Watch, n_segments: int, steps: int | None):
         u, T, fl, res, it = solve_orbit(sysm, u0, T0, steps=steps, max_newton=10)
     except (OrbitNotFound, StepFailure, np.linalg.LinAlgError):
         return None
-    orb = orbit_from_flow(params, sysm, fl, res, it, steps)
+    orb = (_packaged if check else orbit_from_flow)(params, sysm, fl, res, it, steps)
     if orb.amplitude < 1e-6 or not orb.stable:
         return None
+    if not check:
+        return orb
     # as periodic_orbit: the steps per period doubled until the period and advance hold
-    return _checked_steps(params, sysm, orb, 1e-10, 10).compact() if check else orb
+    try:
+        return _checked_steps(params, sysm, orb, 1e-10, 10).compact()
+    except (StepFailure, np.linalg.LinAlgError):
+        return orb.compact()
 
 
 def _at_cap(params, groups, orbit, watch: _Watch, lam: complex, n_segments: int, steps, t_cap_tau: float,

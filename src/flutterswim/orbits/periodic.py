@@ -531,6 +531,9 @@ def _checked_steps(params, system: ShapeSystem, orb: PeriodicOrbit, tol: float, 
     length = _scales(orb.params)[1]
     steps = orb.steps
     while True:
+        screened = _step_screen(system, orb)
+        if screened is not None and screened[0] <= 0.5 * STEP_TOLERANCE[0] and screened[1] <= 0.5 * STEP_TOLERANCE[1]:
+            return replace(orb, step_error=max(screened))
         try:
             u, T, fl, res, it = solve_orbit(system, orb.u0, orb.period_dimensionless, steps=2 * steps, tol=tol,
                                             max_newton=max_newton, sensitivity=True, floor=_floor(tol, orb.u0))
@@ -551,6 +554,33 @@ def _checked_steps(params, system: ShapeSystem, orb: PeriodicOrbit, tol: float, 
                           f"the orbit with {steps} is returned", RuntimeWarning, stacklevel=3)
             return replace(fine, step_error=err)
         orb = fine
+
+
+def _step_screen(system: ShapeSystem, orb: PeriodicOrbit) -> tuple[float, float] | None:
+    """A cheap estimate of what doubling the steps changes (relative period, advance), or None
+    without the orbit's monodromy: one flow with twice the steps from the orbit's start (no
+    variational equation) and one Newton step with the orbit's monodromy for the period. The
+    period's change is the full solve's to 1e-3 of it; the advance's within a factor 0.7-1.4
+    (it leaves out the shape's correction): a screen that passes only below half the tolerance
+    (else the full solve decides). About a quarter of the full solve's time."""
+    warm = orb.warm_start
+    if warm is None or warm.monodromy is None:
+        return None
+    u0, T = orb.u0, orb.period_dimensionless
+    try:
+        fine = flow(system, u0, T, 2 * orb.steps)
+    except StepFailure:
+        return None
+    normal = system.f(u0)
+    normal /= np.linalg.norm(normal)
+    try:
+        dx = np.linalg.solve(_bordered(warm.monodromy, fine.f[-1, 2:], normal),
+                             np.concatenate((u0 - fine.y[-1, 2:], [0.0])))
+    except np.linalg.LinAlgError:
+        return None
+    adv = float(np.hypot(*(fine.y[-1, :2] - fine.y[0, :2])))
+    adv_coarse = orb.advance / _scales(orb.params)[1]
+    return abs(dx[-1]) / T, abs(adv - adv_coarse) / max(adv, 1e-3)
 
 
 def _leading_pair(groups: Groups, n_segments: int) -> complex:
