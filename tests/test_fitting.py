@@ -599,3 +599,45 @@ def test_shape_fit_from_a_track_in_any_orientation(model):
     # fails; the model's cache of neighbouring orbits moves the end point by up to 0.25 sigma)
     for f in fits[1:]:
         np.testing.assert_allclose(f, fits[0], atol=0.5 * float(np.min(sig)))
+
+
+def test_extrapolated_shape_model_does_not_depend_on_the_orbits_phase_origins():
+    """The Richardson-extrapolated kymograph combines the coarse and fine orbits on a common
+    phase: turning the fine orbit's phase origin (its states rolled along the phase grid, the
+    same orbit) leaves it unchanged. A review found them combined in time, each from where its
+    Newton solve put phase 0 (0.0175 cycles apart at the paper's point): 0.004 rad off."""
+    from dataclasses import replace as dc_replace
+    from types import SimpleNamespace
+
+    from flutterswim.fitting.richer import _model_kymograph
+    from flutterswim.orbits import periodic_orbit
+
+    g = BASE.groups
+    coarse = periodic_orbit(g, n_segments=12, steps=16)
+    fine = periodic_orbit(g, n_segments=24, steps=16)
+    x = np.log([g.eta_perp, g.chi, BASE.tau])
+    t = np.arange(0.0, 3.0, 0.02)
+
+    def model(f):
+        return SimpleNamespace(orbit=lambda *a: coarse, _fine=SimpleNamespace(orbit=lambda *a: f))
+
+    ref = _model_kymograph(model(fine), x, t, 0.0, 24)
+    for roll in (1, 5):
+        turned = dc_replace(fine, theta=np.roll(fine.theta, roll, axis=0), kappa=np.roll(fine.kappa, roll, axis=0))
+        np.testing.assert_allclose(_model_kymograph(model(turned), x, t, 0.0, 24), ref, atol=1e-9)
+
+
+def test_shape_data_from_a_track_is_continuous_whichever_end_leads():
+    """The frames' angle branch is chosen for the whole track: with s = 0 at the leading end the
+    body's mean angle is near +-pi, and chosen frame by frame it jumped by 2 pi twice a stroke
+    (a review: 12 of 114 frames)."""
+    from flutterswim.analysis.track import Track, as_track
+    from flutterswim.fitting.richer import ShapeData
+    from flutterswim.orbits import periodic_orbit
+
+    orb = periodic_orbit(BASE, n_segments=24)
+    tr = as_track(orb.to_result(n_cycles=4, frames_per_cycle=19))
+    for xs, ys in ((tr.x, tr.y), (tr.x[:, ::-1], tr.y[:, ::-1])):
+        d = ShapeData.from_track(Track(t=tr.t, x=xs, y=ys, units=tr.units), sigma=0.03)
+        assert np.max(np.abs(np.diff(d.theta, axis=0))) < 1.0  # a stroke's frame-to-frame change
+        assert abs(d.theta.mean()) <= np.pi

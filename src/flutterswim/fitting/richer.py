@@ -56,7 +56,12 @@ class ShapeData:
         mid = 0.5 * (cum[:, 1:] + cum[:, :-1]) / cum[:, -1:]
         s_k = (np.arange(k) + 0.5) / k
         out = np.array([np.interp(s_k, m, row) for m, row in zip(mid, th)]) - np.asarray(tr.field_angle)[:, None]
-        out -= 2 * np.pi * np.round(out.mean(axis=1, keepdims=True) / (2 * np.pi))  # the field's branch
+        # one branch of the angle for the whole track: the frames' mean angles continuous in time
+        # (a body whose s = 0 end leads has its mean near +-pi: chosen frame by frame, it jumped by
+        # 2 pi twice a stroke), the track's mean within (-pi, pi]
+        mean = out.mean(axis=1)
+        out += (np.unwrap(mean) - mean)[:, None]
+        out -= 2 * np.pi * np.round(out.mean() / (2 * np.pi))
         return cls(np.asarray(tr.t, float), out, float(sigma))
 
     def oriented(self, reverse: bool, mirror: bool) -> "ShapeData":
@@ -65,7 +70,7 @@ class ShapeData:
         th = self.theta
         if reverse:
             th = th[:, ::-1] + np.pi
-            th = th - 2 * np.pi * np.round(th.mean(axis=1, keepdims=True) / (2 * np.pi))
+            th = th - 2 * np.pi * np.round(th.mean() / (2 * np.pi))
         if mirror:
             th = -th
         return ShapeData(self.t, th, self.sigma)
@@ -77,15 +82,25 @@ def _model_kymograph(model, x: np.ndarray, t: np.ndarray, t0: float, k: int) -> 
     are (order 2: the 24-segment shapes alone put kappa_E and tau 2 % low, ten of their
     sigmas, fitting a 48-segment stroke)."""
     eta_perp, chi, tau = np.exp(x[:3])
-    coarse = _orbit_kymograph(model.orbit(eta_perp, chi), tau, t, t0, k)
+    orb = model.orbit(eta_perp, chi)
     fine = getattr(model, "_fine", None)
     if fine is None:
-        return coarse
-    return (4.0 * _orbit_kymograph(fine.orbit(eta_perp, chi), tau, t, t0, k) - coarse) / 3.0
+        return _orbit_kymograph(_phase_coefficients(orb, k), orb.period * tau, t, t0)
+    # Richardson on a common phase: each orbit's phase origin is where its Newton solve put it
+    # (0.0175 cycles apart at the paper's point, N = 24 and 48), so the fine one is turned to
+    # the coarse one's by their first harmonics, and the period is extrapolated on its own
+    orb_f = fine.orbit(eta_perp, chi)
+    c, c_f = _phase_coefficients(orb, k), _phase_coefficients(orb_f, k)
+    shift = np.angle(np.vdot(c_f[1], c[1]))  # c_f e^{i h shift} ~ c at h = 1
+    c_f = c_f * np.exp(1j * shift * np.arange(c_f.shape[0]))[:, None]
+    h = min(c.shape[0], c_f.shape[0])
+    period = (4.0 * orb_f.period - orb.period) / 3.0 * tau
+    return _orbit_kymograph((4.0 * c_f[:h] - c[:h]) / 3.0, period, t, t0)
 
 
-def _orbit_kymograph(orb, tau: float, t: np.ndarray, t0: float, k: int) -> np.ndarray:
-    """A dimensionless orbit's tangent angle at times t [s] (time scale tau) on K body points."""
+def _phase_coefficients(orb, k: int) -> np.ndarray:
+    """A dimensionless orbit's tangent angle on K body points as one-sided Fourier
+    coefficients in phase (H, K)."""
     th = orb.theta  # (M, N) on the phase grid
     m, n = th.shape
     if k != n:  # resample along the body (linear in s at the segment midpoints)
@@ -94,7 +109,12 @@ def _orbit_kymograph(orb, tau: float, t: np.ndarray, t0: float, k: int) -> np.nd
     c = np.fft.rfft(th, axis=0) / m  # trigonometric interpolation in phase
     if m % 2 == 0:
         c[-1] *= 0.5
-    phase = (t - t0) / (orb.period * tau)
+    return c
+
+
+def _orbit_kymograph(c: np.ndarray, period: float, t: np.ndarray, t0: float) -> np.ndarray:
+    """The tangent angle at times t [s] from its phase coefficients (H, K) and period [s]."""
+    phase = (t - t0) / period
     h = np.arange(c.shape[0])
     e = np.exp(2j * np.pi * np.outer(phase, h))  # (J, H)
     w = np.where(h == 0, 1.0, 2.0)
