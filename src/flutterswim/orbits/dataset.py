@@ -52,6 +52,8 @@ def orbits_dataset(orbs, *, si: bool, orbit_long_name: str = "orbit number"):
         "stable": (col("stable").astype("i1"), "1", "orbit stable: all non-trivial Floquet multipliers inside the unit circle (0/1)"),
         "max_multiplier": (np.array([o.max_multiplier for o in orbs]), "1", "largest modulus of the non-trivial Floquet multipliers"),
         "trivial_multiplier_error": (col("trivial_multiplier_error"), "1", "|trivial Floquet multiplier - 1| (accuracy gauge)"),
+        "step_error": (col("step_error"), "1", "relative change of period or advance when the steps per period are "
+                       "doubled (NaN: not checked, an orbit from a neighbour or with steps given)"),
         "residual": (col("residual"), "1", "max-norm residual of the closing condition"),
         "n_newton": (col("n_newton").astype("i4"), "1", "Newton iterations"),
     }
