@@ -30,7 +30,7 @@ import numpy as np
 
 from . import _jit, activity, mobility
 
-KERNELS = ("band_product", "moment_load", "rhs", "jacobian", "group_derivatives", "banded_lu_factor", "w_factor", "w_solve", "hermite", "run")
+KERNELS = ("band_product", "moment_load", "rhs", "jacobian", "group_derivatives", "w_factor", "w_solve", "hermite", "run")
 
 
 def kernels():
@@ -138,46 +138,6 @@ def group_derivatives(y, avg, diff, weights, eta_par, eta_perp, sigma, phi, out)
     return out
 
 
-def banded_lu_factor(a, piv, nb):
-    """In-place LU with partial pivoting, P a = L U, of a (m, m) whose rows i < nb have zeros
-    left of column i - 2 (lower bandwidth 2) and whose rows nb.. are full: at step k < nb only
-    rows k..k+2 and the border rows can be non-zero in column k, and row swaps among them keep
-    that shape. O(m^2) instead of O(m^3). False if singular."""
-    m = a.shape[0]
-    for k in range(m):
-        hi = min(k + 3, nb) if k < nb else m
-        lo2 = max(nb, k)
-        p = k
-        big = abs(a[k, k])
-        for i in range(k + 1, hi):
-            if abs(a[i, k]) > big:
-                big = abs(a[i, k])
-                p = i
-        if k < nb:
-            for i in range(lo2, m):
-                if abs(a[i, k]) > big:
-                    big = abs(a[i, k])
-                    p = i
-        piv[k] = p
-        if big == 0.0:
-            return False
-        if p != k:
-            for q in range(m):
-                tmp = a[k, q]
-                a[k, q] = a[p, q]
-                a[p, q] = tmp
-        inv = 1.0 / a[k, k]
-        for i in range(k + 1, m):
-            if k < nb and hi <= i < lo2:
-                continue
-            a[i, k] *= inv
-            lik = a[i, k]
-            if lik != 0.0:
-                for q in range(k + 1, m):
-                    a[i, q] -= lik * a[k, q]
-    return True
-
-
 def w_factor(y, c, avg, diff, weights, eta_par, eta_perp, chi_sigma, phi, lu, piv, g0, s0):
     """Factor M = G + c E D - c^2/(1+c) E S A at state y; keep G (g0) and S (s0) at y for
     :func:`w_solve`. False if singular."""
@@ -186,22 +146,12 @@ def w_factor(y, c, avg, diff, weights, eta_par, eta_perp, chi_sigma, phi, lu, pi
     tn0 = band_product(avg, th0, 0, np.empty(n + 1))
     s0[:] = activity.activity_slope(tn0, chi_sigma, phi)
     g0[:, :] = mobility.assemble(th0, tn0, weights, eta_par, eta_perp, 1.0 / n)
-    lu[:, :] = g0
     q = c * c / (1.0 + c)
     mm = g0.copy()
     for j in range(1, n):
         for k in range(max(0, j - 2), min(n, j + 2)):
             mm[1 + j, 2 + k] += c * diff[j - 1, k] - q * s0[j] * avg[j, k]
-    # Q = M'^T with M' = M in the order [omega_0..omega_{N-1}, U0x, U0y] (rows [moments, forces]):
-    # the cut-moment row of joint j reaches omega_{j+1} at most, so Q has lower bandwidth 2
-    # apart from the two force rows (:func:`banded_lu_factor`).
-    m = n + 2
-    for i in range(m):
-        pi = i + 2 if i < n else i - n
-        for jj in range(m):
-            pj = jj + 2 if jj < n else jj - n
-            lu[i, jj] = mm[pj, pi]
-    return banded_lu_factor(lu, piv, n)
+    return mobility.factor(mm, lu, piv)
 
 
 def w_solve(r, c, avg, lu, piv, g0, s0, x):
@@ -219,31 +169,7 @@ def w_solve(r, c, avg, lu, piv, g0, s0, x):
     f = c / (1.0 + c)
     for j in range(1, n):
         g[1 + j] += f * r[n + 2 + j]
-    # M x = g with P Q = L U, Q = M'^T: U^T a = g', L^T b = a, x' = P^T b
-    gp = np.empty(m)
-    for i in range(m):
-        gp[i] = g[i + 2] if i < n else g[i - n]
-    for i in range(m):
-        acc = gp[i]
-        for k in range(i):
-            acc -= lu[k, i] * gp[k]
-        gp[i] = acc / lu[i, i]
-    for i in range(m - 1, -1, -1):
-        acc = gp[i]
-        for k in range(i + 1, m):
-            acc -= lu[k, i] * gp[k]
-        gp[i] = acc
-    for k in range(m - 1, -1, -1):
-        p = piv[k]
-        if p != k:
-            tmp = gp[k]
-            gp[k] = gp[p]
-            gp[p] = tmp
-    for i in range(m):
-        if i < n:
-            g[i + 2] = gp[i]
-        else:
-            g[i - n] = gp[i]
+    mobility.factored_solve(lu, piv, g)
     x[: n + 2] = g
     a = band_product(avg, g[2:], 0, np.empty(n + 1))
     for j in range(n + 1):
