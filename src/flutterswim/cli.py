@@ -7,13 +7,13 @@ failed computation, 130 for Ctrl-C; ``--debug`` shows the traceback.
 from __future__ import annotations
 
 import argparse
-import json
 import re
 import sys
 from pathlib import Path
 
 from . import defaults
 from ._interrupt import interrupted
+from ._json import dumps
 
 PLOTS = ("ghosts", "swimmer", "kymograph", "descriptors", "summary")
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")
@@ -191,7 +191,7 @@ def _describe(args: argparse.Namespace) -> int:
         raise ParameterError(f"run={args.run!r}: {exc}") from None
     d = desc.to_dict()
     if args.json:
-        print(json.dumps(d, indent=2))
+        print(dumps(d, indent=2))
     else:  # the note once, on stderr below, as in JSON mode (it printed twice, on stdout and stderr)
         width = max(len(k) for k in d)
         for k, v in d.items():

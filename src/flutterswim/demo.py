@@ -10,13 +10,13 @@ cycle and mean speed in physical units.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 
 from . import defaults
 from .limit_cycle import run_to_limit_cycle
 from .params import preset
+from ._json import dumps
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -52,7 +52,7 @@ def main(argv: list[str] | None = None) -> int:
     from . import __version__
 
     atomic_write_text(out / "paper_descriptors.json",
-                      json.dumps({"generator": f"flutterswim {__version__}", **d.to_dict()}, indent=2))
+                      dumps({"generator": f"flutterswim {__version__}", **d.to_dict()}, indent=2))
     print(f"simulated {run.t[-1]:.2f} s of swimming in {wall:.2f} s wall ({run.stats.n_steps} steps); "
           f"limit cycle from t = {d.limit_cycle_time_s:.2f} s")
     print(f"period                  {d.period_s:.4f} s  ({d.frequency_hz:.3f} Hz)")

@@ -10,6 +10,7 @@ import numpy as np
 
 from .integrators import SolverStats
 from .params import Groups, Parameters
+from ._json import dumps
 
 __all__ = ["SimulationResult", "load"]
 
@@ -151,10 +152,10 @@ class SimulationResult:
             "message": self.message,
             "t_final": float(self.t_final),
             "t_final_units": tu,
-            "groups": json.dumps(self.groups.to_dict()),
-            "params": json.dumps(self.params.to_dict() if self.params is not None else None),
-            "stats": json.dumps(self.stats.to_dict()),
-            "settings": json.dumps(self.settings),
+            "groups": dumps(self.groups.to_dict()),
+            "params": dumps(self.params.to_dict() if self.params is not None else None),
+            "stats": dumps(self.stats.to_dict()),
+            "settings": dumps(self.settings),
         }
         for k, v in self.groups.to_dict().items():
             attrs[f"group_{k}"] = float(v)

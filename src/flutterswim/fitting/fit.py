@@ -12,7 +12,6 @@ The descriptors come from the periodic-orbit solver, so the cost is smooth.
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from dataclasses import asdict, dataclass, field, replace
@@ -25,6 +24,7 @@ from ..params import Parameters, preset
 from .model import DescriptorModel, NotSwimming, OutsideModel, Unresolved, to_identifiable, to_physical
 from .reach import MAX_FAILED_IN_A_ROW, MAX_FAILED_POINTS, Reach, Stuck, beyond_resolution  # noqa: F401 (the limits: public here)
 from .uncertainty import NAMES, covariance, identifiability_card
+from .._json import dumps
 
 __all__ = ["FitResult", "fit", "PAPER_GUESS", "paper_cost"]
 
@@ -127,7 +127,7 @@ class FitResult:
         from .._paths import atomic_write_text, check_output_file
 
         p = check_output_file(path, (".json",))
-        atomic_write_text(p, json.dumps({"software": "flutterswim fit", **self.to_dict()}, indent=2))
+        atomic_write_text(p, dumps({"software": "flutterswim fit", **self.to_dict()}, indent=2))
 
 
 class Penalty:

@@ -9,12 +9,11 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import os
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+from .._json import plain as clean_json
 
 __all__ = ["sha256_file", "write_json", "write_netcdf", "save_figure", "clean_json", "read_json"]
 
@@ -25,26 +24,6 @@ def sha256_file(path: str | os.PathLike) -> str:
         for block in iter(lambda: f.read(1 << 20), b""):
             h.update(block)
     return h.hexdigest()
-
-
-def clean_json(obj: Any) -> Any:
-    """numpy scalars/arrays to plain Python, non-finite floats to None (strict JSON)."""
-    if isinstance(obj, dict):
-        return {str(k): clean_json(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [clean_json(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return clean_json(obj.tolist())
-    if isinstance(obj, (bool, np.bool_)):
-        return bool(obj)
-    if isinstance(obj, (int, np.integer)):
-        return int(obj)
-    if isinstance(obj, (float, np.floating)):
-        v = float(obj)
-        return v if math.isfinite(v) else None
-    if isinstance(obj, complex):
-        return {"real": clean_json(obj.real), "imag": clean_json(obj.imag)}
-    return obj
 
 
 def write_json(path: str | os.PathLike, obj: Any) -> Path:

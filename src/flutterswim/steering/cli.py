@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import sys
+from .._json import dumps
 
 __all__ = ["register"]
 
@@ -78,7 +79,6 @@ def _check_path_options(args) -> None:
 
 
 def _cmd_steer(args) -> int:
-    import json
 
     from .. import __version__
     from .._paths import atomic_write_text, check_output_file
@@ -136,7 +136,7 @@ def _cmd_steer(args) -> int:
     m = {"generator": f"flutterswim {__version__}", **res.metrics}  # signed: a rerun may replace it
     m["reduced_model"] = {"U_mm_s": reduced.U * 1e3, "period_s": reduced.period, "k_per_s": reduced.k,
                           "omega_max_rad_s": reduced.omega_max, "r_min_mm": reduced.r_min * 1e3}
-    atomic_write_text(met, json.dumps(_nulls(m), indent=2, allow_nan=False))
+    atomic_write_text(met, dumps(m, indent=2))
     print(f"{out}: {res.path.name}, {'closed' if res.closed_loop else 'open'} loop: cross-track RMS "
           f"{m['cross_track_rms_bl']:.3f} body lengths (max {m['cross_track_max_bl']:.3f}), corner overshoot "
           f"{m['corner_overshoot_bl']:.3f}, trapped: {m['trapped']}; metrics in {met}"
@@ -166,14 +166,3 @@ def trapped_reason(m: dict) -> str:
     return (f"failed: the swimmer stopped{when}, trapped in a bent equilibrium (mean speed "
             f"{m['mean_speed_mm_s']:.3g} mm/s, swimming freely {m['reduced_model']['U_mm_s']:.3g} mm/s); a sudden "
             "turn of the field can do this: give the path gentler turns")
-
-
-def _nulls(v):
-    """NaN -> null (strict JSON): a corner never reacquired, a waypoint never reached."""
-    import math
-
-    if isinstance(v, dict):
-        return {k: _nulls(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple)):
-        return [_nulls(x) for x in v]
-    return None if isinstance(v, float) and not math.isfinite(v) else v

@@ -3,11 +3,11 @@ and ``flutterswim track-batch FOLDER --px-per-mm X --fps 50 --out trials.csv [--
 
 from __future__ import annotations
 
-import json
 import sys
 
 from .._validate import direction_deg, positive, positive_int
 from ..defaults import N_CYCLES_MOVIE
+from .._json import dumps
 
 __all__ = ["register"]
 
@@ -105,7 +105,7 @@ def _cmd_track(args) -> int:
     if args.json:
         from ..analysis.descriptors import describe
 
-        print(json.dumps(describe(tr, n_last=args.last).to_dict(), indent=2))
+        print(dumps(describe(tr, n_last=args.last).to_dict(), indent=2))
     return 0
 
 
