@@ -117,3 +117,52 @@ def test_a_folded_branch_file_is_cf_and_indexable(branch, tmp_path):
     assert per.size >= 2 and per.max() > 1.1 * per.min()
     for v in ds.data_vars.values():
         assert "units" in v.attrs
+
+
+def test_steps_per_period_follow_the_branch(branch):
+    """Near the folds the strokes are stiff: 32 Radau steps per period put the advance 2.6e-3
+    off at N = 24 (1.6e-3 at N = 12), 16 times the branch's step tolerance. The continuation
+    doubles its steps where the step screen asks. Checked independently: each orbit solved
+    again from itself with twice its steps changes period and advance within the tolerance
+    (1.5 times it: the screen estimates the advance's change within a factor 0.5-1.4)."""
+    from flutterswim.orbits.continuation import BRANCH_STEP_TOLERANCE, BRANCH_STEPS
+
+    steps = np.array([o.steps for o in branch.orbits])
+    assert steps.min() == BRANCH_STEPS and steps.max() >= 4 * BRANCH_STEPS
+    assert np.all(np.isfinite([o.step_error for o in branch.orbits]))
+    worst = 0.0
+    for o in branch.orbits[::5] + [branch.orbits[int(np.argmax([o.step_error for o in branch.orbits]))]]:
+        fine = periodic_orbit(o.params, o, steps=2 * o.steps)
+        e_t = abs(fine.period / o.period - 1.0)
+        e_a = abs(fine.advance - o.advance) / max(abs(fine.advance), 1e-3 * o.params.l)
+        worst = max(worst, e_t / BRANCH_STEP_TOLERANCE[0], e_a / BRANCH_STEP_TOLERANCE[1])
+    assert worst < 1.5
+
+
+def test_steps_given_are_kept_unchecked():
+    br = continue_orbits(fs.PAPER, "kappa_E_ratio", 0.8, n_points=4, n_segments=8, steps=24)
+    assert {o.steps for o in br.orbits} == {24} and br.steps == 24
+    assert all(np.isnan(o.step_error) for o in br.orbits)
+
+
+def test_the_branch_figure_signs_the_advance_along_the_field(branch):
+    """Past the fold the strokes swim against the field (swim_direction 180 degrees): drawn as
+    a magnitude, the advance bounced off zero and the reversed stable strokes at 1.9-2 looked
+    like a second forward branch (a review of the reproduce report). The legend sits outside
+    the panels (inside, it covered the stroke just past the onset)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from flutterswim.orbits.plot import plot_branch
+
+    ds = branch.to_dataset()
+    direction = ds.swim_direction.values
+    assert np.any(np.abs(direction) > 179.0) and np.any(np.abs(direction) < 1.0)
+    fig = plot_branch(ds)
+    signed = ds.advance.values * np.cos(np.radians(direction)) * 1e3
+    lines = [np.asarray(ln.get_ydata(), float)[1:] for ln in fig.axes[0].lines
+             if len(ln.get_xdata()) == signed.size + 1]
+    drawn = np.nanmax(np.vstack(lines), axis=0) if lines else None  # black and red runs, NaN elsewhere
+    assert drawn is not None and np.allclose(drawn, signed, rtol=1e-9, atol=1e-12)
+    assert drawn.min() < 0 < drawn.max()
+    assert fig.axes[0].get_legend() is None and fig.legends

@@ -16,7 +16,8 @@ def register(subparsers) -> None:
     p.add_argument("--out", default="branch.nc")
     p.add_argument("--points", type=int, default=100, help="orbits along the branch (at least; default 100)")
     p.add_argument("--segments", type=int, default=None, help="segments N (default: the sweeps' resolution, 24)")
-    p.add_argument("--steps", type=int, default=None, help="Radau steps per period (default 32)")
+    p.add_argument("--steps", type=int, default=None, help="Radau steps per period, unchecked (default: 32, doubled along the branch where "
+                   "doubling them would change the period or advance)")
     p.add_argument("--look-beyond", type=float, default=None,
                    help="follow the branch this fraction of the range past its end, for a fold that turns it "
                         "back into the range (default 0.2; 0: stop at the end)")
@@ -58,7 +59,7 @@ def _cmd_branch(args) -> int:
     from .._paths import check_output_file
     from .._validate import ParameterError, non_negative, positive_int
     from ..params import preset
-    from .continuation import BRANCH_STEPS, MAX_POINTS, continue_orbits, short_of
+    from .continuation import MAX_POINTS, continue_orbits, short_of
     from .linear import hopf_bracket, hopf_point
     from .parameter import Axis
 
@@ -78,7 +79,7 @@ def _cmd_branch(args) -> int:
     if args.plot:
         check_output_file(args.plot, (".png", ".pdf", ".svg"), what="plot")
     n = defaults.SWEEP_N_SEGMENTS if args.segments is None else args.segments
-    steps = BRANCH_STEPS if args.steps is None else args.steps
+    steps = args.steps  # None: from BRANCH_STEPS, doubled where the step screen asks
     # the Hopf point in the range typed, else between the base value and the range's nearer end
     # (kappa_E_ratio -2:-1 is the mirror branch from -0.68, not the one from +0.68), else near
     # the base value; continue towards the end of the range where the straight state is unstable

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -24,18 +24,25 @@ from .linear import hopf_bracket, hopf_point
 from .normal_form import normal_form
 from .parameter import Axis
 from ..params import Parameters
-from .periodic import OrbitNotFound, PeriodicOrbit, _scales, orbit_from_flow
+from .periodic import MAX_STEPS, OrbitNotFound, PeriodicOrbit, _scales, orbit_from_flow, screen_passes, step_screen
 from .shooting import StepFailure, flow
 from ._threads import one_blas_thread
 from .system import ShapeSystem
 
 __all__ = ["Branch", "continue_orbits"]
 
-#: Radau steps per period along a branch. Against 48 steps at kappa_E ratio 1.5 (N = 24):
+#: Radau steps per period a branch starts with (``steps=None``: doubled where the step screen
+#: asks for it, as for an orbit from scratch). Against 48 steps at kappa_E ratio 1.5 (N = 24):
 #: period 2.5e-7 and advance 7.7e-6 relative, far below the N = 24 space errors (1.7e-3,
 #: 1.4e-2); the trivial multiplier within 1e-9 of 1 from the Hopf point to kappa_E ratio 2
 #: (24 steps: period 1.2e-6, advance 3.6e-5, trivial multiplier 1.2e-7 off at ratio 2).
 BRANCH_STEPS = 32
+#: The step screen's tolerance along a branch (relative period, advance): a tenth of an orbit's
+#: from scratch (periodic.STEP_TOLERANCE), about 1 % of the space error of the paper's
+#: resolution (N = 48: period 3.8e-4, advance 3.6e-3) and far below the sweeps' N = 24 one.
+#: At the orbit from scratch's tolerance a branch to kappa_E ratio 2 took 4.4 times as long
+#: (35 s against 8 s, N = 24), most of its orbits at 64-256 steps.
+BRANCH_STEP_TOLERANCE = (1e-5, 1e-4)
 #: |trivial Floquet multiplier - 1| above which an orbit's time discretisation is called out
 #: (a warning from continue_orbits, the dataset's n_inaccurate_orbits): at 32 steps it stays
 #: below 1e-8 up to kappa_E ratio 2 but reaches 6e-6..1.8e-4 on strongly bent strokes (ratio
@@ -90,7 +97,8 @@ class Branch:
         ds.attrs.update({
             "Conventions": "CF-1.10",
             "title": f"flutterswim periodic-orbit branch in {name}",
-            "source": f"flutterswim {__version__}: Newton shooting (Radau IIA, {self.steps} steps per period) and pseudo-arclength continuation",
+            "source": f"flutterswim {__version__}: Newton shooting (Radau IIA, {_step_range(self.orbits)} steps per "
+                      "period) and pseudo-arclength continuation",
             "parameter": name,
             f"hopf_{name}": self.hopf_value,
             "hopf_omega_per_tau": self.hopf_omega,
@@ -110,7 +118,7 @@ class Branch:
             "bifurcation": "supercritical" if self.lyapunov_coefficient < 0 else "subcritical",
             "multiplier_crossings": "; ".join(f"{name}={v:.6g}" for v in crossings) if crossings else "none",
             "n_segments": self.n_segments,
-            "steps_per_period": self.steps,
+            "steps_per_period_max": self.steps,
             "n_inaccurate_orbits": int(np.count_nonzero(ds["trivial_multiplier_error"].values > ACCURACY_GAUGE)),
             "n_inaccurate_orbits_comment": (
                 f"orbits whose trivial Floquet multiplier is off 1 by more than {ACCURACY_GAUGE:g} (see "
@@ -146,7 +154,7 @@ def _systems(axis: Axis, value: float, n: int) -> ShapeSystem:
 
 @one_blas_thread
 def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
-                    n_segments: int = defaults.SWEEP_N_SEGMENTS, steps: int = BRANCH_STEPS, tol: float = 1e-10,
+                    n_segments: int = defaults.SWEEP_N_SEGMENTS, steps: int | None = None, tol: float = 1e-10,
                     max_newton: int = 8, progress: bool = False, max_points: int | None = None,
                     look_beyond: float = LOOK_BEYOND) -> Branch:
     """Continue the stroke from the Hopf point along ``parameter`` up to ``to``, with at least
@@ -162,7 +170,14 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
 
     ``max_points``: at most this many orbits in all, the first one included (default
     ``10 n_points + 50``); a corrector step that fails and is retried shorter adds none, and so
-    does not count."""
+    does not count.
+
+    ``steps``: Radau steps per period. None (default): BRANCH_STEPS to start with, and each
+    orbit's period and advance are screened against twice its steps (as for an orbit from
+    scratch, to :data:`BRANCH_STEP_TOLERANCE`); where the screen fails the
+    steps double for the rest of the branch (up to MAX_STEPS) and the orbit is solved again.
+    Near the kappa_E fold 32 steps put the advance 2.6e-3 off. Each orbit's ``step_error``
+    holds the screen's estimate and ``steps`` its own count. An integer: that many, unchecked."""
     t_start = time.perf_counter()
     axis = Axis(params, parameter)
     to = finite("to", to)
@@ -170,7 +185,8 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     if n_points > MAX_POINTS:
         raise ParameterError(f"n_points={n_points} is too many; at most {MAX_POINTS} orbits along a branch")
     n_segments = positive_int("n_segments", n_segments, minimum=4)
-    steps = positive_int("steps", steps, minimum=8)
+    check = steps is None
+    steps = positive_int("steps", BRANCH_STEPS if steps is None else steps, minimum=8)
     tol = positive("tol", tol)
     max_points = 10 * n_points + 50 if max_points is None else positive_int("max_points", max_points)
     look_beyond = non_negative("look_beyond", look_beyond)
@@ -194,11 +210,16 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     d1 = side * min(0.01 * length_p, 0.002 * abs(hopf.value) if hopf.value != 0 else 0.01 * length_p)
     amp = min(math.sqrt(nf.amplitude2_slope * abs(d1)), START_AMPLITUDE_CAP)
     d1 = side * amp * amp / nf.amplitude2_slope
-    sysm, u, T, fl, res, it, p1 = _amplitude_start(axis, n_segments, steps, hopf, amp, hopf.value + d1, tol,
-                                                   2 * max_newton)
+    while True:
+        sysm, u, T, fl, res, it, p1 = _amplitude_start(axis, n_segments, steps, hopf, amp, hopf.value + d1, tol,
+                                                       2 * max_newton)
+        err, finer = _screened(check, sysm, u, T, steps, fl)
+        if not finer:
+            break
+        steps *= 2
     orbits: list[PeriodicOrbit] = []
     values: list[float] = [p1]
-    orbits.append(orbit_from_flow(axis.at(p1), sysm, fl, res, it, steps))
+    orbits.append(replace(orbit_from_flow(axis.at(p1), sysm, fl, res, it, steps), step_error=err))
     X = [np.concatenate((u, [T, values[-1]]))]
     last_flow = fl  # (only the last is a warm start: each holds its step matrices, MBs)
     w = _weights(u.size, length_u, length_p)
@@ -244,7 +265,13 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
             continue
         pval = float(xn[-1])
         sysn = _systems(axis, pval, n_segments)
-        orbits.append(orbit_from_flow(axis.at(pval), sysn, fl, res, it, steps))
+        m = xn.size - 2
+        err, finer = _screened(check, sysn, xn[:m], float(xn[m]), steps, fl)
+        if finer:  # the same step again, solved with twice the steps (no warm start at the old ones)
+            steps *= 2
+            last_flow = None
+            continue
+        orbits.append(replace(orbit_from_flow(axis.at(pval), sysn, fl, res, it, steps), step_error=err))
         values.append(pval)
         X.append(xn)
         last_flow = fl
@@ -272,7 +299,23 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
         del orbits[n_at_to:], values[n_at_to:]
     _warn_inaccurate(parameter, values, orbits, steps)
     return Branch(axis, np.array(values), orbits, hopf.value, hopf.omega, nf.lyapunov_coefficient,
-                  nf.amplitude2_slope_rms, n_segments, steps, time.perf_counter() - t_start, message)
+                  nf.amplitude2_slope_rms, n_segments, max(o.steps for o in orbits), time.perf_counter() - t_start, message)
+
+
+def _step_range(orbits) -> str:
+    steps = sorted({o.steps for o in orbits})
+    return f"{steps[0]}" if len(steps) <= 1 else f"{steps[0]}-{steps[-1]}"
+
+
+def _screened(check: bool, system: ShapeSystem, u: np.ndarray, T: float, steps: int, fl) -> tuple[float, bool]:
+    """(the step screen's estimate or NaN, whether to solve again with twice the steps)."""
+    if not check or fl.monodromy is None:
+        return math.nan, False
+    adv = float(np.hypot(*(fl.y[-1, :2] - fl.y[0, :2])))
+    screened = step_screen(system, u, T, steps, fl.monodromy, adv)
+    if screened is None:
+        return math.nan, False
+    return max(screened), not screen_passes(screened, BRANCH_STEP_TOLERANCE) and 2 * steps <= MAX_STEPS
 
 
 def short_of(value: float, end: float) -> str:

@@ -53,7 +53,9 @@ def orbits_dataset(orbs, *, si: bool, orbit_long_name: str = "orbit number"):
         "max_multiplier": (np.array([o.max_multiplier for o in orbs]), "1", "largest modulus of the non-trivial Floquet multipliers"),
         "trivial_multiplier_error": (col("trivial_multiplier_error"), "1", "|trivial Floquet multiplier - 1| (accuracy gauge)"),
         "step_error": (col("step_error"), "1", "relative change of period or advance when the steps per period are "
-                       "doubled (NaN: not checked, an orbit from a neighbour or with steps given)"),
+                       "doubled, or the step screen's estimate of it (NaN: not checked, an orbit from a neighbour or "
+                       "with steps given)"),
+        "steps_per_period": (col("steps").astype("i4"), "1", "Radau steps per period the orbit was solved with"),
         "residual": (col("residual"), "1", "max-norm residual of the closing condition"),
         "n_newton": (col("n_newton").astype("i4"), "1", "Newton iterations"),
     }

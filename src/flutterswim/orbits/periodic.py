@@ -532,7 +532,7 @@ def _checked_steps(params, system: ShapeSystem, orb: PeriodicOrbit, tol: float, 
     steps = orb.steps
     while True:
         screened = _step_screen(system, orb)
-        if screened is not None and screened[0] <= 0.5 * STEP_TOLERANCE[0] and screened[1] <= 0.5 * STEP_TOLERANCE[1]:
+        if screen_passes(screened):
             return replace(orb, step_error=max(screened))
         try:
             u, T, fl, res, it = solve_orbit(system, orb.u0, orb.period_dimensionless, steps=2 * steps, tol=tol,
@@ -558,29 +558,41 @@ def _checked_steps(params, system: ShapeSystem, orb: PeriodicOrbit, tol: float, 
 
 def _step_screen(system: ShapeSystem, orb: PeriodicOrbit) -> tuple[float, float] | None:
     """A cheap estimate of what doubling the steps changes (relative period, advance), or None
-    without the orbit's monodromy: one flow with twice the steps from the orbit's start (no
-    variational equation) and one Newton step with the orbit's monodromy for the period. The
-    period's change is the full solve's to 1e-3 of it; the advance's within a factor 0.7-1.4
-    (it leaves out the shape's correction): a screen that passes only below half the tolerance
-    (else the full solve decides). About a quarter of the full solve's time."""
+    without the orbit's monodromy: :func:`step_screen` on the orbit's kept flow."""
     warm = orb.warm_start
     if warm is None or warm.monodromy is None:
         return None
-    u0, T = orb.u0, orb.period_dimensionless
+    return step_screen(system, orb.u0, orb.period_dimensionless, orb.steps, warm.monodromy,
+                       orb.advance / _scales(orb.params)[1])
+
+
+def step_screen(system: ShapeSystem, u0: np.ndarray, T: float, steps: int, monodromy: np.ndarray,
+                advance: float) -> tuple[float, float] | None:
+    """A cheap estimate of what doubling the steps changes (relative period, advance) for the
+    orbit through ``u0`` of period ``T`` (tau) solved with ``steps``, its ``monodromy`` and its
+    ``advance`` (in l), or None if the estimate fails: one flow with twice the steps from u0
+    (no variational equation) and one Newton step with the monodromy for the period. The
+    period's change is the full solve's to 1e-3 of it; the advance's within a factor 0.7-1.4
+    (it leaves out the shape's correction): a screen that passes only below half the tolerance
+    (else the full solve decides). About a quarter of the full solve's time."""
     try:
-        fine = flow(system, u0, T, 2 * orb.steps)
+        fine = flow(system, u0, T, 2 * steps)
     except StepFailure:
         return None
     normal = system.f(u0)
     normal /= np.linalg.norm(normal)
     try:
-        dx = np.linalg.solve(_bordered(warm.monodromy, fine.f[-1, 2:], normal),
+        dx = np.linalg.solve(_bordered(monodromy, fine.f[-1, 2:], normal),
                              np.concatenate((u0 - fine.y[-1, 2:], [0.0])))
     except np.linalg.LinAlgError:
         return None
     adv = float(np.hypot(*(fine.y[-1, :2] - fine.y[0, :2])))
-    adv_coarse = orb.advance / _scales(orb.params)[1]
-    return abs(dx[-1]) / T, abs(adv - adv_coarse) / max(adv, 1e-3)
+    return abs(dx[-1]) / T, abs(adv - advance) / max(adv, 1e-3)
+
+
+def screen_passes(screened: tuple[float, float] | None, tolerance: tuple[float, float] = STEP_TOLERANCE) -> bool:
+    """The screen's estimate is below half of ``tolerance`` (period, advance) in both."""
+    return screened is not None and screened[0] <= 0.5 * tolerance[0] and screened[1] <= 0.5 * tolerance[1]
 
 
 def _leading_pair(groups: Groups, n_segments: int) -> complex:

@@ -1,7 +1,8 @@
-"""Figure of a stroke branch (the paper's Fig. 4b, done by continuation): advance per cycle,
-period and the lateral excursions of both ends against the parameter, with the straight
-state from linear theory on its stable side of the Hopf point (the branch may lie above or
-below it) and self-intersecting strokes in red."""
+"""Figure of a stroke branch (the paper's Fig. 4b, done by continuation): advance per cycle
+along the field (negative where the stroke swims against it), period and the lateral
+excursions of both ends against the parameter, with the straight state from linear theory on
+its stable side of the Hopf point (the branch may lie above or below it) and
+self-intersecting strokes in red."""
 
 from __future__ import annotations
 
@@ -60,16 +61,19 @@ def plot_branch(ds, path=None, *, x_range: tuple[float, float] | None = None):
         lo, hi = (lo - pad, hi) if stable_side < 0 else (lo, hi + pad)
     straight_end = lo if stable_side < 0 else hi
     xs = np.r_[hopf, x]
-    fig, axes = plt.subplots(3, 1, figsize=(6.0, 8.0), sharex=True, constrained_layout=True)
+    fig, axes = plt.subplots(3, 1, figsize=(6.0, 8.8), sharex=True, constrained_layout=True)
     ax = axes[0]
     ax.plot(sorted([straight_end, hopf]), [0, 0], color="0.5", lw=1.8, label="straight, stable (linear theory)")
     # the straight state past the Hopf point: still a solution, unstable (a review: left out)
     other_end = hi if stable_side < 0 else lo
     ax.plot(sorted([hopf, other_end]), [0, 0], color="0.5", lw=1.2, ls="--", label="straight, unstable")
     un = np.r_[False, unstable]
-    _segments(ax, xs, np.r_[0.0, ds.advance.values * lscale], np.r_[False, red], un, lw=1.8,
+    # signed along the field: past the kappa_E fold strokes swim against it (swim_direction
+    # 180 degrees); as a magnitude they looked like a second forward branch bouncing off zero
+    along = np.cos(np.radians(ds.swim_direction.values)) if "swim_direction" in ds else 1.0
+    _segments(ax, xs, np.r_[0.0, ds.advance.values * along * lscale], np.r_[False, red], un, lw=1.8,
               label="stroke (periodic orbit)")
-    ax.set_ylabel(f"advance per cycle [{lunit}]")
+    ax.set_ylabel(f"advance per cycle along the field [{lunit}]")
     ax2 = axes[1]
     _segments(ax2, xs, np.r_[ds.attrs["hopf_period"], ds.period.values], np.r_[False, red], un, lw=1.8)
     ax2.plot(hopf, ds.attrs["hopf_period"], "o", color="k", ms=4)
@@ -98,7 +102,8 @@ def plot_branch(ds, path=None, *, x_range: tuple[float, float] | None = None):
     if np.any(unstable):
         handles.insert(3, Line2D([], [], marker="o", mfc="none", color="tab:orange", ls="none", ms=4,
                                  label="unstable orbit (a Floquet multiplier outside the unit circle)"))
-    axes[0].legend(handles=handles, fontsize=8, loc="best")
+    # below the panels: inside, "best" covered the stroke just past the onset
+    fig.legend(handles=handles, fontsize=8, loc="outside lower center", ncols=2)
     h3 = [Line2D([], [], color="k", lw=1.8, label="leading end"),
           Line2D([], [], color="k", lw=1.8, ls="--", label="trailing end")]
     ax3.legend(handles=h3, fontsize=8, loc="lower right")
