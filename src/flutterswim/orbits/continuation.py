@@ -37,9 +37,9 @@ __all__ = ["Branch", "continue_orbits"]
 #: 1.4e-2); the trivial multiplier within 1e-9 of 1 from the Hopf point to kappa_E ratio 2
 #: (24 steps: period 1.2e-6, advance 3.6e-5, trivial multiplier 1.2e-7 off at ratio 2).
 BRANCH_STEPS = 32
-#: The step screen's tolerance along a branch (relative period, advance): a tenth of an orbit's
-#: from scratch (periodic.STEP_TOLERANCE), about 1 % of the space error of the paper's
-#: resolution (N = 48: period 3.8e-4, advance 3.6e-3) and far below the sweeps' N = 24 one.
+#: The step screen's tolerance along a branch (relative period, advance): 20 times looser than
+#: an orbit's from scratch (periodic.STEP_TOLERANCE), about 3 % of the space error of the
+#: paper's resolution (N = 48: period 3.8e-4, advance 3.6e-3), 1 % of the sweeps' N = 24 one.
 #: At the orbit from scratch's tolerance a branch to kappa_E ratio 2 took 4.4 times as long
 #: (35 s against 8 s, N = 24), most of its orbits at 64-256 steps.
 BRANCH_STEP_TOLERANCE = (1e-5, 1e-4)
