@@ -210,16 +210,22 @@ def integrate(
     ends it with status "failed" and the reason. ``scale_cap`` (n,) caps |y| in the
     relative part of the error weights, atol + rtol min(|y|, cap): for components such
     as positions and angles, whose size grows with distance swum or turned, not with
-    what needs resolving (ros34pw2 only).
+    what needs resolving (ros34pw2 only). A compiled method's name takes its Python-stepped
+    counterpart: ``ndf`` scipy's BDF (the algorithm it compiles), ``ros34pw2``/``ros34pw3``
+    the Python ROS34PW2.
     """
     scheme = METHODS.get(method)
     if scheme is None:
         from ._validate import ParameterError
 
         raise ParameterError(f"method={method!r} is unknown; choose one of {sorted(METHODS)}")
+    if isinstance(scheme, CompiledNDF):
+        # a Python right-hand side: scipy's BDF, the algorithm the compiled NDF compiles
+        scheme = METHODS["bdf"]
     if isinstance(scheme, ScipyMethod):
-        return _integrate_scipy(fun, jac, t_span, y0, t_eval, scheme, rtol, atol, max_step, check)
-    if isinstance(scheme, (CompiledRosW, CompiledNDF)):
+        return _integrate_scipy(fun, jac, t_span, y0, t_eval, scheme, rtol, atol, max_step, check, breakpoints,
+                                progress, max_steps)
+    if isinstance(scheme, CompiledRosW):
         scheme = ROS34PW2  # a Python right-hand side: the Python-stepped ROS34PW2
     return _integrate_rosw(
         fun, jac, t_span, y0, t_eval, scheme, rtol, atol, max_step, first_step,
@@ -269,6 +275,11 @@ def _integrate_rosw(fun, jac, t_span, y0, t_eval, tab, rtol, atol, max_step, fir
             n_jac += 1
             if jac is None:
                 n_rhs += n
+            # the stages use J in (I - gamma h J) and in h J sum gamma_ij k_j: both must be the
+            # same matrix (the method's order conditions). Keeping the LU of the last step's J
+            # while the stage term used this one made the method first order wherever h
+            # repeated (max_step, fixed steps): a review measured order 1.00 at fixed h.
+            last_h_lu = None
         if last_h_lu != h:
             lu, piv, info = getrf(eye - (g * h) * jmat, overwrite_a=True)
             n_lu += 1
@@ -347,19 +358,56 @@ def _fd_jac(fun, t, y, f0):
     return jmat
 
 
-def _integrate_scipy(fun, jac, t_span, y0, t_eval, scheme, rtol, atol, max_step, check):
-    from scipy.integrate import solve_ivp
+def _integrate_scipy(fun, jac, t_span, y0, t_eval, scheme, rtol, atol, max_step, check, breakpoints=(),
+                     progress=None, max_steps=10_000_000):
+    """scipy's Radau or BDF stepped here (``OdeSolver.step``): restarted at each field
+    breakpoint (the right-hand side jumps there), frames from each step's dense output, and
+    ``check`` and ``progress`` after each accepted step, as on the other paths. The error
+    weights are scipy's, atol + rtol |y| (no ``scale_cap``)."""
+    from scipy import integrate as si
 
     wall0 = time.perf_counter()
+    t0, t1 = float(t_span[0]), float(t_span[1])
+    y = np.array(y0, dtype=float)
+    out = np.full((len(t_eval), y.size), np.nan)
+    n_out = 0
+    while n_out < len(t_eval) and t_eval[n_out] <= t0:
+        out[n_out] = y
+        n_out += 1
     kw = {} if jac is None else {"jac": jac}
-    sol = solve_ivp(fun, t_span, y0, method=scheme.scipy_name, t_eval=t_eval, rtol=rtol,
-                    atol=atol, max_step=max_step, **kw)
-    stats = SolverStats(scheme.name, scheme.order, int(sol.t.size and len(sol.t)), 0,
-                        int(sol.nfev), int(sol.njev), int(sol.nlu), time.perf_counter() - wall0)
-    status = "completed" if sol.success else "failed"
-    y_final = sol.y[:, -1] if sol.y.size else np.asarray(y0)
-    t_final = float(sol.t[-1]) if sol.t.size else float(t_span[0])
-    return Solution(sol.t, sol.y.T, status, sol.message, t_final, y_final, stats)
+    status, message = "completed", "reached t_end"
+    t = t0
+    counts = np.zeros(4, dtype=np.int64)  # steps, rhs, jacobians, LUs
+    for stop in sorted({b for b in breakpoints if t0 < b < t1} | {t1}):
+        solver = getattr(si, scheme.scipy_name)(fun, t, y, stop, rtol=rtol, atol=atol, max_step=max_step, **kw)
+        while solver.status == "running":
+            if counts[0] >= max_steps:
+                status, message = "failed", f"maximum number of steps ({max_steps}) reached at t={solver.t:.6g}"
+                break
+            reason = solver.step()
+            if solver.status == "failed":
+                status, message = "failed", f"{reason} at t={solver.t:.6g}"
+                break
+            counts[0] += 1
+            if n_out < len(t_eval) and t_eval[n_out] <= solver.t:
+                j = n_out
+                while j < len(t_eval) and t_eval[j] <= solver.t:
+                    j += 1
+                out[n_out:j] = solver.dense_output()(t_eval[n_out:j]).T
+                n_out = j
+            if progress is not None:
+                progress(solver.t)
+            reason = check(solver.t, solver.y) if check is not None else None
+            if reason is not None:
+                status, message = "stopped", reason
+                break
+        counts[1:] += [solver.nfev, solver.njev, solver.nlu]
+        t, y = float(solver.t), np.array(solver.y)
+        if status != "completed":
+            break
+    stats = SolverStats(scheme.name, scheme.order, int(counts[0]), 0, int(counts[1]), int(counts[2]),
+                        int(counts[3]), time.perf_counter() - wall0)
+    return Solution(np.asarray(t_eval[:n_out]), out[:n_out], status, message, t, y, stats)
 
 
 #: LU reuse window |gamma h / gamma h0 - 1| and the largest Jacobian age (accepted steps).

@@ -133,7 +133,9 @@ def run(y, t, t_stop, d, istate, fstate, t_eval, out, i_out, rtol, atol, cap, ma
                 status = 1
                 break
             t_new = t + h_abs
-            if t_new > t_stop and fixed <= 0.0:
+            # a step ending within the loop's slack of t_stop ends at t_stop: the loop stopped
+            # there (1e-12 short) and the frame at t_stop was never written
+            if t_new > t_stop - 1e-12 * max(1.0, abs(t_stop)) and fixed <= 0.0:
                 t_new = t_stop
                 change_d(d, order, (t_new - t) / h_abs)
                 n_equal = 0

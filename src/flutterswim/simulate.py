@@ -114,7 +114,7 @@ def simulate(
                 pieces = [(a, direction(0.5 * (a + b)), strength(0.5 * (a + b))) for a, b in zip(edges[:-1], edges[1:])]
                 sol = integrate_filament(fil, pieces, t1, y0, t_eval, method=method, rtol=rtol, atol=atol,
                                          max_step=mstep, check=chk, progress=tick, scale_cap=cap)
-            else:  # a field changing between breakpoints: Python-stepped (ros34pw2-wave1 for compiled names)
+            else:  # a field changing between breakpoints: Python-stepped (ndf: scipy's BDF; ros34pw2/3: ROS34PW2)
                 sol = integrate(
                     fun, jac, (t0, t1), y0, t_eval, method=method, rtol=rtol, atol=atol, max_step=mstep,
                     breakpoints=fld.breakpoints, time_dependent=not fld.steady_between_breakpoints,
@@ -158,6 +158,9 @@ def _frames(t0: float, t1: float, n_frames: int | None, dt: float | None, tau: f
             "at this frame rate (frame_dt sets a slower one), or continue from the end state in several runs")
     if dt is not None:
         t = np.arange(t0, t1 + 0.5 * dt, dt)[: int(np.floor((t1 - t0) / dt + 1e-9)) + 1]
+        # a last frame at t_end by the count may lie past it by round-off (7.300000000000001 for
+        # t_end = 7.3, frame_dt = 0.1): no step reaches it, and it was dropped
+        t = np.minimum(t, t1)
         # a run shorter than one frame interval still saves its end (it saved only its start)
         return t if t.size >= 2 else np.array([t0, t1])
     if n_frames is None:

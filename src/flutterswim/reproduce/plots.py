@@ -95,7 +95,7 @@ def plot_fig5(run, t_avg, xa, ya, circle, start: float):
     n = run.t.size
     for j, k in enumerate(np.linspace(0, n - 1, 24).astype(int)):
         ax.plot(run.x[k] * mm, run.y[k] * mm, color=cmap(0.3 + 0.65 * j / 23), lw=1)
-    ax.plot(run.x[:, -1] * mm, run.y[:, -1] * mm, color=TIP_COLOR, lw=0.3, alpha=0.6, label="tip trajectory")
+    ax.plot(run.x[:, -1] * mm, run.y[:, -1] * mm, color=TIP_COLOR, lw=0.3, alpha=0.6, label="tip (s = l) trajectory")
     ax.plot(xa * mm, ya * mm, color=SWIM_COLOR, lw=2.4, label="trajectory averaged over each cycle")
     xc, yc, R = circle
     ph = np.linspace(0, 2 * math.pi, 200)
