@@ -75,11 +75,14 @@ def main() -> None:
         br = continue_orbits(fs.PAPER, "kappa_E_ratio", 2.0, n_points=100)
         ts.append(time.perf_counter() - t)
     ds = br.to_dataset()
-    out["branch_to_2_s"] = {"min": min(ts), "median": statistics.median(ts), "orbits": int(ds.sizes["kappa_E_ratio"]),
+    out["branch_to_2_s"] = {"min": min(ts), "median": statistics.median(ts), "orbits": int(ds.sizes["orbit"]),
                             "hopf_kappa_E_ratio": ds.attrs["hopf_kappa_E_ratio"],
                             "lyapunov_coefficient": ds.attrs["lyapunov_coefficient"],
                             "max_trivial_multiplier_error": float(ds.trivial_multiplier_error.max()),
-                            "max_residual": float(ds.residual.max())}
+                            "max_residual": float(ds.residual.max()),
+                            "steps_per_period": {int(k): int(c) for k, c in
+                                                 zip(*np.unique(ds.steps_per_period.values, return_counts=True))},
+                            "max_step_error": float(ds.step_error.max())}
     out["ratios_to_calibration"] = {k: v["median"] / out["calibration_s"]["median"]
                                     for k, v in out.items() if isinstance(v, dict) and "median" in v and k != "calibration_s"}
     if args.figure:

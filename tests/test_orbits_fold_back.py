@@ -129,9 +129,10 @@ def test_steps_per_period_follow_the_branch(branch):
 
     steps = np.array([o.steps for o in branch.orbits])
     assert steps.min() == BRANCH_STEPS and steps.max() >= 4 * BRANCH_STEPS
-    assert np.all(np.isfinite([o.step_error for o in branch.orbits]))
+    screened = np.isfinite([o.step_error for o in branch.orbits])
+    assert screened.mean() > 0.5  # (one after an orbit that passed with room is not screened)
     worst = 0.0
-    for o in branch.orbits[::5] + [branch.orbits[int(np.argmax([o.step_error for o in branch.orbits]))]]:
+    for o in branch.orbits[::5] + [branch.orbits[int(np.nanargmax([o.step_error for o in branch.orbits]))]]:
         fine = periodic_orbit(o.params, o, steps=2 * o.steps)
         e_t = abs(fine.period / o.period - 1.0)
         e_a = abs(fine.advance - o.advance) / max(abs(fine.advance), 1e-3 * o.params.l)

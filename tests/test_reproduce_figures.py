@@ -190,7 +190,8 @@ def test_kymograph_velocity_is_the_orbit_speed(built):
     assert v == pytest.approx(ds.attrs["orbit_speed_m_s"], rel=1e-2)
     assert ds.attrs["onset_average_velocity_m_s"] < 0.5 * v
     # the line's slope is the centroid's net displacement along the path over the window
-    t, u = ds["limit_t"].values, ds["limit_centroid_along"].values
+    assert "t_limit" in ds.indexes and "t_onset" in ds.indexes  # times are coordinates (they were plain variables)
+    t, u = ds["t_limit"].values, ds["limit_centroid_along"].values
     assert (u[-1] - u[0]) / (t[-1] - t[0]) == pytest.approx(v, rel=1e-12)
 
 

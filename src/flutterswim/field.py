@@ -25,6 +25,13 @@ class Schedule:
     is_constant: bool = False
 
     @property
+    def jumps(self) -> tuple[float, ...]:
+        """The breakpoints where the value may jump (a multistep integrator restarts there;
+        at the others, kinks of a continuous schedule, it steps through). All of them unless
+        the schedule knows better."""
+        return tuple(self.breakpoints)
+
+    @property
     def steady_between_breakpoints(self) -> bool:
         """True if the value only changes at the breakpoints (the integrator steps to
         them, so within a step the field does not depend on time)."""
@@ -90,6 +97,10 @@ class Piecewise(Schedule):
     def steady_between_breakpoints(self) -> bool:
         return self.kind == "hold"
 
+    @property
+    def jumps(self) -> tuple[float, ...]:
+        return self.times if self.kind == "hold" else ()  # linear: continuous, kinks only
+
     def __call__(self, t: float) -> float:
         if self.kind == "linear":
             return float(np.interp(t, self.times, self.values))
@@ -128,6 +139,10 @@ class _Rescaled(Schedule):
     @property
     def breakpoints(self) -> tuple[float, ...]:  # type: ignore[override]
         return tuple(b / self.time_scale for b in self.base.breakpoints)
+
+    @property
+    def jumps(self) -> tuple[float, ...]:
+        return tuple(b / self.time_scale for b in self.base.jumps)
 
     @property
     def steady_between_breakpoints(self) -> bool:
@@ -175,6 +190,10 @@ class Field:
     @property
     def breakpoints(self) -> tuple[float, ...]:
         return tuple(sorted(set(self.direction.breakpoints) | set(self.strength.breakpoints)))
+
+    @property
+    def jumps(self) -> tuple[float, ...]:
+        return tuple(sorted(set(self.direction.jumps) | set(self.strength.jumps)))
 
     def scaled(self, time_scale: float) -> "Field":
         return Field(self.direction.scaled(time_scale), self.strength.scaled(time_scale))

@@ -202,6 +202,7 @@ def integrate(
     max_steps: int = 10_000_000,
     progress: Callable[[float], None] | None = None,
     scale_cap: np.ndarray | None = None,
+    jumps: tuple[float, ...] | None = None,
 ) -> Solution:
     """Integrate y' = fun(t, y) over t_span, returning y at t_eval (sorted, inside t_span).
 
@@ -212,7 +213,9 @@ def integrate(
     as positions and angles, whose size grows with distance swum or turned, not with
     what needs resolving (ros34pw2 only). A compiled method's name takes its Python-stepped
     counterpart: ``ndf`` scipy's BDF (the algorithm it compiles), ``ros34pw2``/``ros34pw3``
-    the Python ROS34PW2.
+    the Python ROS34PW2. ``breakpoints``: times a one-step method steps to; ``jumps`` (default:
+    all breakpoints): those where fun jumps, at which scipy's multistep BDF (and Radau) restart
+    (a restart goes back to order 1: at the kinks of a continuous field it only costs).
     """
     scheme = METHODS.get(method)
     if scheme is None:
@@ -223,8 +226,8 @@ def integrate(
         # a Python right-hand side: scipy's BDF, the algorithm the compiled NDF compiles
         scheme = METHODS["bdf"]
     if isinstance(scheme, ScipyMethod):
-        return _integrate_scipy(fun, jac, t_span, y0, t_eval, scheme, rtol, atol, max_step, check, breakpoints,
-                                progress, max_steps)
+        return _integrate_scipy(fun, jac, t_span, y0, t_eval, scheme, rtol, atol, max_step, check,
+                                breakpoints if jumps is None else jumps, progress, max_steps)
     if isinstance(scheme, CompiledRosW):
         scheme = ROS34PW2  # a Python right-hand side: the Python-stepped ROS34PW2
     return _integrate_rosw(

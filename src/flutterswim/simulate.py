@@ -118,15 +118,15 @@ def simulate(
                 sol = integrate(
                     fun, jac, (t0, t1), y0, t_eval, method=method, rtol=rtol, atol=atol, max_step=mstep,
                     breakpoints=fld.breakpoints, time_dependent=not fld.steady_between_breakpoints,
-                    check=chk, progress=tick, scale_cap=cap,
+                    check=chk, progress=tick, scale_cap=cap, jumps=fld.jumps,
                 )
     finally:
         if bar is not None:
             bar.close()
     return _package(sol, fil, fld, groups, params, tau, forces, {
         "n_segments": n_segments, "method": method, "rtol": rtol, "atol": atol,
-        # what ran: a field turning between breakpoints is stepped in Python by another method (the
-        # settings said "ndf" where the stats said "ros34pw2")
+        # what ran: a field turning between breakpoints is stepped in Python by another method (ndf:
+        # scipy's bdf; the settings said "ndf" where the stats named the method that ran)
         "method_used": getattr(sol.stats, "method", method),
         "field": field.describe(), "initial": initial.describe(), "t_start": t_start,
         "t_end": t_end, "stop_on_self_intersection": stop_on_self_intersection,

@@ -62,7 +62,8 @@ START_AMPLITUDE_CAP = 6.0
 class Branch:
     """The orbits along the branch, with the Hopf point and normal form. ``amplitude2_slope``:
     d(amplitude^2)/d(parameter) at the Hopf point for the orbits' RMS ``amplitude``
-    (:attr:`NormalForm.amplitude2_slope_rms`)."""
+    (:attr:`NormalForm.amplitude2_slope_rms`). ``steps``: the largest Radau steps per period
+    of its orbits (each orbit's own: ``orbits[i].steps``)."""
 
     axis: Axis
     values: np.ndarray
@@ -175,9 +176,12 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     ``steps``: Radau steps per period. None (default): BRANCH_STEPS to start with, and each
     orbit's period and advance are screened against twice its steps (as for an orbit from
     scratch, to :data:`BRANCH_STEP_TOLERANCE`); where the screen fails the
-    steps double for the rest of the branch (up to MAX_STEPS) and the orbit is solved again.
-    Near the kappa_E fold 32 steps put the advance 2.6e-3 off. Each orbit's ``step_error``
-    holds the screen's estimate and ``steps`` its own count. An integer: that many, unchecked."""
+    steps double (up to MAX_STEPS) and the orbit is solved again; where it passes with room
+    (below 1/64 of the tolerance) the next orbit takes half (not below BRANCH_STEPS).
+    The MAX_SKIPPED orbits after one that passed below ROOM_FRACTION of the tolerance are not
+    screened (their ``step_error`` NaN). Near the kappa_E fold 32 steps put the advance 2.6e-3 off. Each
+    orbit's ``step_error`` holds the screen's estimate and ``steps`` its own count. An integer:
+    that many, unchecked."""
     t_start = time.perf_counter()
     axis = Axis(params, parameter)
     to = finite("to", to)
@@ -213,7 +217,8 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     while True:
         sysm, u, T, fl, res, it, p1 = _amplitude_start(axis, n_segments, steps, hopf, amp, hopf.value + d1, tol,
                                                        2 * max_newton)
-        err, finer = _screened(check, sysm, u, T, steps, fl)
+        err, finer, _, prev_ratio = _screened(check, sysm, u, T, steps, fl)
+        skipped = 0
         if not finer:
             break
         steps *= 2
@@ -266,15 +271,25 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
         pval = float(xn[-1])
         sysn = _systems(axis, pval, n_segments)
         m = xn.size - 2
-        err, finer = _screened(check, sysn, xn[:m], float(xn[m]), steps, fl)
+        # up to MAX_SKIPPED orbits after one that passed with room are not screened (prev_ratio
+        # NaN: the steps changed, screen)
+        screen = check and not (prev_ratio < ROOM_FRACTION and skipped < MAX_SKIPPED)
+        err, finer, coarser, ratio = _screened(screen, sysn, xn[:m], float(xn[m]), steps, fl)
+        skipped = 0 if screen else skipped + 1
+        prev_ratio = ratio if screen else prev_ratio
         if finer:  # the same step again, solved with twice the steps (no warm start at the old ones)
             steps *= 2
             last_flow = None
+            prev_ratio = math.nan
             continue
         orbits.append(replace(orbit_from_flow(axis.at(pval), sysn, fl, res, it, steps), step_error=err))
         values.append(pval)
         X.append(xn)
         last_flow = fl
+        if coarser:  # half the steps from the next orbit on (its warm start is at these)
+            steps //= 2
+            last_flow = None
+            prev_ratio = math.nan
         if bar is not None and n_at_to is None:
             bar.update(abs(values[-1] - values[-2]))
         if n_at_to is not None and not turned and (values[-1] - to) * side < 0:
@@ -297,7 +312,7 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
         bar.close()
     if n_at_to is not None and not turned:  # no fold back into the range: the branch ends at ``to``
         del orbits[n_at_to:], values[n_at_to:]
-    _warn_inaccurate(parameter, values, orbits, steps)
+    _warn_inaccurate(parameter, values, orbits)
     return Branch(axis, np.array(values), orbits, hopf.value, hopf.omega, nf.lyapunov_coefficient,
                   nf.amplitude2_slope_rms, n_segments, max(o.steps for o in orbits), time.perf_counter() - t_start, message)
 
@@ -307,15 +322,31 @@ def _step_range(orbits) -> str:
     return f"{steps[0]}" if len(steps) <= 1 else f"{steps[0]}-{steps[-1]}"
 
 
-def _screened(check: bool, system: ShapeSystem, u: np.ndarray, T: float, steps: int, fl) -> tuple[float, bool]:
-    """(the step screen's estimate or NaN, whether to solve again with twice the steps)."""
+#: The advance's step error along a branch is relative to max(advance, this) (in l): near the
+#: Hopf point the advance vanishes (a branch's reaches 0.15 l); 32 steps there are 2e-7 l off,
+#: 2e-4 of 1e-3 l (an orbit from scratch's floor), 2e-5 of this
+ADVANCE_FLOOR = 1e-2
+#: An orbit whose screen passed below this fraction of the tolerance lets the next MAX_SKIPPED
+#: go unscreened (at the same steps): along a few steps of the branch the error changes little
+ROOM_FRACTION = 1 / 8
+MAX_SKIPPED = 2
+
+
+def _screened(check: bool, system: ShapeSystem, u: np.ndarray, T: float, steps: int,
+              fl) -> tuple[float, bool, bool, float]:
+    """(the step screen's estimate or NaN, whether to solve again with twice the steps, whether
+    the next orbit may take half, the estimate as a fraction of the tolerance or NaN). Half:
+    the estimate below 1/64 of the tolerance, where halving (order 5: about 32 times the
+    error) still passes with room."""
     if not check or fl.monodromy is None:
-        return math.nan, False
+        return math.nan, False, False, math.nan
     adv = float(np.hypot(*(fl.y[-1, :2] - fl.y[0, :2])))
-    screened = step_screen(system, u, T, steps, fl.monodromy, adv)
+    screened = step_screen(system, u, T, steps, fl.monodromy, adv, advance_floor=ADVANCE_FLOOR)
     if screened is None:
-        return math.nan, False
-    return max(screened), not screen_passes(screened, BRANCH_STEP_TOLERANCE) and 2 * steps <= MAX_STEPS
+        return math.nan, False, False, math.nan
+    ratio = max(screened[0] / BRANCH_STEP_TOLERANCE[0], screened[1] / BRANCH_STEP_TOLERANCE[1])
+    finer = not screen_passes(screened, BRANCH_STEP_TOLERANCE) and 2 * steps <= MAX_STEPS
+    return max(screened), finer, steps > BRANCH_STEPS and ratio < 1 / 64, ratio
 
 
 def short_of(value: float, end: float) -> str:
@@ -328,12 +359,13 @@ def short_of(value: float, end: float) -> str:
     return repr(float(value))
 
 
-def _warn_inaccurate(parameter, values, orbits, steps) -> None:
+def _warn_inaccurate(parameter, values, orbits) -> None:
     """Warn (UserWarning) if some orbits' trivial multiplier is off 1 by more than ACCURACY_GAUGE."""
     err = np.array([o.trivial_multiplier_error for o in orbits])
     bad = np.nonzero(err > ACCURACY_GAUGE)[0]
     if bad.size:
         v = np.asarray(values)[bad]
+        steps = _step_range([orbits[i] for i in bad])  # theirs, not the branch's largest
         warnings.warn(f"{bad.size} of {err.size} orbits ({parameter} {v.min():.6g} to {v.max():.6g}) have the trivial "
                       f"Floquet multiplier off 1 by up to {err.max():.2g} (> {ACCURACY_GAUGE:g}): {steps} steps per "
                       "period limit their accuracy there; continue with more (steps=) to check them",

@@ -156,11 +156,11 @@ def build_fig4de(ctx: Context) -> Outcome:
     vel = {k: average_velocity(tr, w) for k, w in wins.items()}
     fig = plot_fig4de(tr, wins, vel)
     save_figure(fig, ctx.path("fig4de.png"))
-    data, attrs = {}, {}
+    data, attrs, coords = {}, {}, {}
     for k, (a, b) in wins.items():
         v, ang, t, uc = vel[k]
         along, across, _ = path_sections(tr.window(a, b))
-        data[f"{k}_t"] = _var((f"t_{k}",), t, "s", f"time ({k} window)")
+        coords[f"t_{k}"] = _var((f"t_{k}",), t, "s", f"time ({k} window)")  # (a coordinate: xarray plots against it)
         data[f"{k}_centroid_along"] = _var((f"t_{k}",), uc, "m", f"centroid position along the mean path ({k})")
         data[f"{k}_along_positions"] = _var((f"t_{k}", f"k_{k}"), along.positions, "m",
                                             f"crossings of the mean path, position along it ({k}; NaN: none)")
@@ -168,7 +168,7 @@ def build_fig4de(ctx: Context) -> Outcome:
         attrs[f"{k}_window_s"] = [a, b]
         attrs[f"{k}_average_velocity_m_s"] = v
         attrs[f"{k}_path_angle_rad"] = ang
-    ds = xr.Dataset(data, attrs={"title": "flutterswim reproduce: Fig. 4d-e, kymographs along the mean path near onset "
+    ds = xr.Dataset(data, coords=coords, attrs={"title": "flutterswim reproduce: Fig. 4d-e, kymographs along the mean path near onset "
                                           "and at the limit cycle", **attrs, "orbit_speed_m_s": orb["speed"]})
     write_netcdf(ctx.path("fig4de.nc"), ds)
     v_on, v_lim = vel["onset"][0], vel["limit"][0]
