@@ -590,6 +590,15 @@ def _integrate_ndf(fil, pieces, t_end, y0, t_eval, tab, rtol, atol, max_step, fi
                     break
             if code == 0 or status != "completed":
                 break
+            taken = int(stats[0] + stats[1])
+            if fixed_step <= 0.0 and taken >= max_steps // 10 and (t_end - t) / fstate[0] > 10 * (max_steps - taken):
+                # hopelessly stiff (kappa_E 1e9 times the paper's: 9.2 million steps of 5e-9 tau
+                # in 110 s, then "maximum number of steps"): say so a tenth of the way in
+                status, message = "failed", (
+                    f"too stiff: at its step size {fstate[0]:.3g} the run would need about "
+                    f"{(t_end - t) / fstate[0]:.2g} more steps to reach t_end, more than max_steps={max_steps} "
+                    f"(at t={t:.6g}, after {taken} steps)")
+                break
         h_abs = float(fstate[0])
         if code not in (0, 5):
             status, message = "failed", f"{_STATUS[code]} at t={t:.6g} (h={h_abs:.3g})"
