@@ -363,8 +363,8 @@ def _fd_jac(fun, t, y, f0):
 
 def _integrate_scipy(fun, jac, t_span, y0, t_eval, scheme, rtol, atol, max_step, check, breakpoints=(),
                      progress=None, max_steps=10_000_000):
-    """scipy's Radau or BDF stepped here (``OdeSolver.step``): restarted at each field
-    breakpoint (the right-hand side jumps there), frames from each step's dense output, and
+    """scipy's Radau or BDF stepped here (``OdeSolver.step``): restarted at each of
+    ``breakpoints`` (those where the right-hand side jumps: :func:`integrate`'s ``jumps``), frames from each step's dense output, and
     ``check`` and ``progress`` after each accepted step, as on the other paths. The error
     weights are scipy's, atol + rtol |y| (no ``scale_cap``)."""
     from scipy import integrate as si

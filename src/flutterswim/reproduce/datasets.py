@@ -5,7 +5,6 @@ attributes."""
 
 from __future__ import annotations
 
-import json
 
 import numpy as np
 
@@ -83,7 +82,7 @@ def fit_dataset(truth: dict, res):
     :class:`~flutterswim.fitting.FitResult`) and the values they were made from (``truth``, SI)."""
     import xarray as xr
 
-    from .io import clean_json
+    from .._json import dumps
 
     names = list(truth)
     got = {"B": res.B, "tau": res.tau, "kappa_E": res.kappa_E}
@@ -105,4 +104,4 @@ def fit_dataset(truth: dict, res):
     return xr.Dataset(data, attrs={
         "title": "flutterswim reproduce: Fig. 3e stand-in, fit to synthetic descriptors", "data_source": "synthetic",
         "status": "converged" if res.converged else "failed", "message": res.message,
-        "identifiability": res.card.describe(), "settings": json.dumps(clean_json(res.settings), sort_keys=True)})
+        "identifiability": res.card.describe(), "settings": dumps(res.settings, sort_keys=True)})

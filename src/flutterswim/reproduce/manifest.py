@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from .._json import dumps
 from .io import clean_json, sha256_file
 
 __all__ = ["Manifest", "input_key", "code_hashes", "code_fingerprint", "mode_summary", "MANIFEST_NAME"]
@@ -27,7 +28,7 @@ MANIFEST_NAME = "manifest.json"
 
 def input_key(inputs: dict) -> str:
     """SHA-256 of the canonical JSON of the inputs."""
-    text = json.dumps(clean_json(inputs), sort_keys=True, separators=(",", ":"), allow_nan=False)
+    text = dumps(inputs, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()
 
 
