@@ -247,7 +247,7 @@ def test_synthetic_fit_recovers_the_truth(built):
     _assert_cf(ds, "fig3e_data.nc")
     assert ds.attrs["data_source"] == "synthetic" and ds.attrs["source"].startswith("flutterswim ")
     ratio = []
-    for k, unit in (("B", "N m2"), ("tau", "s"), ("kappa_E", "m-1")):
+    for k, unit in (("B", "N m2"), ("tau", "s"), ("kappa_E", "1/m")):
         assert ds[f"{k}_true"].attrs["units"] == ds[f"{k}_fitted"].attrs["units"] == unit
         assert float(ds[f"{k}_true"]) == getattr(fs.PAPER, k)
         assert float(ds[f"{k}_fitted"]) == pytest.approx(float(ds[f"{k}_true"]), rel=1e-2)

@@ -19,7 +19,18 @@ from dataclasses import asdict, dataclass, replace
 
 from ._validate import ParameterError, finite, positive
 
-__all__ = ["Groups", "Parameters", "SlendernessWarning", "PAPER", "preset"]
+__all__ = ["Groups", "Parameters", "SlendernessWarning", "PAPER", "preset", "UNITS", "LONG_NAMES"]
+
+#: CF units (UDUNITS spelling) of the physical parameters, the groups and kappa_E_ratio: the one
+#: table that runs, sweeps, branches and reproduce's data files label them with.
+UNITS = {"l": "m", "a": "m", "b": "m", "B": "N m2", "tau": "s", "kappa_E": "1/m", "mu": "Pa s",
+         "eta_par": "1", "eta_perp": "1", "chi": "1", "kappa_E_ratio": "1"}
+#: Their long names.
+LONG_NAMES = {"l": "filament length", "a": "ribbon half thickness", "b": "ribbon half width",
+              "B": "bending stiffness", "tau": "activity relaxation time", "kappa_E": "target curvature",
+              "mu": "fluid viscosity", "eta_par": "tangential drag group eta_par",
+              "eta_perp": "normal drag group eta_perp", "chi": "activity group chi = kappa_E l",
+              "kappa_E_ratio": "kappa_E relative to the base parameter set"}
 
 #: Ratio a/b or b/l above which RFT for a slender ribbon is only a rough guide.
 SLENDER_RATIO = 0.2

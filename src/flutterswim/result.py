@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from .integrators import SolverStats
-from .params import Groups, Parameters
+from .params import UNITS, Groups, Parameters
 from ._json import dumps
 
 __all__ = ["SimulationResult", "load"]
@@ -163,7 +163,7 @@ class SimulationResult:
         if self.params is not None:
             for k, v in self.params.to_dict().items():
                 attrs[f"parameter_{k}"] = float(v)
-                attrs[f"parameter_{k}_units"] = PARAMETER_UNITS.get(k, "")
+                attrs[f"parameter_{k}_units"] = UNITS[k]
         ds.attrs.update(attrs)
         return cf_dataset(ds)
 
@@ -197,8 +197,6 @@ class SimulationResult:
         )
 
 
-#: Units of the physical parameters (attributes ``parameter_<name>_units`` of a saved run).
-PARAMETER_UNITS = {"l": "m", "a": "m", "b": "m", "B": "N m2", "tau": "s", "kappa_E": "1/m", "mu": "Pa s"}
 _REQUIRED = ("t", "s", "s_mid", "x", "y", "theta", "kappa", "field_angle", "field_strength", "state_final")
 
 

@@ -13,20 +13,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from .._validate import ParameterError
-from ..params import Groups, Parameters
+from ..params import LONG_NAMES, UNITS, Groups, Parameters
 
 __all__ = ["Axis"]
 
 _PHYSICAL = ("l", "a", "b", "B", "tau", "kappa_E", "mu", "kappa_E_ratio", "chi", "eta_perp")
 _GROUPS = ("eta_par", "eta_perp", "chi", "kappa_E_ratio")
-UNITS = {"l": "m", "a": "m", "b": "m", "B": "N m2", "tau": "s", "kappa_E": "m-1", "mu": "Pa s",
-         "kappa_E_ratio": "1", "chi": "1", "eta_perp": "1", "eta_par": "1"}
-LONG_NAMES = {"l": "filament length", "a": "half thickness", "b": "half width",
-              "B": "bending stiffness", "tau": "activity relaxation time",
-              "kappa_E": "target curvature", "mu": "viscosity",
-              "kappa_E_ratio": "kappa_E relative to the base parameter set",
-              "chi": "chi = kappa_E l", "eta_perp": "normal drag group eta_perp",
-              "eta_par": "tangential drag group eta_par"}
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..orbits.parameter import LONG_NAMES, UNITS
+from ..params import LONG_NAMES, UNITS
 
 __all__ = ["table1_dataset", "orbit_dataset", "read_orbit", "trials_dataset", "fit_dataset", "DESCRIPTORS"]
 

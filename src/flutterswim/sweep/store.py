@@ -37,6 +37,7 @@ import numpy as np
 from .._cf import cf_attrs
 from .._paths import MARKER, check_store_path, has_marker, remove_own_store, write_marker
 from .._validate import ParameterError
+from ..params import LONG_NAMES, UNITS
 from .spec import SweepSpec
 
 __all__ = ["SweepStore", "SweepDefinitionError", "SweepStoreError", "SweepLockedError", "FORMAT", "variable_attrs",
@@ -48,13 +49,6 @@ BOOKKEEPING = ("done", "failed", "reason", "wall_time_s", "state")
 FLAGS = ("straight", "unstable", "swimming", "limit_cycle_reached", "saturated", "capped", "limit_cycle",
          "bent_equilibrium", "not_periodic", "reached_limit_cycle", "stable",
          "self_intersecting", "towards_field", "reciprocal")
-AXIS_UNITS = {"l": "m", "a": "m", "b": "m", "B": "N m2", "tau": "s", "kappa_E": "1/m", "mu": "Pa s",
-              "eta_par": "1", "eta_perp": "1", "chi": "1", "kappa_E_ratio": "1"}
-AXIS_NAMES = {"l": "filament length", "a": "ribbon half thickness", "b": "ribbon half width",
-              "B": "bending stiffness", "tau": "activity relaxation time", "kappa_E": "target curvature",
-              "mu": "fluid viscosity", "eta_par": "tangential drag group eta_par",
-              "eta_perp": "normal drag group eta_perp", "chi": "activity group chi = kappa_E l",
-              "kappa_E_ratio": "kappa_E over the base kappa_E"}
 
 
 # a file zarr writes under a temporary name and renames into place ("0.<uuid hex>.partial");
@@ -200,12 +194,12 @@ def store_dims(spec: SweepSpec) -> tuple[list[str], tuple[int, ...], dict[str, A
         dims = list(spec.names)
         shape = spec.shape
         coords: dict[str, Any] = {a.name: (a.name, np.array(a.values, float),
-                                           {"units": AXIS_UNITS[a.name], "long_name": AXIS_NAMES[a.name]})
+                                           {"units": UNITS[a.name], "long_name": LONG_NAMES[a.name]})
                                   for a in spec.axes}
     else:
         dims, shape = ["point"], (spec.n_values,)
         coords = {a.name: ("point", np.array(a.values, float),
-                           {"units": AXIS_UNITS[a.name], "long_name": AXIS_NAMES[a.name]}) for a in spec.axes}
+                           {"units": UNITS[a.name], "long_name": LONG_NAMES[a.name]}) for a in spec.axes}
         coords["point"] = ("point", np.arange(spec.n_values), {"units": "1", "long_name": "point number"})
     if spec.continuation:
         dims = ["branch"] + dims
