@@ -382,6 +382,9 @@ def _at_cap(params, groups, orbit, watch: _Watch, lam: complex, n_segments: int,
             br = continue_orbits(groups, "chi", groups.chi, n_points=6, n_segments=n_segments,
                                  steps=DEFAULT_STEPS if steps is None else steps,
                                  look_beyond=0.0)  # the stroke reached first from the straight state
+            if not br.ends_at(groups.chi):  # (its last orbit is at another chi)
+                return ("capped", f"still growing at t_max={t_cap_tau:g} tau and continuation from the Hopf "
+                        f"point did not reach this point ({br.message})", None)
             orb = br.orbits[-1]
             if isinstance(params, Parameters):
                 from .orbits.periodic import PeriodicOrbit  # noqa: F401

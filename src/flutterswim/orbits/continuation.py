@@ -129,6 +129,11 @@ class Branch:
         })
         return cf_dataset(ds)
 
+    def ends_at(self, value: float) -> bool:
+        """Whether the branch's last orbit is at ``value`` of its parameter (it reached its
+        ``to``; a branch stopped short ends elsewhere, and its ``message`` says why)."""
+        return abs(float(self.values[-1]) - value) <= 1e-12 * max(1.0, abs(value))
+
     def multiplier_crossings(self) -> list[float]:
         """Parameter values (linearly interpolated) where the largest non-trivial multiplier
         crosses the unit circle along the branch."""
@@ -228,6 +233,12 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     X = [np.concatenate((u, [T, values[-1]]))]
     last_flow = fl  # (only the last is a warm start: each holds its step matrices, MBs)
     w = _weights(u.size, length_u, length_p)
+    # the scale of the steps: the range from the Hopf point to ``to``, or as far from ``to`` as
+    # the branch has gone (a nearly degenerate Hopf point with ``to`` just past it: the branch
+    # first runs the other way to a fold 12 ranges off and back, which steps of a range's
+    # 1/n_points could not cover in max_points orbits; settle then took the last orbit, at
+    # another chi). Within the range, as for every ordinary branch, it is the range.
+    reach = length_p
     ds = 0.7 / n_points
     ds_max = 3.0 / n_points
     bar = _bar(progress, length_p)
@@ -252,7 +263,7 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
             tangent = X[-1] - X[-2]
         tangent = tangent / math.sqrt(np.sum((tangent * w) ** 2))
         # at most 1/n_points of the parameter range per step, so that there are n_points or more
-        step_ds = min(ds, length_p / (n_points * max(abs(tangent[-1]), 1e-300)))
+        step_ds = min(ds, reach / (n_points * max(abs(tangent[-1]), 1e-300)))
         finishing = (xk[-1] + step_ds * tangent[-1] - target) * side >= 0 and tangent[-1] * side > 0
         try:
             if finishing:
@@ -286,6 +297,9 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
         values.append(pval)
         X.append(xn)
         last_flow = fl
+        if abs(pval - to) > 1.5 * reach:
+            reach = abs(pval - to)
+            w = _weights(u.size, 3.0 * math.sqrt(nf.amplitude2_slope * reach), reach)
         if coarser:  # half the steps from the next orbit on (its warm start is at these)
             steps //= 2
             last_flow = None

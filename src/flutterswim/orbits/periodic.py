@@ -433,6 +433,9 @@ def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = 
                 # (past the Hopf point on the side without strokes, or no Hopf point near it)
                 raise OrbitNotFound(f"no stroke at chi={g.chi:.6g}, eta_perp={g.eta_perp:.6g}: the continuation "
                                     f"from the Hopf point does not reach it ({exc})") from None
+            if not br.ends_at(g.chi):  # (its last orbit is at another chi)
+                raise OrbitNotFound(f"no stroke found at chi={g.chi:.6g}, eta_perp={g.eta_perp:.6g}: the "
+                                    f"continuation from the Hopf point did not reach it ({br.message})")
             u0, T = br.orbits[-1].u0, br.orbits[-1].period_dimensionless
             if not br.orbits[-1].stable:
                 # the branch from the Hopf point is unstable here (it can be with l1 < 0, where
