@@ -18,6 +18,7 @@ order 2 in the segment count N, so by default they are extrapolated from N and 2
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -263,15 +264,18 @@ def solve_point(item):
     from ..orbits import OrbitNotFound, periodic_orbit
 
     groups, guess, n_segments, steps = item
-    try:
-        orb = periodic_orbit(groups, guess, n_segments=n_segments, steps=steps)
-    except OrbitNotFound as exc:
-        if guess is None:
-            return str(exc)
+    with warnings.catch_warnings():
+        # (the fit's own steps, unchecked: its resolution is judged by N against 2N instead)
+        warnings.filterwarnings("ignore", message="the orbit's trivial Floquet multiplier", category=UserWarning)
         try:
-            orb = periodic_orbit(groups, n_segments=n_segments, steps=steps)
-        except OrbitNotFound as exc2:
-            return str(exc2)
+            orb = periodic_orbit(groups, guess, n_segments=n_segments, steps=steps)
+        except OrbitNotFound as exc:
+            if guess is None:
+                return str(exc)
+            try:
+                orb = periodic_orbit(groups, n_segments=n_segments, steps=steps)
+            except OrbitNotFound as exc2:
+                return str(exc2)
     if not orb.stable:
         return f"the stroke at eta_perp={groups.eta_perp:.4g}, chi={groups.chi:.4g} is unstable"
     return orb

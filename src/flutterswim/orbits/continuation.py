@@ -24,7 +24,7 @@ from .linear import hopf_bracket, hopf_point
 from .normal_form import normal_form
 from .parameter import Axis
 from ..params import Parameters
-from .periodic import MAX_STEPS, OrbitNotFound, PeriodicOrbit, _scales, orbit_from_flow, screen_passes, step_screen
+from .periodic import ACCURACY_GAUGE, MAX_STEPS, OrbitNotFound, PeriodicOrbit, _scales, orbit_from_flow, screen_passes, step_screen
 from .shooting import StepFailure, flow
 from ._threads import one_blas_thread
 from .system import ShapeSystem
@@ -43,11 +43,6 @@ BRANCH_STEPS = 32
 #: At the orbit from scratch's tolerance a branch to kappa_E ratio 2 took 4.4 times as long
 #: (35 s against 8 s, N = 24), most of its orbits at 64-256 steps.
 BRANCH_STEP_TOLERANCE = (1e-5, 1e-4)
-#: |trivial Floquet multiplier - 1| above which an orbit's time discretisation is called out
-#: (a warning from continue_orbits, the dataset's n_inaccurate_orbits): at 32 steps it stays
-#: below 1e-8 up to kappa_E ratio 2 but reaches 6e-6..1.8e-4 on strongly bent strokes (ratio
-#: 1.95 upper branch, ratio 3; period errors 1.6e-5..4.6e-5 against 128 steps)
-ACCURACY_GAUGE = 1e-6
 #: most orbits a branch is asked for (each keeps its shape on its phase grid, ~50 kB at N = 24)
 MAX_POINTS = 20000
 #: the fraction of a branch's range it is followed past its end for a fold back into the range:

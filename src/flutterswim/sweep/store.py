@@ -46,6 +46,9 @@ __all__ = ["SweepStore", "SweepDefinitionError", "SweepStoreError", "SweepLocked
 FORMAT = "flutterswim-sweep/2"
 #: Per-point bookkeeping variables (besides the point function's own).
 BOOKKEEPING = ("done", "failed", "reason", "wall_time_s", "state")
+#: Flags of the stroke (its periodic orbit), with their long names.
+STROKE_FLAGS = {"stable": "the stroke is a stable periodic orbit",
+                "self_intersecting": "the stroke's shapes cross themselves"}
 FLAGS = ("straight", "unstable", "swimming", "limit_cycle_reached", "saturated", "capped", "limit_cycle",
          "bent_equilibrium", "not_periodic", "reached_limit_cycle", "stable",
          "self_intersecting", "towards_field", "reciprocal")
@@ -137,6 +140,8 @@ def _variable_attrs(name: str, time_unit: str) -> dict[str, str]:
     tu = time_unit
     phys = tu == "s"
     words = name.replace("_", " ")
+    if name in STROKE_FLAGS:  # (a flag is 0/1: a point without a stroke stores 0)
+        return {"units": "1", "long_name": f"{STROKE_FLAGS[name]} (1 yes, 0 no or no stroke)"}
     if name in FLAGS:
         return {"units": "1", "long_name": f"{words} (1 yes, 0 no)"}
     table = {
