@@ -60,6 +60,33 @@ def test_dropped_frames_with_their_times(movie):
     assert "give the frames' times" in naive.meta["temporal"]["periodic"]
 
 
+@pytest.mark.parametrize("drop", [[40, 41], [30, 60, 61], [70, 71, 72]])
+def test_runs_of_dropped_frames_with_their_times(movie, drop, tmp_path, capsys):
+    """Two or three frames dropped in a row: the fits in time use the frames' times. The end
+    smoothing fitted its polynomial over frame indices and moved the frame before the gap by
+    2-3 px; the stroke's period, counted over indices, came out 4.7 % short, outside the
+    template's search, and the template was refused."""
+    from flutterswim.cli import main
+    from flutterswim.tracking.netcdf import load_track, save_track
+
+    mv, truth = movie
+    keep = np.setdiff1d(np.arange(mv.t.size), drop)
+    kept = SimpleNamespace(x_px=mv.x_px[keep], y_px=mv.y_px[keep])
+    tr = track(mv.frames[keep], px_per_mm=mv.px_per_mm, times=mv.t[keep])
+    assert tr.meta["temporal"]["periodic"].startswith("done")
+    _, E, _ = pixel_errors(tr, kept)
+    assert float(np.sqrt(np.mean(E ** 2))) < 0.5 and float(E.max()) < 1.0
+    d = describe(tr, n_last=100)
+    assert _rel(d.period_s, truth.period_s) < 1e-3
+    # without the times: the hint reaches the track file, describe and the command's output
+    naive = track(mv.frames[keep], px_per_mm=mv.px_per_mm, fps=FPS)
+    save_track(naive, tmp_path / "naive.nc")
+    back = load_track(tmp_path / "naive.nc")
+    assert "give the frames' times" in back.meta["temporal"]["periodic"]
+    assert main(["describe", str(tmp_path / "naive.nc")]) == 0
+    assert "give the frames' times" in capsys.readouterr().err  # (describe's note)
+
+
 def test_duplicated_frames_are_flagged(movie):
     """A frame replaced by a copy of the one before (a grabber's duplicate) is flagged
     'repeated' and left out; the others are kept and the period is the truth's."""

@@ -515,6 +515,13 @@ def per_cycle(obj: Any, cycles: Cycles | None = None, *, tip: int | str = "end",
     }
 
 
+def _dropped_frames_hint(tr) -> str:
+    """The tracker's hint for a movie whose stroke did not repeat frame by frame (a camera that
+    dropped frames and no timestamps given), or ""."""
+    periodic = str(((getattr(tr, "meta", None) or {}).get("temporal") or {}).get("periodic", ""))
+    return periodic[periodic.index("if the camera dropped frames"):] if "if the camera dropped frames" in periodic else ""
+
+
 def describe(
     obj: Any,
     *,
@@ -709,6 +716,9 @@ def describe(
         note = (f"the stroke stopped: the oscillation over the cycles described is "
                 f"{float(np.mean(amp)) / float(np.max(cyc.amplitudes)):.2g} of the record's largest (at rest, "
                 "or trapped in a bent equilibrium), so no limit cycle and these figures describe no stroke")
+    hint = _dropped_frames_hint(tr)
+    if note.startswith("no limit cycle") and hint:
+        note = f"{note}; {hint}"
     if still:
         note = (note + "; " if note else "") + (
             f"no net swimming: the centroid moves {drift / tr.length:.2g} body lengths per cycle, under "

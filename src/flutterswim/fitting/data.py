@@ -149,9 +149,11 @@ def summarise(trials: Trials) -> Summary:
 LABELS = ("period [s]", "advance per cycle [mm]", "lateral peak-to-peak [mm]")
 
 
-def draw_trials(ax, k: int, summary: Summary, trials: Trials | None = None) -> None:
+def draw_trials(ax, k: int, summary: Summary, trials: Trials | None = None, tip: str | None = None) -> None:
     """Descriptor k (period, advance, lateral) against voltage on ``ax``: mean +- SEM (red) and
-    the trials (grey dots, drawn just left of their voltage so the error bar does not hide them)."""
+    the trials (grey dots, drawn just left of their voltage so the error bar does not hide them);
+    the number of trials under each voltage's mean on the first panel. ``tip``: which end the
+    lateral excursions are ("trailing", "leading"), said on its axis."""
     if trials is not None:
         u = np.unique(np.asarray(summary.voltage_V, float))
         shift = 0.06 * (float(np.min(np.diff(u))) if u.size > 1 else max(abs(float(u[0])), 1.0))
@@ -160,12 +162,19 @@ def draw_trials(ax, k: int, summary: Summary, trials: Trials | None = None) -> N
     ax.errorbar(summary.voltage_V, summary.mean[:, k], yerr=summary.sem[:, k], fmt="o", color="tab:red",
                 capsize=3, label="mean \u00b1 SEM")
     ax.set_xlabel("voltage [V]")
-    ax.set_ylabel(LABELS[k])
+    ax.set_ylabel(LABELS[k] if k != 2 or tip is None else f"lateral p-p, {tip} end [mm]")
+    if k == 0:  # (along the bottom of the panel, below the points)
+        lo, hi = ax.get_ylim()
+        ax.set_ylim(lo - 0.1 * (hi - lo), hi)
+        for v, n in zip(summary.voltage_V, summary.n):
+            ax.text(v, 0.01, f"n={int(n)}", transform=ax.get_xaxis_transform(), ha="center", va="bottom",
+                    fontsize=7, color="tab:red")
 
 
-def plot_trials(summary: Summary, path=None, *, trials: Trials | None = None, model=None):
+def plot_trials(summary: Summary, path=None, *, trials: Trials | None = None, model=None, tip: str | None = None):
     """Fig. 3e: advance per cycle and period against voltage, mean +- SEM (red), the trials
-    (grey dots) and, optionally, model values per voltage (``model``: (m, 3) array)."""
+    (grey dots) and, optionally, model values per voltage (``model``: (m, 3) array); ``tip``:
+    which end the lateral column measures, for its axis label."""
     import matplotlib
 
     if path is not None:
@@ -174,7 +183,7 @@ def plot_trials(summary: Summary, path=None, *, trials: Trials | None = None, mo
 
     fig, axs = plt.subplots(1, 3, figsize=(10, 3.4), constrained_layout=True)
     for k, ax in enumerate(axs):
-        draw_trials(ax, k, summary, trials)
+        draw_trials(ax, k, summary, trials, tip)
         if model is not None:
             ax.plot(summary.voltage_V, np.asarray(model)[:, k], "s", mfc="none", color="k", label="model")
     axs[0].legend(fontsize=8)

@@ -37,7 +37,7 @@ def plot_fit(res, summary, trials, path=None, *, voltage: float | None = None):
     joint = res.settings.get("voltages_V")
     for k in range(3):
         ax = axs[0, k]
-        draw_trials(ax, k, summary, trials)
+        draw_trials(ax, k, summary, trials, res.settings.get("tip"))
         if joint:  # a joint fit over voltages: the model at each of them
             ax.plot(joint, np.asarray(res.model)[:, k], "s-", mfc="none", color="k", ms=8, lw=0.8,
                     label="model at the fit (kappa_E ~ V)")

@@ -274,5 +274,5 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
         from ..fitting.data import plot_trials, read_trials, summarise
 
         trials_data = read_trials(out_p)
-        plot_trials(summarise(trials_data), plot, trials=trials_data)
+        plot_trials(summarise(trials_data), plot, trials=trials_data, tip="trailing")
     return out_p, rows, failed

@@ -97,6 +97,9 @@ def _cmd_track(args) -> int:
     print(f"tracked {m['n_frames'] - m['n_failed']} of {m['n_frames']} frames in {m['wall_time_s']:.2f} s; body length "
           f"{tr.length:.4g} mm, spread {100 * m['length_spread']:.2g}% (sd {m['length_std_px'] / m['px_per_mm']:.2g} mm)"
           f"{note}; wrote {out}", file=sys.stderr if args.json else sys.stdout)
+    periodic = str((m.get("temporal") or {}).get("periodic", ""))
+    if periodic.startswith("not done"):  # (its reason may say what to do: --times for dropped frames)
+        print(f"note: periodic template {periodic}", file=sys.stderr if args.json else sys.stdout)
     if args.kymograph:
         from .kymograph import plot_raw_kymographs, raw_kymographs
 

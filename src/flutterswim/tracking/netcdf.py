@@ -82,6 +82,9 @@ def to_xarray(tr: Track):
     if math.isfinite(m.get("unchanged_fraction", math.nan)):
         # share of pixels keeping their exact value between frames (a lossy codec's skipped blocks)
         ds.attrs.update({"unchanged_fraction": float(m["unchanged_fraction"]), "unchanged_fraction_units": "1"})
+    for key, text in (m.get("temporal") or {}).items():  # what the fits in time did, and why not
+        if isinstance(text, str):
+            ds.attrs[f"temporal_{key}"] = text
     if "template_coef_se" in m:  # the periodic template's coefficient noise at (s = 0, s = l)
         ds.attrs.update({"template_coef_se": np.asarray(m["template_coef_se"], float),
                          "template_coef_se_units": "mm"})
@@ -129,6 +132,9 @@ def load_track(path: str | os.PathLike) -> Track:
             "length_px": float(a["body_length"]) * a["px_per_mm"],
             "length_std_px": float(a["body_length_std"]) * a["px_per_mm"],
             "length_spread": float(a["body_length_spread"]), "frames": frames}
+    temporal = {k[len("temporal_"):]: str(v) for k, v in a.items() if k.startswith("temporal_")}
+    if temporal:
+        meta["temporal"] = temporal
     if "unchanged_fraction" in a:
         meta["unchanged_fraction"] = float(a["unchanged_fraction"])
     if "template_coef_se" in a:

@@ -123,15 +123,19 @@ def tip_outliers(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, *, k: float = 6.0
 
 
 def smooth_offsets(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, *, window: int = 7, degree: int = 4,
-                   middle: tuple[float, float] = (0.2, 0.8)) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                   middle: tuple[float, float] = (0.2, 0.8), positions: np.ndarray | None = None
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Slide each good frame's samples along its own curve so that the middle of the body
     (the fraction ``middle`` of the samples) sits where the local polynomial in time predicts
     it (see the module docstring). X, Y (T, P) [px] with equal arc-length samples; returns
     (X, Y, shift (T,) [px], + towards s = l; 0 where not done). Frames with fewer than
     ``window`` good frames within reach keep their samples (the window is shifted at the
-    ends of the movie, as in Savitzky-Golay's 'interp' mode)."""
+    ends of the movie, as in Savitzky-Golay's 'interp' mode). ``positions``: the frames' times
+    in frame intervals (a camera that dropped frames), for the polynomial in time; None: the
+    frame indices (a frame next to a gap of two dropped frames was moved by 2-3 px)."""
     ok = np.asarray(ok, bool)
     T, P = X.shape
+    pos = np.arange(T, dtype=float) if positions is None else np.asarray(positions, float)
     Xo, Yo = X.copy(), Y.copy()
     shift = np.zeros(T)
     idx = np.nonzero(ok)[0]
@@ -148,7 +152,7 @@ def smooth_offsets(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, *, window: int 
         nb = idx[(idx >= lo) & (idx <= hi)]
         if nb.size < window:
             continue
-        V = np.vander((nb - i) / max(h, 1), degree + 1, increasing=True)
+        V = np.vander((pos[nb] - pos[i]) / max(h, 1), degree + 1, increasing=True)
         n = X[i, m].size
         c, *_ = np.linalg.lstsq(V, np.concatenate([X[nb][:, m], Y[nb][:, m]], axis=1), rcond=None)
         tx, ty = np.gradient(X[i]), np.gradient(Y[i])
@@ -162,26 +166,30 @@ def smooth_offsets(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, *, window: int 
     return Xo, Yo, shift
 
 
-def frames_per_stroke(X: np.ndarray, Y: np.ndarray, ok: np.ndarray) -> float:
+def frames_per_stroke(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, positions: np.ndarray | None = None) -> float:
     """The stroke's period [frames], from the body's shape: the offsets of the samples at a
     quarter, half and three quarters of the body from the line through its ends (rigid motion
     removed), each over the good frames (gaps filled linearly) less its mean; the period of
     the highest of their dominant frequencies (the shortest period, so that a shape that
     oscillates at twice the stroke frequency errs on the safe side). NaN with fewer than 8
-    good frames or no oscillation."""
+    good frames or no oscillation. ``positions``: the frames' times in frame intervals (a
+    camera that dropped frames; three dropped of 110 put the period 4.7 % short, outside the
+    periodic template's search); None: the frame indices."""
     ok = np.asarray(ok, bool)
     idx = np.nonzero(ok)[0]
     if idx.size < 8:
         return math.nan
+    pos = np.arange(ok.size, dtype=float) if positions is None else np.asarray(positions, float)
     P = X.shape[1]
     cx, cy = X[idx, -1] - X[idx, 0], Y[idx, -1] - Y[idx, 0]
     n = np.hypot(cx, cy)
     n[n == 0] = 1.0
-    T = idx[-1] - idx[0] + 1
+    grid = np.arange(pos[idx[0]], pos[idx[-1]] + 0.5)  # one sample per frame interval
+    T = grid.size
     best = 0.0
     for j in (P // 4, P // 2, (3 * P) // 4):
         u = ((X[idx, j] - X[idx, 0]) * -cy + (Y[idx, j] - Y[idx, 0]) * cx) / n
-        v = np.interp(np.arange(idx[0], idx[-1] + 1), idx, u)
+        v = np.interp(grid, pos[idx], u)
         v = v - v.mean()
         F = np.abs(np.fft.rfft(v * np.hanning(T), n=8 * T))
         f = np.fft.rfftfreq(8 * T)

@@ -696,7 +696,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     Y[~ok] = np.nan
     from .temporal import frames_per_stroke, smoothing_allowed
 
-    per_stroke = frames_per_stroke(X, Y, ok)
+    per_stroke = frames_per_stroke(X, Y, ok, pos)
     flips, unsure = _unlinked(links, X_loop, Y_loop, ok_loop, per_stroke)
     for i in flips:
         X[i:], Y[i:] = X[i:, ::-1].copy(), Y[i:, ::-1].copy()
@@ -706,7 +706,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         X[~ok] = np.nan
         Y[~ok] = np.nan
     if flips or unsure is not None:
-        per_stroke = frames_per_stroke(X, Y, ok)
+        per_stroke = frames_per_stroke(X, Y, ok, pos)
     temporal: dict[str, Any] = {"frames_per_stroke": per_stroke, "tip_check": "off", "smoothing": "off",
                                 "periodic": "off"}
     if tip_check and not per_stroke >= 12:
@@ -738,7 +738,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
 
         w = int(smooth_frames) | 1
         if smoothing_allowed(w, 4, per_stroke):
-            X, Y, _ = smooth_offsets(X, Y, ok, window=w, degree=4)
+            X, Y, _ = smooth_offsets(X, Y, ok, window=w, degree=4, positions=pos)
             temporal["smoothing"] = f"end offsets along the body, window {w} frames, quartic"
         else:
             temporal["smoothing"] = (f"not done: {per_stroke:.1f} frames per stroke, too few for a quartic over "
