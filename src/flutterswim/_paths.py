@@ -239,7 +239,8 @@ def check_output_file(path: str | os.PathLike, suffixes: Sequence[str], *, what:
     folder is not writable. A symbolic link to a file is followed: the path returned is its
     target's, so the file is replaced there and the link kept. ``kind``: the NetCDF title the
     command writes; a flutterswim NetCDF of another title (a simulated run under a track's
-    name) is refused, not replaced."""
+    name) is refused, not replaced; "<kind> in <anything>" is of the kind (a branch's title names
+    its parameter)."""
     try:
         p = Path(os.fspath(path))
     except TypeError:
@@ -269,7 +270,7 @@ def check_output_file(path: str | os.PathLike, suffixes: Sequence[str], *, what:
                              "overwritten. Choose another name, or move the file away first")
     if kind is not None and p.is_file() and p.stat().st_size > 0:
         title = netcdf_title(p)
-        if title and title != kind:
+        if title and title != kind and not title.startswith(f"{kind} in "):  # (a branch: "... in <parameter>")
             raise ParameterError(f"{what}={str(p)!r} holds another kind of flutterswim result ({title!r}); it is "
                                  f"not replaced by a {kind!r}. Choose another name, or move the file away first")
     _writable_dir(p.parent if str(p.parent) else Path("."), what, p)
@@ -285,11 +286,11 @@ def check_output_dir(path: str | os.PathLike, *, what: str = "out") -> Path:
     return p
 
 
-def check_files_in(folder: Path, names: Sequence[str], *, what: str = "out") -> None:
+def check_files_in(folder: Path, names: Sequence[str], *, what: str = "out", kinds: dict | None = None) -> None:
     """:func:`check_output_file` for each file ``names`` an output folder would get (each with
-    its own suffix); a folder not made yet replaces nothing."""
+    its own suffix and, from ``kinds``, its NetCDF title); a folder not made yet replaces nothing."""
     for name in names if Path(folder).is_dir() else ():
-        check_output_file(Path(folder) / name, (Path(name).suffix,), what=what)
+        check_output_file(Path(folder) / name, (Path(name).suffix,), what=what, kind=(kinds or {}).get(name))
 
 
 @contextlib.contextmanager

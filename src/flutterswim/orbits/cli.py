@@ -75,7 +75,9 @@ def _cmd_branch(args) -> int:
             axis.at(v)
         except ParameterError as exc:
             raise ParameterError(f"range={args.range!r}: {name}={v:g} is not allowed ({exc})") from None
-    out = check_output_file(args.out, (".nc",))
+    from .continuation import BRANCH_TITLE
+
+    out = check_output_file(args.out, (".nc",), kind=BRANCH_TITLE)
     if args.plot:
         check_output_file(args.plot, (".png", ".pdf", ".svg"), what="plot")
     n = defaults.SWEEP_N_SEGMENTS if args.segments is None else args.segments

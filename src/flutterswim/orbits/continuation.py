@@ -43,6 +43,8 @@ BRANCH_STEPS = 32
 #: At the orbit from scratch's tolerance a branch to kappa_E ratio 2 took 4.4 times as long
 #: (35 s against 8 s, N = 24), most of its orbits at 64-256 steps.
 BRANCH_STEP_TOLERANCE = (1e-5, 1e-4)
+#: the NetCDF title of a branch, before " in <parameter>" (a branch replaces only these)
+BRANCH_TITLE = "flutterswim periodic-orbit branch"
 #: most orbits a branch is asked for (each keeps its shape on its phase grid, ~50 kB at N = 24)
 MAX_POINTS = 20000
 #: the fraction of a branch's range it is followed past its end for a fold back into the range:
@@ -92,7 +94,7 @@ class Branch:
 
         ds.attrs.update({
             "Conventions": "CF-1.10",
-            "title": f"flutterswim periodic-orbit branch in {name}",
+            "title": f"{BRANCH_TITLE} in {name}",
             "source": f"flutterswim {__version__}: Newton shooting (Radau IIA, {_step_range(self.orbits)} steps per "
                       "period) and pseudo-arclength continuation",
             "parameter": name,
@@ -144,7 +146,7 @@ class Branch:
         """Write the branch to NetCDF atomically (temporary name, then rename)."""
         from .._paths import atomic_path, check_output_file
 
-        path = check_output_file(path, (".nc",))
+        path = check_output_file(path, (".nc",), kind=BRANCH_TITLE)
         with atomic_path(path) as tmp:
             self.to_dataset().to_netcdf(tmp, engine="h5netcdf")
 

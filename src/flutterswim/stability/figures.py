@@ -48,7 +48,9 @@ def stability_figures(out_dir, *, params: Parameters = PAPER, step: float = 0.1,
         raise ParameterError(f"dtype={dtype!r} is not allowed; use 'float64' or 'float32'")
     out = check_output_dir(out_dir, what="out_dir")
     names = ("stability_map.nc", "stability_map.png", "bifurcation.png", "eigenmodes.png", "mode1.gif")
-    check_files_in(out, names, what="out_dir")  # before computing
+    from .stability_map import MAP_TITLE
+
+    check_files_in(out, names, what="out_dir", kinds={"stability_map.nc": MAP_TITLE})  # before computing
     out.mkdir(exist_ok=True)  # (its parent exists: check_output_dir)
     from ..simulate import single_blas_thread
 

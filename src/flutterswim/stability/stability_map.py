@@ -23,6 +23,9 @@ from .newton import _newton_numpy, follow_root, resolve_backend
 
 __all__ = ["StabilityMap", "stability_map", "load_map"]
 
+#: the NetCDF title of a stability map (a map replaces only these)
+MAP_TITLE = "flutterswim stability map of the straight filament"
+
 
 @dataclass(frozen=True)
 class StabilityMap:
@@ -66,7 +69,7 @@ class StabilityMap:
             coords={"eta_perp": ("eta_perp", self.eta_perp,
                                  {"long_name": "normal drag group eta_perp = mu_perp l^4/(B tau)", "units": "1"}),
                     "chi": ("chi", self.chi, {"long_name": "activity group chi = kappa_E l", "units": "1"})},
-            attrs={"Conventions": "CF-1.10", "source": f"flutterswim {__version__}",
+            attrs={"Conventions": "CF-1.10", "title": MAP_TITLE, "source": f"flutterswim {__version__}",
                    "description": "leading eigenvalue of the straight filament (flutterswim.stability)",
                    "check_points": self.check_points, "check_max_rel_diff": self.check_max_rel_diff},
         ))
@@ -79,7 +82,7 @@ class StabilityMap:
 
         if dtype not in ("float64", "float32"):
             raise ParameterError(f"dtype={dtype!r} is not allowed; use 'float64' or 'float32'")
-        path = check_output_file(path, (".nc", ".nc4", ".h5"), what="path")
+        path = check_output_file(path, (".nc", ".nc4", ".h5"), what="path", kind=MAP_TITLE)
         enc = {k: {"zlib": True, "complevel": int(complevel), "shuffle": True, "dtype": dtype}
                for k in ("re_omega", "im_omega")}
         enc["iterations"] = {"zlib": True, "complevel": int(complevel), "shuffle": True}

@@ -89,7 +89,9 @@ def _cmd_steer(args) -> int:
     from .steer import steer
 
     _check_path_options(args)
-    out = check_output_file(args.out, (".nc",))
+    from .steer import STEER_TITLE
+
+    out = check_output_file(args.out, (".nc",), kind=STEER_TITLE)
     met = check_output_file(args.metrics, (".json",), what="--metrics")
     if args.plot:
         check_output_file(args.plot, (".png", ".pdf", ".svg"), what="--plot")

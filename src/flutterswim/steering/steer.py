@@ -34,6 +34,10 @@ class SteerResult:
     control_start: float
 
 
+#: the NetCDF title of a steered run (steer replaces only these; a plain run is not one)
+STEER_TITLE = "flutterswim simulation of an active filament steered along a path"
+
+
 def steer_dataset(res: SteerResult, reduced=None):
     """The run as an xarray Dataset (``SimulationResult.to_xarray``) with what scores it on its
     own: the reference path as placed (``path_x``, ``path_y`` [m] along ``path_point``, with
@@ -47,7 +51,7 @@ def steer_dataset(res: SteerResult, reduced=None):
                     {**units, "long_name": "reference path, x (as placed when control started)"})
     ds["path_y"] = ("path_point", np.asarray(res.path.points[:, 1], float),
                     {**units, "long_name": "reference path, y (as placed when control started)"})
-    ds.attrs.update({"steering_path": res.path.name, "steering_path_closed": int(res.path.closed),
+    ds.attrs.update({"title": STEER_TITLE, "steering_path": res.path.name, "steering_path_closed": int(res.path.closed),
                      "steering_path_corners": json.dumps([int(c) for c in res.path.corners]),
                      "steering_closed_loop": int(res.closed_loop),
                      "steering_control_start": float(res.control_start), "steering_control_start_units": "s"})
