@@ -286,6 +286,19 @@ def check_output_dir(path: str | os.PathLike, *, what: str = "out") -> Path:
     return p
 
 
+def check_text_file(path: Path, what: str) -> None:
+    """A CSV or other text input that is UTF-8 text (a byte-order mark allowed) without NUL
+    bytes; otherwise a ParameterError naming it (a binary file reached the CSV readers as a
+    UnicodeDecodeError, exit 1)."""
+    data = Path(path).read_bytes()
+    try:
+        data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise ParameterError(f"{what}={str(path)!r} is not a text (UTF-8) file: {exc.reason} at byte {exc.start}") from None
+    if b"\x00" in data:
+        raise ParameterError(f"{what}={str(path)!r} is not a text file: it holds NUL bytes at byte {data.index(0)}")
+
+
 def check_files_in(folder: Path, names: Sequence[str], *, what: str = "out", kinds: dict | None = None) -> None:
     """:func:`check_output_file` for each file ``names`` an output folder would get (each with
     its own suffix and, from ``kinds``, its NetCDF title); a folder not made yet replaces nothing."""

@@ -31,6 +31,7 @@ import numpy as np
 
 from . import defaults
 from ._validate import positive, positive_int
+from ._validate import n_segments as segments_checked
 from .orbits._threads import one_blas_thread
 from .params import Groups, Parameters
 
@@ -224,7 +225,7 @@ def settle(params: Parameters | Groups, *, initial=None, n_cycles: int = default
     tau = params.tau if si else 1.0
     groups = params.groups if si else params
     n_cycles = positive_int("n_cycles", n_cycles)
-    n_segments = positive_int("n_segments", n_segments, minimum=4)
+    n_segments = segments_checked(n_segments)
     chunk = positive("chunk", 10.0 * tau if chunk is None else chunk)
     t_max = positive("t_max", 200.0 * tau if t_max is None else t_max)
     frames_per_tau = positive_int("frames_per_tau", frames_per_tau, minimum=4)

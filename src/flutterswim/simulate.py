@@ -14,6 +14,7 @@ import numpy as np
 
 from . import defaults
 from ._validate import ParameterError, angle as _angle, finite, positive, positive_int, tolerance
+from ._validate import n_segments as segments_checked
 from .field import Constant, Field
 from .filament import Filament, centreline
 from .initial import InitialState
@@ -63,7 +64,7 @@ def simulate(
     t_end = finite("t_end", t_end, strict=True)
     if not t_end > t_start:
         raise ParameterError(f"t_end={t_end!r} must be greater than t_start={t_start!r}")
-    n_segments = positive_int("n_segments", n_segments, minimum=4)
+    n_segments = segments_checked(n_segments)
     rtol, atol = tolerance("rtol", rtol, strict=True), tolerance("atol", atol, strict=True)
     frame_dt = None if frame_dt is None else positive("frame_dt", frame_dt, strict=True)
     max_step = None if max_step is None else positive("max_step", max_step, strict=True)

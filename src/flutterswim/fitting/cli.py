@@ -62,7 +62,10 @@ def _cmd_fit(args) -> int:
     if args.plot:
         check_output_file(args.plot, (".png", ".pdf", ".svg"), what="--plot")
     base = preset(args.preset)
-    positive_int("--bootstrap", args.bootstrap, minimum=0)  # before the data are read or anything is fitted
+    from .fit import MAX_BOOTSTRAP
+
+    # before the data are read or anything is fitted
+    positive_int("--bootstrap", args.bootstrap, 0, MAX_BOOTSTRAP, "each draw is a refit: 10^4 take hours")
     if args.joint and (args.paper_cost or args.profiles or args.bootstrap):
         raise ParameterError("--joint fits by the SEM-weighted cost, without profiles or bootstrap: --paper-cost, "
                              "--profiles and --bootstrap are for one voltage")

@@ -30,6 +30,8 @@ __all__ = ["FitResult", "fit", "PAPER_GUESS", "paper_cost"]
 
 #: The paper's initial guess (SI): B0 = 2e-8 N mm^2, tau0 = 0.3 s, kappa_E0 = 18 1/mm.
 PAPER_GUESS = (2.0e-14, 0.3, 18.0e3)
+#: most parametric bootstrap draws
+MAX_BOOTSTRAP = 10_000
 PENALTY = 1e3  # weighted residual when there is no stable stroke
 
 
@@ -187,7 +189,8 @@ def fit(measured, sem=None, *, base: Parameters | None = None, guess=PAPER_GUESS
     ``backend``, ``workers``:
     a sweep backend (``"processes"``, ``"dask-local"``, ...) on which the finite-difference
     orbits of each Jacobian are computed in parallel (default: in this process)."""
-    bootstrap = positive_int("bootstrap", bootstrap, minimum=0)  # before any orbit is computed
+    # (before any orbit is computed; each draw is a refit of seconds)
+    bootstrap = positive_int("bootstrap", bootstrap, 0, MAX_BOOTSTRAP, "each draw is a refit: 10^4 take hours")
     if backend is None or not hasattr(model if model is not None else DescriptorModel, "prefetch"):
         return _fit(measured, sem, base=base, guess=guess, cost=cost, tip=tip, model=model, profiles=profiles,
                     bootstrap=bootstrap, n_segments=n_segments, extrapolate=extrapolate, seed=seed)

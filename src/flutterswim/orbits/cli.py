@@ -58,6 +58,7 @@ def _cmd_branch(args) -> int:
     from .. import defaults
     from .._paths import check_output_file
     from .._validate import ParameterError, non_negative, positive_int
+    from .._validate import n_segments as segments_checked
     from ..params import preset
     from .continuation import MAX_POINTS, continue_orbits, short_of
     from .linear import hopf_bracket, hopf_point
@@ -85,7 +86,7 @@ def _cmd_branch(args) -> int:
     # the Hopf point in the range typed, else between the base value and the range's nearer end
     # (kappa_E_ratio -2:-1 is the mirror branch from -0.68, not the one from +0.68), else near
     # the base value; continue towards the end of the range where the straight state is unstable
-    n = positive_int("n_segments", n, minimum=4)
+    n = segments_checked(n)
     base = axis.value()
     # a range on the other side of zero (negative fields) is looked at from the base value's
     # mirror: kappa_E_ratio=-0.3:-0.1 lies beyond the mirror branch's Hopf point -0.68, not

@@ -20,6 +20,7 @@ import numpy as np
 
 from .. import defaults
 from .._validate import ParameterError, finite, non_negative, positive, positive_int
+from .._validate import n_segments as segments_checked
 from .linear import hopf_bracket, hopf_point
 from .normal_form import normal_form
 from .parameter import Axis
@@ -190,9 +191,9 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     n_points = positive_int("n_points", n_points, minimum=2)
     if n_points > MAX_POINTS:
         raise ParameterError(f"n_points={n_points} is too many; at most {MAX_POINTS} orbits along a branch")
-    n_segments = positive_int("n_segments", n_segments, minimum=4)
+    n_segments = segments_checked(n_segments)
     check = steps is None
-    steps = positive_int("steps", BRANCH_STEPS if steps is None else steps, minimum=8)
+    steps = positive_int("steps", BRANCH_STEPS if steps is None else steps, minimum=8, maximum=MAX_STEPS)
     tol = positive("tol", tol)
     max_points = 10 * n_points + 50 if max_points is None else positive_int("max_points", max_points)
     look_beyond = non_negative("look_beyond", look_beyond)

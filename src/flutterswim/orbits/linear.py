@@ -16,7 +16,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import brentq
 
-from .._validate import ParameterError, finite, positive_int
+from .._validate import ParameterError, finite
+from .._validate import n_segments as segments_checked
 from .parameter import Axis
 from ._threads import one_blas_thread
 from .system import ShapeSystem
@@ -107,7 +108,7 @@ def hopf_point(params, parameter: str = "kappa_E_ratio", *, n_segments: int = 48
     side; by default it is searched geometrically below and above ``start`` (default: the
     base value; e.g. minus it for the mirror branch of a negative field). ``xtol`` is relative
     to the parameter's size."""
-    n_segments = positive_int("n_segments", n_segments, minimum=4)
+    n_segments = segments_checked(n_segments)
     axis = Axis(params, parameter)
 
     def growth(v: float) -> float:

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .._validate import ParameterError, finite, positive, positive_int
+from .._validate import n_segments as segments_checked
 from ..params import Groups, Parameters
 from .shooting import Flow, StepFailure, flow
 from ._threads import one_blas_thread
@@ -419,8 +420,8 @@ def periodic_orbit(params: Parameters | Groups, guess: "PeriodicOrbit | None" = 
     if isinstance(guess, PeriodicOrbit):
         n_segments = guess.n_segments if n_segments is None else n_segments
         steps = guess.steps if steps is None else steps
-    n_segments = positive_int("n_segments", DEFAULT_SEGMENTS if n_segments is None else n_segments, minimum=4)
-    steps = positive_int("steps", DEFAULT_STEPS if steps is None else steps, minimum=8)
+    n_segments = segments_checked(DEFAULT_SEGMENTS if n_segments is None else n_segments)
+    steps = positive_int("steps", DEFAULT_STEPS if steps is None else steps, minimum=8, maximum=MAX_STEPS)
     tol = positive("tol", tol)
     max_newton = positive_int("max_newton", max_newton)
     phi = finite("phi", phi, strict=True)

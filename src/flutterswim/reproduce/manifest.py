@@ -89,11 +89,23 @@ class Manifest:
             data = json.loads(p.read_text())
         except (OSError, ValueError):
             return cls(folder)  # unreadable: every target reruns
-        return cls(folder, dict(data.get("targets", {})), dict(data.get("run", {})))
+        # a manifest of another shape (edited by hand: "targets": NaN made a TypeError, exit 1):
+        # as unreadable; each target's entry that is not a record is dropped (it reruns)
+        if not isinstance(data, dict):
+            return cls(folder)
+        targets, run = data.get("targets", {}), data.get("run", {})
+        targets = {str(k): v for k, v in targets.items() if isinstance(v, dict)} if isinstance(targets, dict) else {}
+        return cls(folder, targets, run if isinstance(run, dict) else {})
 
     def up_to_date(self, name: str, key: str, mode: str | None = None) -> bool:
         """``mode``: the mode asked for (a quick build is not up to date for --full, nor a full
-        one for --quick); None accepts either."""
+        one for --quick); None accepts either. An entry of another shape is not (it reruns)."""
+        try:
+            return self._up_to_date(name, key, mode)
+        except (AttributeError, TypeError, ValueError):
+            return False
+
+    def _up_to_date(self, name: str, key: str, mode: str | None) -> bool:
         e = self.targets.get(name)
         if not e or e.get("key") != key or e.get("status") not in ("ok", "skipped"):
             return False

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._paths import check_text_file
 from .._validate import ParameterError, positive
 
 __all__ = ["RefPath", "square", "circle", "figure8", "waypoints_csv", "min_radius"]
@@ -192,7 +193,8 @@ def waypoints_csv(path: str | Path, scale: float, start=(0.0, 0.0)) -> RefPath:
     if not p.is_file():
         raise ParameterError(f"waypoints={str(p)!r} is not a file")
     rows = []
-    with open(p, newline="") as f:
+    check_text_file(p, "waypoints")
+    with open(p, newline="", encoding="utf-8-sig") as f:
         reader = csv.reader(f)
         first = True
         for row in reader:

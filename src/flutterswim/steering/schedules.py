@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._paths import check_text_file
 from .._validate import ParameterError, angle as _angle, finite, positive
 from ..field import Constant, Field, Piecewise, Schedule
 from .path import header_unit, parse_number
@@ -114,7 +115,8 @@ def from_csv(path: str | Path) -> Field:
         raise ParameterError(f"field CSV={str(p)!r} is not a file")
     rows, lines = [], []
     t_scale, a_scale, first = 1.0, 1.0, True
-    with open(p, newline="") as f:
+    check_text_file(p, "field CSV")
+    with open(p, newline="", encoding="utf-8-sig") as f:
         reader = csv.reader(f)
         for row in reader:
             where = f"field CSV={str(p)!r}, line {reader.line_num}"

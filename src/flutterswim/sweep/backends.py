@@ -382,6 +382,7 @@ def _dask(workers=None, scheduler=None):
 
     from ..defaults import SCHEDULER_TIMEOUT_S
 
+    _reachable(scheduler, SCHEDULER_TIMEOUT_S)
     try:
         client = Client(scheduler, set_as_default=False, timeout=SCHEDULER_TIMEOUT_S)
     except (OSError, TimeoutError, ValueError) as exc:
@@ -391,6 +392,30 @@ def _dask(workers=None, scheduler=None):
         ) from None
     with client:
         yield DaskExecutor(client)
+
+
+def _reachable(scheduler: str, timeout: float) -> None:
+    """A TCP scheduler address that parses and accepts a connection, before a Client is made
+    (a Client that fails to connect leaves an object whose clean-up prints a traceback 20 s
+    later, after the one-line message); other schemes are left to the Client."""
+    import socket
+
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    try:
+        scheme, loc = parse_address(str(scheduler))
+        if scheme not in ("tcp", "tls"):
+            return
+        host, port = parse_host_port(loc)
+    except (ValueError, TypeError) as exc:
+        raise SchedulerUnreachable(f"scheduler={scheduler!r} is not a scheduler address ({exc}); give "
+                                   "tcp://host:port") from None
+    try:
+        socket.create_connection((host, int(port)), timeout=timeout).close()
+    except OSError as exc:
+        raise SchedulerUnreachable(
+            f"scheduler={scheduler!r}: no Dask scheduler answered within {timeout:g} s ({type(exc).__name__}: "
+            f"{exc}); check the address (tcp://host:port) and that the scheduler is running") from None
 
 
 @contextlib.contextmanager

@@ -19,6 +19,7 @@ from typing import Any, Iterable, Mapping
 import numpy as np
 
 from .._validate import ParameterError, finite, positive, positive_int, tolerance
+from .._validate import n_segments as segments_checked
 from ..defaults import ATOL, MAX_SWEEP_POINTS, N_CYCLES, RTOL, SWEEP_FRAMES_PER_TAU, SWEEP_N_SEGMENTS
 from ..params import Groups, Parameters, preset
 
@@ -122,7 +123,7 @@ class PointSettings:
             v = getattr(self, k)
             if isinstance(v, float) and v.is_integer():
                 v = int(v)
-            object.__setattr__(self, k, positive_int(k, v, minimum=4 if k == "n_segments" else 1))
+            object.__setattr__(self, k, segments_checked(v) if k == "n_segments" else positive_int(k, v))
         object.__setattr__(self, "initial_angle_deg", finite("initial_angle_deg", self.initial_angle_deg))
         if not -90.0 <= self.initial_angle_deg <= 90.0:
             raise ParameterError(f"initial_angle_deg={self.initial_angle_deg!r} must be in [-90, 90]")

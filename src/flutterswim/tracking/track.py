@@ -475,11 +475,27 @@ def _start_end(v: Any) -> Any:
     return v
 
 
+#: most samples along the tracked body (a 512 px body has 512 pixels along it)
+MAX_POINTS = 10_000
+#: widest matched filter [px]: the ridge is a line of a pixel or two (sigma 1e6 ran for minutes)
+MAX_SIGMA_PX = 20.0
+
+
+def _sigma(v) -> float:
+    v = positive("sigma", v)
+    if v > MAX_SIGMA_PX:
+        raise ParameterError(f"sigma={v!r} px is too wide a filter for a line a pixel or two wide; at most "
+                             f"{MAX_SIGMA_PX:g} px (the default, 1.2 px, suits a focused ribbon)")
+    return v
+
+
 # the checks of track()'s options (NaN would switch the checks off: min_contrast, the tolerances)
 _OPTION_CHECKS = {
-    "n_points": lambda v: positive_int("n_points", v, 5), "tip_k": lambda v: positive("tip_k", v),
+    "n_points": lambda v: positive_int("n_points", v, 5, MAX_POINTS, "samples along the body; 10^8 ran out of "
+                                                                     "memory"),
+    "tip_k": lambda v: positive("tip_k", v),
     "tip_floor_px": lambda v: positive("tip_floor_px", v),
-    "sigma": lambda v: None if v is None else positive("sigma", v),
+    "sigma": lambda v: None if v is None else _sigma(v),
     # (radians: more than a turn is likely degrees; user -> track -> check_options -> here)
     "field_angle": lambda v: angle("field_angle", v, stacklevel=3), "t0": lambda v: finite("t0", v),
     "min_contrast": lambda v: non_negative("min_contrast", v), "length_tol": lambda v: positive("length_tol", v),

@@ -1,0 +1,66 @@
+"""Sizes that asked for gigabytes or ran without end are refused by name, before any work (a
+review: --segments 10^5 allocated 74.5 GiB per sweep point, --steps 10^7, --sigma 10^6 and
+--bootstrap 10^9 ran on); a binary file given as a CSV is refused by name (exit 2, not a
+UnicodeDecodeError with exit 1)."""
+
+import numpy as np
+import pytest
+
+import flutterswim as fs
+from flutterswim._validate import MAX_SEGMENTS
+from flutterswim.cli import main
+
+
+def test_segments_are_bounded_everywhere():
+    from flutterswim.orbits.continuation import continue_orbits
+    from flutterswim.orbits.periodic import periodic_orbit
+    from flutterswim.sweep.spec import PointSettings
+
+    big = MAX_SEGMENTS + 1
+    for call in (lambda: fs.simulate(fs.PAPER, 0.01, n_segments=big),
+                 lambda: periodic_orbit(fs.PAPER, n_segments=big),
+                 lambda: continue_orbits(fs.PAPER, "kappa_E_ratio", 1.5, n_segments=big),
+                 lambda: PointSettings(n_segments=big)):
+        with pytest.raises(fs.ParameterError, match=rf"n_segments={big} must be an integer in \[4, {MAX_SEGMENTS}\]"):
+            call()
+    assert fs.simulate(fs.PAPER, 1e-4, n_segments=8).ok  # (small ones as before)
+
+
+@pytest.mark.parametrize("argv,name", [
+    (["simulate", "--segments", "100000"], "--segments"),
+    (["sweep", "kappa_E_ratio=1,2", "--n-segments", "100000"], "--n-segments"),
+    (["branch", "kappa_E_ratio=1.5:2", "--steps", "10000000"], "--steps"),
+    (["fit", "TRIALS", "--bootstrap", "1000000000"], "--bootstrap"),
+])
+def test_the_cli_refuses_sizes_in_one_line(tmp_path, capsys, argv, name):
+    trials = tmp_path / "t.csv"
+    trials.write_text("voltage_V,sample,period_s,advance_mm,lateral_mm\n85,a,0.38,0.39,1.1\n85,b,0.37,0.40,1.2\n")
+    argv = [str(trials) if a == "TRIALS" else a for a in argv]
+    suffix = {"sweep": ".zarr", "fit": ".json"}.get(argv[0], ".nc")
+    assert main(argv + ["--out", str(tmp_path / f"o{suffix}")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and name.lstrip("-").replace("-", "_") in err.replace("-", "_")
+    assert not (tmp_path / f"o{suffix}").exists()
+
+
+def test_track_refuses_a_filter_wider_than_a_line_and_too_many_samples(tmp_path):
+    from flutterswim.tracking import track
+
+    frames = np.zeros((3, 20, 20))
+    with pytest.raises(fs.ParameterError, match="sigma=1000000.0"):
+        track(frames, px_per_mm=70.0, fps=50.0, sigma=1e6)
+    with pytest.raises(fs.ParameterError, match="n_points=100000000"):
+        track(frames, px_per_mm=70.0, fps=50.0, n_points=10**8)
+
+
+def test_a_binary_csv_is_refused_by_name(tmp_path, capsys):
+    blob = tmp_path / "b.csv"
+    blob.write_bytes(bytes(range(128, 256)) * 8)
+    assert main(["simulate", "--t-end", "0.01", "--segments", "8", "--field-csv", str(blob), "--out",
+                 str(tmp_path / "x.nc"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "b.csv" in err and "not a text" in err and err.count("\n") == 1
+    from flutterswim.steering.path import waypoints_csv
+
+    with pytest.raises(fs.ParameterError, match="not a text"):
+        waypoints_csv(blob, 1e-3)
