@@ -64,3 +64,35 @@ def test_a_binary_csv_is_refused_by_name(tmp_path, capsys):
 
     with pytest.raises(fs.ParameterError, match="not a text"):
         waypoints_csv(blob, 1e-3)
+
+
+def test_inputs_once_taken_silently_are_refused_by_name(tmp_path):
+    """A review's silent acceptances: an empty sweep value ("1,,2" ran 2 points), a preset
+    given as a list (TypeError), continuation's max_newton=0, fps contradicting the frames'
+    times (dropped without a word), sidecar values of the wrong JSON type (true read as 1.0)."""
+    import json
+
+    from flutterswim.orbits.continuation import continue_orbits
+    from flutterswim.sweep.spec import parse_axis
+    from flutterswim.tracking import track
+    from flutterswim.tracking.batch import find_trials
+
+    with pytest.raises(fs.ParameterError, match="empty value"):
+        parse_axis("kappa_E_ratio=1,,2")
+    assert parse_axis("kappa_E_ratio=1,2,").values == (1.0, 2.0)
+    with pytest.raises(fs.ParameterError, match="preset"):
+        fs.preset(["paper"])
+    with pytest.raises(fs.ParameterError, match="max_newton"):
+        continue_orbits(fs.PAPER, "kappa_E_ratio", 1.5, max_newton=0)
+    frames = np.zeros((4, 20, 20))
+    with pytest.raises(fs.ParameterError, match="disagrees with the frames' times"):
+        track(frames, px_per_mm=70.0, fps=10.0, times=[0.0, 0.02, 0.04, 0.06])
+    folder = tmp_path / "trials"
+    folder.mkdir()
+    (folder / "a.tif").write_bytes(b"")
+    for bad in ({"px_per_mm": True}, {"px_per_mm": "71"}, {"fps": 50, "times": [0, 0.02]}):
+        (folder / "a.json").write_text(json.dumps({"voltage_V": 85, "sample": "s1", **bad}))
+        with pytest.raises(fs.ParameterError, match="a.json"):
+            find_trials(folder)
+    (folder / "a.json").write_text(json.dumps({"voltage_V": 85, "sample": ["s1", "s2"]}))
+    assert "sample a name" in find_trials(folder)[0].problem

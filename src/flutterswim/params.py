@@ -195,5 +195,5 @@ def preset(name: str) -> Parameters:
     """Return a named parameter set (``"paper"``)."""
     try:
         return _PRESETS[name]
-    except KeyError:
+    except (KeyError, TypeError):  # (TypeError: a list or other unhashable name)
         raise ParameterError(f"preset={name!r} is unknown; choose one of {sorted(_PRESETS)}") from None

@@ -195,6 +195,7 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     check = steps is None
     steps = positive_int("steps", BRANCH_STEPS if steps is None else steps, minimum=8, maximum=MAX_STEPS)
     tol = positive("tol", tol)
+    max_newton = positive_int("max_newton", max_newton)
     max_points = 10 * n_points + 50 if max_points is None else positive_int("max_points", max_points)
     look_beyond = non_negative("look_beyond", look_beyond)
     base = axis.value()

@@ -75,7 +75,12 @@ def parse_axis(text: str) -> Axis:
             # round to suppress linspace noise so the definition is reproducible as text
             vals = [float(f"{v:.12g}") for v in vals]
         else:
-            vals = [float(v) for v in rhs.split(",") if v.strip()]
+            parts = rhs.split(",")
+            if len(parts) > 1 and not parts[-1].strip():
+                parts = parts[:-1]  # (a trailing comma: "chi=60,70,")
+            if any(not v.strip() for v in parts):  # "1,,2" ran 2 points without a word
+                raise ParameterError(f"sweep axis {text!r} has an empty value; write name=v1,v2,...")
+            vals = [float(v) for v in parts]
     except ParameterError:
         raise
     except ValueError:

@@ -91,11 +91,14 @@ def _sidecar_options(meta: dict, cand: Path) -> dict:
     opts = {k: meta[k] for k in ("px_per_mm", "fps", "roi", "field_angle_deg", "start_end", "dark_line")
             if meta.get(k) is not None}
     try:
+        # (JSON numbers only: true was read as 1.0 and "71" as 71)
         for k in ("px_per_mm", "fps"):
             if k in opts:
-                opts[k] = positive(k, opts[k])
+                opts[k] = positive(k, opts[k], strict=True)
         if "field_angle_deg" in opts:
-            opts["field_angle_deg"] = finite("field_angle_deg", opts["field_angle_deg"])
+            opts["field_angle_deg"] = finite("field_angle_deg", opts["field_angle_deg"], strict=True)
+        if "fps" in opts and meta.get("times") is not None:
+            raise ParameterError("give fps or times, not both: the times set the frame rate")
         if "roi" in opts:
             parse_roi(opts["roi"], None)
         if "start_end" in opts and opts["start_end"] not in START_ENDS:
@@ -148,6 +151,10 @@ def find_trials(folder: str | os.PathLike, pattern: str = DEFAULT_PATTERN) -> li
             where = f"sidecar={str(cand)!r}"
             if v is None or smp is None:
                 out.append(Trial(p, math.nan, str(smp), opts, f"{where} needs the keys voltage_V and sample"))
+                continue
+            if isinstance(v, bool) or not isinstance(smp, (str, int)) or isinstance(smp, bool) or not str(smp).strip():
+                out.append(Trial(p, math.nan, str(smp), opts, f"{where}: voltage_V must be a number and sample a "
+                                 f"name (text or a whole number); got voltage_V={v!r}, sample={smp!r}"))
                 continue
         else:
             m = rx.search(p.stem if p.is_file() else p.name)

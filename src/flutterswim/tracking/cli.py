@@ -124,7 +124,7 @@ def _cmd_batch(args) -> int:
             positive(name, v)
     field = {} if args.field_angle_deg is None else {"field_angle": direction_deg("--field-angle-deg", args.field_angle_deg)}
     out, rows, failed = track_batch(args.folder, args.out, px_per_mm=args.px_per_mm, fps=args.fps,
-                                    pattern=args.pattern or DEFAULT_PATTERN, n_last=args.last, plot=args.plot,
+                                    pattern=DEFAULT_PATTERN if args.pattern is None else args.pattern, n_last=args.last, plot=args.plot,
                                     progress=not args.quiet, as_typed=partial(as_typed, args),
                                     dark_line=args.dark_line,
                                     **field,
