@@ -118,6 +118,7 @@ def _cmd_branch(args) -> int:
     ds = br.to_dataset()
     ds.attrs["n_inaccurate_orbits_comment"] = as_typed(args, ds.attrs["n_inaccurate_orbits_comment"])
     ds.attrs["range_start" if side > 0 else "range_end"] = lo if side > 0 else hi
+    ds.attrs["range_start_units" if side > 0 else "range_end_units"] = axis.units
     from .._paths import atomic_path
 
     with atomic_path(out) as tmp:

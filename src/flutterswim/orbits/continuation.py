@@ -100,16 +100,19 @@ class Branch:
                       "period) and pseudo-arclength continuation",
             "parameter": name,
             f"hopf_{name}": self.hopf_value,
+            f"hopf_{name}_units": self.axis.units,
             "hopf_omega_per_tau": self.hopf_omega,
             "hopf_omega_per_tau_units": "1/tau",
             "hopf_period": (2 * math.pi / self.hopf_omega) * tau_hopf,
             "hopf_period_units": tu,
             "lyapunov_coefficient": self.lyapunov_coefficient,
+            "lyapunov_coefficient_units": "1/tau",
             "lyapunov_coefficient_comment": (
                 "first Lyapunov coefficient l1 [1/tau] for the critical eigenvector q normalised to unit Euclidean "
                 "norm over the 2N+1 shape components: its size scales like 1/N (N l1 converges); its sign decides "
                 "the bifurcation"),
             "lyapunov_amplitude2_slope": self.amplitude2_slope,
+            "lyapunov_amplitude2_slope_units": "1" if self.axis.units == "1" else f"1/({self.axis.units})",
             "lyapunov_amplitude2_slope_comment": (
                 f"d(amplitude^2)/d({name}){'' if self.axis.units == '1' else f' [1/({self.axis.units})]'} at the "
                 "Hopf point from the normal form, for "
@@ -118,6 +121,7 @@ class Branch:
             "multiplier_crossings": "; ".join(f"{name}={v:.6g}" for v in crossings) if crossings else "none",
             "n_segments": self.n_segments,
             "steps_per_period_max": self.steps,
+            "steps_per_period_max_units": "1",
             "n_inaccurate_orbits": int(np.count_nonzero(ds["trivial_multiplier_error"].values > ACCURACY_GAUGE)),
             "n_inaccurate_orbits_comment": (
                 f"orbits whose trivial Floquet multiplier is off 1 by more than {ACCURACY_GAUGE:g} (see "

@@ -115,7 +115,8 @@ def build_b_readings(ctx: Context) -> Outcome:
            for k, n in (("semi", "semi-axis"), ("full", "full width"))},
         coords={"kappa_E_ratio": ("kappa_E_ratio", ratios, {"units": "1", "long_name": "kappa_E / kappa_E,fit"})},
         attrs={"title": "flutterswim reproduce: the two readings of b in ln(2l/b), growth rate of the straight state",
-               **{f"onset_ratio_{k}": out[n]["onset_ratio"] for k, n in (("semi", "semi-axis"), ("full", "full width"))}},
+               **{f"onset_ratio_{k}": out[n]["onset_ratio"] for k, n in (("semi", "semi-axis"), ("full", "full width"))},
+               "onset_ratio_semi_units": "1", "onset_ratio_full_units": "1"},
     )
     write_netcdf(ctx.path("b_readings.nc"), ds)
     fig = plot_b_readings(ratios, growth, out, PAPER_ONSET_RATIO)

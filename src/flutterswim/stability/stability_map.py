@@ -71,7 +71,8 @@ class StabilityMap:
                     "chi": ("chi", self.chi, {"long_name": "activity group chi = kappa_E l", "units": "1"})},
             attrs={"Conventions": "CF-1.10", "title": MAP_TITLE, "source": f"flutterswim {__version__}",
                    "description": "leading eigenvalue of the straight filament (flutterswim.stability)",
-                   "check_points": self.check_points, "check_max_rel_diff": self.check_max_rel_diff},
+                   "check_points": self.check_points, "check_points_units": "1",
+                   "check_max_rel_diff": self.check_max_rel_diff, "check_max_rel_diff_units": "1"},
         ))
 
     def save(self, path, *, dtype: str = "float64", complevel: int = 4):

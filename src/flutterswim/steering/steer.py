@@ -52,8 +52,9 @@ def steer_dataset(res: SteerResult, reduced=None):
     ds["path_y"] = ("path_point", np.asarray(res.path.points[:, 1], float),
                     {**units, "long_name": "reference path, y (as placed when control started)"})
     ds.attrs.update({"title": STEER_TITLE, "steering_path": res.path.name, "steering_path_closed": int(res.path.closed),
+                     "steering_path_closed_units": "1",
                      "steering_path_corners": json.dumps([int(c) for c in res.path.corners]),
-                     "steering_closed_loop": int(res.closed_loop),
+                     "steering_closed_loop": int(res.closed_loop), "steering_closed_loop_units": "1",
                      "steering_control_start": float(res.control_start), "steering_control_start_units": "s"})
     if reduced is not None:
         ds.attrs["steering_reduced_model"] = json.dumps(

@@ -77,7 +77,7 @@ def to_xarray(tr: Track):
         "body_length_spread": float(m["length_spread"]), "body_length_spread_units": "1",
         "n_frames": int(m["n_frames"]), "n_failed": int(m["n_failed"]),
         # NetCDF has no boolean attribute: 1 for a line darker than its background
-        "dark_line": int(bool(m.get("dark_line", False))),
+        "dark_line": int(bool(m.get("dark_line", False))), "dark_line_units": "1",
     })
     if math.isfinite(m.get("unchanged_fraction", math.nan)):
         # share of pixels keeping their exact value between frames (a lossy codec's skipped blocks)
