@@ -96,3 +96,21 @@ def test_inputs_once_taken_silently_are_refused_by_name(tmp_path):
             find_trials(folder)
     (folder / "a.json").write_text(json.dumps({"voltage_V": 85, "sample": ["s1", "s2"]}))
     assert "sample a name" in find_trials(folder)[0].problem
+
+
+def test_fit_and_reproduce_refuse_what_they_would_have_ignored(tmp_path, capsys):
+    """--workers without --backend was ignored; a row with more fields than the header had its
+    extras dropped; a bad trials CSV given to reproduce with --only table1 was not read."""
+    from flutterswim.fitting import read_trials
+
+    good = "voltage_V,sample,period_s,advance_mm,lateral_mm\n85,a,0.38,0.39,1.1\n85,b,0.37,0.40,1.2\n"
+    (tmp_path / "t.csv").write_text(good)
+    assert main(["fit", str(tmp_path / "t.csv"), "--workers", "2", "--out", str(tmp_path / "f.json")]) == 2
+    assert "--backend" in capsys.readouterr().err
+    (tmp_path / "r.csv").write_text(good + "85,c,0.38,0.39,1.1,7,8\n")
+    with pytest.raises(fs.ParameterError, match="row 4 has 7 fields under a header of 5"):
+        read_trials(tmp_path / "r.csv")
+    (tmp_path / "bad.csv").write_text("voltage_V,sample\n85,a\n")
+    assert main(["reproduce", "--out", str(tmp_path / "rep"), "--only", "table1", "--trials",
+                 str(tmp_path / "bad.csv")]) == 2
+    assert "lacks the column" in capsys.readouterr().err and not (tmp_path / "rep").exists()

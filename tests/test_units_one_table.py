@@ -29,4 +29,7 @@ def test_each_parameter_has_one_unit_everywhere(tmp_path):
         assert Axis(fs.PAPER, name).units == unit, name
         assert table[name].attrs["units"] == unit, name
     assert store["kappa_E"].attrs["units"] == attrs["parameter_kappa_E_units"]
+    for name in ("l", "B", "kappa_E", "mu"):  # the base point as numeric attributes, as a run's
+        assert store.attrs[f"base_{name}"] == getattr(fs.PAPER, name)
+        assert store.attrs[f"base_{name}_units"] == attrs[f"parameter_{name}_units"]
     assert store["kappa_E"].attrs["long_name"] == Axis(fs.PAPER, "kappa_E").long_name

@@ -62,6 +62,9 @@ def _cmd_fit(args) -> int:
     if args.plot:
         check_output_file(args.plot, (".png", ".pdf", ".svg"), what="--plot")
     base = preset(args.preset)
+    if args.workers is not None and args.backend is None:  # (it was ignored without a word)
+        raise ParameterError(f"--workers={args.workers} needs --backend (processes, dask-local, ...): without one "
+                             "the fit runs in this process")
     from .fit import MAX_BOOTSTRAP
 
     # before the data are read or anything is fitted

@@ -129,7 +129,11 @@ class FitResult:
         from .._paths import atomic_write_text, check_output_file
 
         p = check_output_file(path, (".json",))
-        atomic_write_text(p, dumps({"software": "flutterswim fit", **self.to_dict()}, indent=2))
+        from .. import __version__
+
+        # ("generator", as every other JSON flutterswim writes; "software" kept for old readers)
+        atomic_write_text(p, dumps({"generator": f"flutterswim {__version__}", "software": "flutterswim fit",
+                                    **self.to_dict()}, indent=2))
 
 
 class Penalty:

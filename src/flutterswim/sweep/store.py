@@ -422,6 +422,10 @@ class SweepStore:
             "time_unit": tu,
             "swept": json.dumps(list(spec.names)),
         })
+        # the base point as numeric attributes with units (as a run's), beside the JSON
+        for k, v in spec.base.to_dict().items():
+            ds.attrs[f"base_{k}"] = float(v)
+            ds.attrs[f"base_{k}_units"] = UNITS[k]
         tmp = path.parent / f".{path.name}.creating-{os.getpid()}"
         if tmp.exists():
             shutil.rmtree(tmp)
