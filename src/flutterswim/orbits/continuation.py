@@ -249,84 +249,90 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     # past ``to`` (look_beyond): the orbits up to ``to``, the outer limit, whether it turned back
     target, n_at_to, turned = to, None, False
     limit = to + side * look_beyond * length_p
-    while True:
-        if len(orbits) >= max_points:
-            if n_at_to is None:
-                message = f"stopped after max_points={max_points} orbits before {parameter}={to:g}"
-            elif turned:
-                message += f" (stopped after max_points={max_points} orbits at {parameter}={short_of(values[-1], to)})"
-            break
-        xk = X[-1]
-        if len(X) == 1:
-            # along the amplitude: du/da = (u - u_s)/a, dp/da = 2 a / slope (square-root law)
-            tangent = np.zeros_like(xk)
-            tangent[:-2] = (u - sysm.straight()) / amp
-            tangent[-1] = side * 2 * amp / nf.amplitude2_slope
-        else:
-            tangent = X[-1] - X[-2]
-        tangent = tangent / math.sqrt(np.sum((tangent * w) ** 2))
-        # at most 1/n_points of the parameter range per step, so that there are n_points or more
-        step_ds = min(ds, reach / (n_points * max(abs(tangent[-1]), 1e-300)))
-        finishing = (xk[-1] + step_ds * tangent[-1] - target) * side >= 0 and tangent[-1] * side > 0
-        try:
-            if finishing:
-                xn, fl, res, it = _newton_natural(axis, n_segments, steps, xk, last_flow, target, tol, max_newton)
-            else:
-                xn, fl, res, it = _newton_arclength(axis, n_segments, steps, xk, last_flow, tangent, w,
-                                                    step_ds, tol, max_newton)
-        except (OrbitNotFound, StepFailure, np.linalg.LinAlgError, ParameterError) as exc:
-            # (ParameterError: the corrector left the parameter's admissible range)
-            ds *= 0.5
-            if ds < 1e-4 / n_points:
-                if n_at_to is None or turned:
-                    message = f"continuation stopped at {parameter}={short_of(xk[-1], to)}: {exc}"
+    try:
+        while True:
+            if len(orbits) >= max_points:
+                if n_at_to is None:
+                    message = f"stopped after max_points={max_points} orbits before {parameter}={to:g}"
+                elif turned:
+                    message += f" (stopped after max_points={max_points} orbits at {parameter}={short_of(values[-1], to)})"
                 break
-            continue
-        pval = float(xn[-1])
-        sysn = _systems(axis, pval, n_segments)
-        m = xn.size - 2
-        # up to MAX_SKIPPED orbits after one that passed with room are not screened (prev_ratio
-        # NaN: the steps changed, screen)
-        screen = check and not (prev_ratio < ROOM_FRACTION and skipped < MAX_SKIPPED)
-        err, finer, coarser, ratio = _screened(screen, sysn, xn[:m], float(xn[m]), steps, fl)
-        skipped = 0 if screen else skipped + 1
-        prev_ratio = ratio if screen else prev_ratio
-        if finer:  # the same step again, solved with twice the steps (no warm start at the old ones)
-            steps *= 2
-            last_flow = None
-            prev_ratio = math.nan
-            continue
-        orbits.append(replace(orbit_from_flow(axis.at(pval), sysn, fl, res, it, steps), step_error=err))
-        values.append(pval)
-        X.append(xn)
-        last_flow = fl
-        if abs(pval - to) > 1.5 * reach:
-            reach = abs(pval - to)
-            w = _weights(u.size, 3.0 * math.sqrt(nf.amplitude2_slope * reach), reach)
-        if coarser:  # half the steps from the next orbit on (its warm start is at these)
-            steps //= 2
-            last_flow = None
-            prev_ratio = math.nan
-        if bar is not None and n_at_to is None:
-            bar.update(abs(values[-1] - values[-2]))
-        if n_at_to is not None and not turned and (values[-1] - to) * side < 0:
-            # a fold beyond ``to`` has turned the branch back into the range: follow it until it
-            # leaves the range again
-            turned, target = True, to
-            fold = max(values[n_at_to:], key=lambda v: v * side)
-            message = (f"reached {parameter}={to:g}; the branch folds back at {parameter}={fold:.6g} "
-                       "beyond it and was followed until it leaves the range again")
-        if turned and (values[-1] - hopf.value) * side <= 0:
-            message += f" (it returned to the Hopf point's side at {parameter}={values[-1]:.6g})"
-            break
-        if finishing:
-            if n_at_to is None and look_beyond > 0:
-                n_at_to, target = len(orbits), limit
+            xk = X[-1]
+            if len(X) == 1:
+                # along the amplitude: du/da = (u - u_s)/a, dp/da = 2 a / slope (square-root law)
+                tangent = np.zeros_like(xk)
+                tangent[:-2] = (u - sysm.straight()) / amp
+                tangent[-1] = side * 2 * amp / nf.amplitude2_slope
+            else:
+                tangent = X[-1] - X[-2]
+            tangent = tangent / math.sqrt(np.sum((tangent * w) ** 2))
+            # at most 1/n_points of the parameter range per step, so that there are n_points or more
+            step_ds = min(ds, reach / (n_points * max(abs(tangent[-1]), 1e-300)))
+            finishing = (xk[-1] + step_ds * tangent[-1] - target) * side >= 0 and tangent[-1] * side > 0
+            try:
+                if finishing:
+                    xn, fl, res, it = _newton_natural(axis, n_segments, steps, xk, last_flow, target, tol, max_newton)
+                else:
+                    xn, fl, res, it = _newton_arclength(axis, n_segments, steps, xk, last_flow, tangent, w,
+                                                        step_ds, tol, max_newton)
+            except (OrbitNotFound, StepFailure, np.linalg.LinAlgError, ParameterError) as exc:
+                # (ParameterError: the corrector left the parameter's admissible range)
+                ds *= 0.5
+                if ds < 1e-4 / n_points:
+                    if n_at_to is None or turned:
+                        message = f"continuation stopped at {parameter}={short_of(xk[-1], to)}: {exc}"
+                    break
                 continue
-            break
-        ds = min(ds_max, max(ds, step_ds) * (1.5 if it <= 4 else 0.7 if it >= 7 else 1.0))
-    if bar is not None:
-        bar.close()
+            pval = float(xn[-1])
+            sysn = _systems(axis, pval, n_segments)
+            m = xn.size - 2
+            # up to MAX_SKIPPED orbits after one that passed with room are not screened (prev_ratio
+            # NaN: the steps changed, screen)
+            screen = check and not (prev_ratio < ROOM_FRACTION and skipped < MAX_SKIPPED)
+            err, finer, coarser, ratio = _screened(screen, sysn, xn[:m], float(xn[m]), steps, fl)
+            skipped = 0 if screen else skipped + 1
+            prev_ratio = ratio if screen else prev_ratio
+            if finer:  # the same step again, solved with twice the steps (no warm start at the old ones)
+                steps *= 2
+                last_flow = None
+                prev_ratio = math.nan
+                continue
+            orbits.append(replace(orbit_from_flow(axis.at(pval), sysn, fl, res, it, steps), step_error=err))
+            values.append(pval)
+            X.append(xn)
+            last_flow = fl
+            if abs(pval - to) > 1.5 * reach:
+                reach = abs(pval - to)
+                w = _weights(u.size, 3.0 * math.sqrt(nf.amplitude2_slope * reach), reach)
+            if coarser:  # half the steps from the next orbit on (its warm start is at these)
+                steps //= 2
+                last_flow = None
+                prev_ratio = math.nan
+            if bar is not None and n_at_to is None:
+                # how far into the range the branch has come (a branch that runs back past a fold
+                # summed its steps past the total: tqdm's "clamping frac to range [0, 1]")
+                done = min(length_p, max(0.0, (values[-1] - hopf.value) * side))
+                if done > bar.n:
+                    bar.update(done - bar.n)
+            if n_at_to is not None and not turned and (values[-1] - to) * side < 0:
+                # a fold beyond ``to`` has turned the branch back into the range: follow it until it
+                # leaves the range again
+                turned, target = True, to
+                fold = max(values[n_at_to:], key=lambda v: v * side)
+                message = (f"reached {parameter}={to:g}; the branch folds back at {parameter}={fold:.6g} "
+                           "beyond it and was followed until it leaves the range again")
+            if turned and (values[-1] - hopf.value) * side <= 0:
+                message += f" (it returned to the Hopf point's side at {parameter}={values[-1]:.6g})"
+                break
+            if finishing:
+                if n_at_to is None and look_beyond > 0:
+                    n_at_to, target = len(orbits), limit
+                    continue
+                break
+            ds = min(ds_max, max(ds, step_ds) * (1.5 if it <= 4 else 0.7 if it >= 7 else 1.0))
+    finally:  # (closed before Ctrl-C's message, which it would share a line with)
+        if bar is not None:
+            bar.close()
     if n_at_to is not None and not turned:  # no fold back into the range: the branch ends at ``to``
         del orbits[n_at_to:], values[n_at_to:]
     _warn_inaccurate(parameter, values, orbits)
