@@ -114,3 +114,20 @@ def test_fit_and_reproduce_refuse_what_they_would_have_ignored(tmp_path, capsys)
     assert main(["reproduce", "--out", str(tmp_path / "rep"), "--only", "table1", "--trials",
                  str(tmp_path / "bad.csv")]) == 2
     assert "lacks the column" in capsys.readouterr().err and not (tmp_path / "rep").exists()
+
+
+def test_scales_no_experiment_has_are_refused(tmp_path):
+    """A review: px_per_mm 1e-300 tracked a body of 2.6e302 mm, noise_px 1e12 was scored,
+    look_beyond 1e9 was taken."""
+    from flutterswim.orbits.continuation import continue_orbits
+    from flutterswim.steering.path import circle
+    from flutterswim.steering.steer import steer
+    from flutterswim.tracking import track
+
+    with pytest.raises(fs.ParameterError, match="px_per_mm=1e-300"):
+        track(np.zeros((3, 20, 20)), px_per_mm=1e-300, fps=50.0)
+    with pytest.raises(fs.ParameterError, match="noise_px=1000000000000.0"):
+        steer(fs.PAPER, lambda p, h: circle(2 * fs.PAPER.l, p, h), None, noise_px=1e12)
+    with pytest.raises(fs.ParameterError, match="look_beyond=1000000000.0"):
+        continue_orbits(fs.PAPER, "kappa_E_ratio", 1.5, look_beyond=1e9)
+    assert main(["branch", "kappa_E_ratio=1.5:2", "--look-beyond", "1e9", "--out", str(tmp_path / "b.nc")]) == 2

@@ -52,6 +52,8 @@ MAX_POINTS = 20000
 #: along kappa_E_ratio (N = 24 and 48) the branch folds at 2.108 and back at 1.899, so the range
 #: to 2 holds a second stable stroke that stopping at 2 missed
 LOOK_BEYOND = 0.2
+#: the farthest past ``to`` a branch may be followed, in ranges
+MAX_LOOK_BEYOND = 10.0
 #: Largest amplitude (along the unit Hopf eigenvector) of the branch's first orbit
 START_AMPLITUDE_CAP = 6.0
 
@@ -202,6 +204,9 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     max_newton = positive_int("max_newton", max_newton)
     max_points = 10 * n_points + 50 if max_points is None else positive_int("max_points", max_points)
     look_beyond = non_negative("look_beyond", look_beyond)
+    if look_beyond > MAX_LOOK_BEYOND:  # (1e9 was taken: a branch followed a billion ranges on)
+        raise ParameterError(f"look_beyond={look_beyond!r} is too far; at most {MAX_LOOK_BEYOND:g} times the range "
+                             f"(default {LOOK_BEYOND:g})")
     base = axis.value()
     lo, hi = sorted((base, to))
     span = hi - lo

@@ -34,6 +34,8 @@ class SteerResult:
     control_start: float
 
 
+#: most tracking noise [px] a steered run may be given (the body is about 260 px at 14 um/px)
+MAX_NOISE_PX = 100.0
 #: the NetCDF title of a steered run (steer replaces only these; a plain run is not one)
 STEER_TITLE = "flutterswim simulation of an active filament steered along a path"
 
@@ -102,6 +104,9 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
         raise ParameterError(f"params={params!r} must be flutterswim.Parameters")
     fps = positive("fps", fps)
     noise_px = non_negative("noise_px", noise_px)
+    if noise_px > MAX_NOISE_PX:  # (1e12 px was taken, and scored)
+        raise ParameterError(f"noise_px={noise_px!r} is more tracking noise than a camera can have on a swimmer it "
+                             f"sees; at most {MAX_NOISE_PX:g} px")
     um_per_px = positive("um_per_px", um_per_px)
     laps = positive("laps", laps)
     rate_fraction = positive("rate_fraction", rate_fraction)

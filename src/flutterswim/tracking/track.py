@@ -475,6 +475,8 @@ def _start_end(v: Any) -> Any:
     return v
 
 
+#: pixels per millimetre a camera may have: a pixel from 1 m to 1 nm
+PX_PER_MM_RANGE = (1e-3, 1e6)
 #: most samples along the tracked body (a 512 px body has 512 pixels along it)
 MAX_POINTS = 10_000
 #: widest matched filter [px]: the ridge is a line of a pixel or two (sigma 1e6 ran for minutes)
@@ -576,6 +578,9 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     ``track.meta["frames"]``; see the module docstring for the checks.
     """
     px_per_mm = positive("px_per_mm", px_per_mm)
+    if not PX_PER_MM_RANGE[0] <= px_per_mm <= PX_PER_MM_RANGE[1]:  # (1e-300 gave a body of 2.6e302 mm)
+        raise ParameterError(f"px_per_mm={px_per_mm!r} is not a camera's scale; give pixels per millimetre in "
+                             f"[{PX_PER_MM_RANGE[0]:g}, {PX_PER_MM_RANGE[1]:g}] (the paper's movies: about 71)")
     # checked before any frame is read
     o = check_options(n_points=n_points, tip_k=tip_k, tip_floor_px=tip_floor_px, sigma=sigma,
                       field_angle=field_angle, t0=t0, min_contrast=min_contrast, length_tol=length_tol,
