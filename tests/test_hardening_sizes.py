@@ -131,3 +131,42 @@ def test_scales_no_experiment_has_are_refused(tmp_path):
     with pytest.raises(fs.ParameterError, match="look_beyond=1000000000.0"):
         continue_orbits(fs.PAPER, "kappa_E_ratio", 1.5, look_beyond=1e9)
     assert main(["branch", "kappa_E_ratio=1.5:2", "--look-beyond", "1e9", "--out", str(tmp_path / "b.nc")]) == 2
+
+
+def test_trials_rows_must_match_their_header(tmp_path):
+    """A trailing comma is no field; a row short of a column is refused (with a comment column
+    it was read shifted: sample '0.37', period 0.40)."""
+    from flutterswim.fitting import read_trials
+
+    head = "voltage_V,sample,period_s,advance_mm,lateral_mm"
+    (tmp_path / "a.csv").write_text(f"{head}\n85,a,0.38,0.39,1.1,\n85,b,0.37,0.40,1.2,\n")
+    assert read_trials(tmp_path / "a.csv").values.shape == (2, 3)
+    (tmp_path / "b.csv").write_text(f"{head},comment\n85,a,0.38,0.39,1.1,ok\n85,0.37,0.40,1.2,0.9\n")
+    with pytest.raises(fs.ParameterError, match="row 3 has 5 fields under a header of 6"):
+        read_trials(tmp_path / "b.csv")
+
+
+def test_a_batch_trial_with_its_own_times_ignores_the_batch_fps(tmp_path, monkeypatch):
+    """track-batch --fps 50 with a trial whose sidecar gives its times (48.5 fps): the times
+    set the trial's rate (it was refused as disagreeing with --fps)."""
+    import importlib
+    import json
+
+    batch = importlib.import_module("flutterswim.tracking.batch")
+    track_module = importlib.import_module("flutterswim.tracking.track")
+    seen = {}
+
+    def fake_track(path, px_per_mm=None, fps=None, **kw):
+        seen.update(fps=fps, times=kw.get("times"))
+        raise RuntimeError("stop here")
+
+    monkeypatch.setattr(track_module, "track", fake_track)
+    folder = tmp_path / "trials"
+    folder.mkdir()
+    (folder / "a.tif").write_bytes(b"")
+    times = np.arange(5) / 48.5
+    (folder / "a_times.txt").write_text("\n".join(f"{t:.9f}" for t in times) + "\n")
+    (folder / "a.json").write_text(json.dumps({"voltage_V": 85, "sample": "s", "px_per_mm": 71.4,
+                                               "times": "a_times.txt"}))
+    batch.track_batch(folder, tmp_path / "out.csv", fps=50.0, progress=False)  # (the trial fails here)
+    assert seen["fps"] is None and np.allclose(seen["times"], times)

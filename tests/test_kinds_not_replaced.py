@@ -57,3 +57,14 @@ def test_the_api_savers_refuse_another_kind_and_replace_their_own(files):
     assert xr.open_dataset(files["map"], engine="h5netcdf").attrs["title"] == MAP_TITLE
     # a branch in another parameter is a branch
     assert check_output_file(files["branch"], (".nc",), kind=BRANCH_TITLE) == files["branch"]
+
+
+def test_a_steered_run_written_before_its_title_is_still_steers_own(files, tmp_path):
+    from flutterswim.result import RUN_TITLE
+    from flutterswim.steering.cli import _old_steered
+
+    old = tmp_path / "old_steer.nc"
+    xr.Dataset({"v": ("i", np.arange(3.0), {"units": "1", "long_name": "v"})},
+               attrs={"title": RUN_TITLE, "source": f"flutterswim {__version__}", "steering_path": "circle"}
+               ).to_netcdf(old, engine="h5netcdf")
+    assert _old_steered(old) and not _old_steered(files["run"]) and not _old_steered(files["track"])

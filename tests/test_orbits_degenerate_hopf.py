@@ -39,3 +39,17 @@ def test_the_stroke_just_past_onset_is_the_one_at_that_point(hopf_chi):
     orb = run.settings["orbit"]
     assert orb["period"] == pytest.approx(ref.period, rel=1e-6)
     assert orb["advance"] == pytest.approx(ref.advance, rel=1e-5)
+
+
+def test_the_branch_back_into_the_range_keeps_its_orbits(hopf_chi):
+    """The steps grow on the way out to the fold and shrink again on the way back: the range
+    from the Hopf point to the target holds about n_points orbits (2 of 6 when the steps only
+    grew)."""
+    from flutterswim.orbits.continuation import continue_orbits
+
+    chi = 1.001 * hopf_chi
+    br = continue_orbits(_groups(chi), "chi", chi, n_points=6, n_segments=24, look_beyond=0.0)
+    assert br.ends_at(chi)
+    v = br.values
+    assert v.min() < 0.99 * hopf_chi  # (out to the fold and back)
+    assert int(((v >= hopf_chi) & (v <= chi)).sum()) >= 4

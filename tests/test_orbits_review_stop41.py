@@ -38,3 +38,13 @@ def test_stroke_flags_say_that_0_also_means_no_stroke():
     for name in ("stable", "self_intersecting"):
         assert "no stroke" in variable_attrs(name, "s")["long_name"]
     assert "no stroke" not in variable_attrs("straight", "s")["long_name"]
+
+
+def test_the_branch_progress_bar_stays_within_its_total(tmp_path, capsys):
+    """(A review: counting how far into the range the branch had come against a total rounded
+    to 6 digits ended above it: tqdm's 'clamping frac to range [0, 1]' on stderr.)"""
+    from flutterswim.cli import main
+
+    assert main(["branch", "kappa_E_ratio=1:1.5", "--points", "4", "--segments", "12", "--look-beyond", "0",
+                 "--out", str(tmp_path / "b.nc")]) == 0
+    assert "clamping" not in capsys.readouterr().err

@@ -175,7 +175,7 @@ def test_fit_names_segments_once(tmp_path, capsys):
     trials = tmp_path / "t.csv"
     trials.write_text("voltage_V,sample,period_s,advance_mm,lateral_mm\n85,1,0.5,0.4,1.1\n85,2,0.52,0.41,1.12\n")
     line = _error(["fit", trials, "--segments", "1", "--out", tmp_path / "f.json"], capsys)
-    assert "--segments=1 must be an integer >= 8" in line and line.count("--segments") == 1, line
+    assert "--segments=1 must be an integer in [8, 512]" in line and line.count("--segments") == 1, line
 
 
 def test_reproduce_into_a_folder_of_other_files_names_a_reproduce_folder(tmp_path, capsys):

@@ -114,6 +114,10 @@ def _cmd_fit(args) -> int:
     print(f"{out}: B = {res.B * 1e6:.4g} N mm^2 (+-{100 * s[0]:.2g}%), tau = {res.tau:.4g} s (+-{100 * s[1]:.2g}%), "
           f"kappa_E = {res.kappa_E * 1e-3:.4g} 1/mm (+-{100 * s[2]:.2g}%) at {v:g} V; paper cost C = {res.paper_cost:.3g}; "
           f"{res.card.describe()}")
+    if res.weakly_determined:
+        import sys
+
+        print(f"flutterswim fit: note: {res.weakly_determined}", file=sys.stderr)
     if res.at_bound:
         import sys
 

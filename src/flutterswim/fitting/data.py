@@ -79,9 +79,12 @@ def read_trials(path: str | Path) -> Trials:
     vals = np.empty((len(rows), 3))
     volt = np.empty(len(rows))
     for i, r in enumerate(rows):
-        if r.get(None):  # more fields than the header names: a shifted row, not to be guessed at
-            raise ParameterError(f"trials={str(p)!r}, row {i + 2} has {len(header) + len(r[None])} fields under a "
-                                 f"header of {len(header)}; every row needs one value per column")
+        extra = [v for v in r.get(None) or [] if v.strip()]  # (empty ones: a trailing comma)
+        short = any(v is None for k, v in r.items() if k is not None)
+        if extra or short:  # a shifted row, not to be guessed at
+            n = sum(v is not None for k, v in r.items() if k is not None) + len(r.get(None) or [])
+            raise ParameterError(f"trials={str(p)!r}, row {i + 2} has {n} fields under a header of {len(header)}; "
+                                 "every row needs one value per column")
         try:
             volt[i] = float(r["voltage_V"])
             vals[i] = [float(r[c]) for c in DESCRIPTORS]

@@ -30,6 +30,8 @@ __all__ = ["FitResult", "fit", "PAPER_GUESS", "paper_cost"]
 
 #: The paper's initial guess (SI): B0 = 2e-8 N mm^2, tau0 = 0.3 s, kappa_E0 = 18 1/mm.
 PAPER_GUESS = (2.0e-14, 0.3, 18.0e3)
+#: a fit whose largest relative 1-sigma exceeds this says which combination is weakly determined
+WEAK_SIGMA_REL = 0.3
 #: most parametric bootstrap draws
 MAX_BOOTSTRAP = 10_000
 PENALTY = 1e3  # weighted residual when there is no stable stroke
@@ -70,6 +72,21 @@ class FitResult:
     #: the unconstrained local problem (finite, never NaN), and the bound itself is reported
     at_bound: tuple = ()
 
+    @property
+    def weakly_determined(self) -> str:
+        """A note when some parameter's 1-sigma exceeds WEAK_SIGMA_REL ("" otherwise): the data
+        leave a combination nearly free, along which other parameter sets fit as well (at
+        (1.5, 0.7, 1.5) x the paper's guess the three descriptors have a second exact solution,
+        B, tau, kappa_E 18 %, 14 %, 13 % lower, which the fit may find instead)."""
+        s = np.asarray(self.sigma_rel, float)
+        if not (np.all(np.isfinite(s)) and s.max() > WEAK_SIGMA_REL):
+            return ""
+        a = self.card.weakest / self.card.weakest[np.argmax(np.abs(self.card.weakest))]
+        combo = " ".join(f"{n}^{v:+.2f}" for n, v in zip(NAMES, a) if abs(v) > 0.05)
+        return (f"the data determine {combo} poorly (1-sigma up to {100 * s.max():.0f} %): parameter sets far apart "
+                "along it fit as well, and some may fit exactly; the profiles (--profiles) show the range, and "
+                "tracked shapes, the onset or several voltages (--joint) narrow it")
+
     def _descriptor_names(self) -> list[str]:
         """Names of the measured descriptors, per voltage for a joint fit ("period@85V")."""
         names = ["period", "advance", "lateral"]
@@ -109,6 +126,7 @@ class FitResult:
                                 "condition_number": self.card.condition_number,
                                 "weakest_combination_exponents": dict(zip(NAMES, self.card.weakest.tolist())),
                                 "summary": self.card.describe(),
+                                "note": self.weakly_determined or None,
                                 "sensitivities_dlog_descriptor_dlog_parameter":
                                     {d: dict(zip(NAMES, row)) for d, row in
                                      zip(self._descriptor_names(), self.card.sensitivities.tolist())}},
@@ -131,9 +149,8 @@ class FitResult:
         p = check_output_file(path, (".json",))
         from .. import __version__
 
-        # ("generator", as every other JSON flutterswim writes; "software" kept for old readers)
-        atomic_write_text(p, dumps({"generator": f"flutterswim {__version__}", "software": "flutterswim fit",
-                                    **self.to_dict()}, indent=2))
+        # ("generator", as every other JSON flutterswim writes; it was "software": "flutterswim fit")
+        atomic_write_text(p, dumps({"generator": f"flutterswim {__version__} fit", **self.to_dict()}, indent=2))
 
 
 class Penalty:

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._validate import ParameterError
+from .._validate import MAX_SEGMENTS, ParameterError, positive_int
 from ..params import Groups, Parameters
 
 __all__ = ["DescriptorModel", "to_physical", "to_identifiable", "LOG_MAP", "NotSwimming", "Unresolved",
@@ -102,11 +102,12 @@ class DescriptorModel:
             raise ParameterError(f"base={self.base!r} must be flutterswim.Parameters (geometry and viscosity)")
         if self.tip not in ("trailing", "leading"):
             raise ParameterError(f"tip={self.tip!r} must be 'trailing' or 'leading'")
-        if isinstance(self.n_segments, bool) or not isinstance(self.n_segments, (int, np.integer)) \
-                or self.n_segments < 8:
-            raise ParameterError(f"n_segments={self.n_segments!r} (--segments) must be an integer >= 8")
         if not isinstance(self.extrapolate, (bool, np.bool_)):
             raise ParameterError(f"extrapolate={self.extrapolate!r} must be True or False")
+        # (extrapolating: the fine model has twice the segments, within MAX_SEGMENTS too)
+        top = MAX_SEGMENTS // 2 if self.extrapolate and self._fine is None else MAX_SEGMENTS
+        positive_int("n_segments", self.n_segments, 8, top,
+                     "extrapolating from it and twice as many" if top < MAX_SEGMENTS else "")
         if self.extrapolate and self._fine is None:
             self._fine = DescriptorModel(self.base, tip=self.tip, n_segments=2 * int(self.n_segments),
                                          steps=self.steps, extrapolate=False)

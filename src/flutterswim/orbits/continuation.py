@@ -242,10 +242,11 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     last_flow = fl  # (only the last is a warm start: each holds its step matrices, MBs)
     w = _weights(u.size, length_u, length_p)
     # the scale of the steps: the range from the Hopf point to ``to``, or as far from ``to`` as
-    # the branch has gone (a nearly degenerate Hopf point with ``to`` just past it: the branch
-    # first runs the other way to a fold 12 ranges off and back, which steps of a range's
-    # 1/n_points could not cover in max_points orbits; settle then took the last orbit, at
-    # another chi). Within the range, as for every ordinary branch, it is the range.
+    # the branch now is, updated when that changes by half or more (a nearly degenerate Hopf
+    # point with ``to`` just past it: the branch first runs the other way to a fold 12 ranges
+    # off and back, which steps of a range's 1/n_points could not cover in max_points orbits;
+    # settle then took the last orbit, at another chi). Within 1.5 ranges of ``to``, as on every
+    # ordinary branch, it is the range.
     reach = length_p
     ds = 0.7 / n_points
     ds_max = 3.0 / n_points
@@ -306,8 +307,9 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
             values.append(pval)
             X.append(xn)
             last_flow = fl
-            if abs(pval - to) > 1.5 * reach:
-                reach = abs(pval - to)
+            far = max(length_p, abs(pval - to))
+            if far > 1.5 * reach or far < reach / 1.5:  # (out and back: the steps grow, then shrink again)
+                reach = far
                 w = _weights(u.size, 3.0 * math.sqrt(nf.amplitude2_slope * reach), reach)
             if coarser:  # half the steps from the next orbit on (its warm start is at these)
                 steps //= 2
@@ -316,7 +318,7 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
             if bar is not None and n_at_to is None:
                 # how far into the range the branch has come (a branch that runs back past a fold
                 # summed its steps past the total: tqdm's "clamping frac to range [0, 1]")
-                done = min(length_p, max(0.0, (values[-1] - hopf.value) * side))
+                done = min(bar.total, max(0.0, (values[-1] - hopf.value) * side))
                 if done > bar.n:
                     bar.update(done - bar.n)
             if n_at_to is not None and not turned and (values[-1] - to) * side < 0:

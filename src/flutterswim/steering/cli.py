@@ -78,6 +78,26 @@ def _check_path_options(args) -> None:
             raise ParameterError(f"--{opt}={value!r} is for --path {path}, not --path {args.path}: {size}")
 
 
+def _old_steered(path) -> bool:
+    """A steered run written before steered runs had their own title (a run's, with the
+    steering attributes): steer's own, replaced as before."""
+    from pathlib import Path
+
+    from .._paths import is_ours, netcdf_title
+    from ..result import RUN_TITLE
+
+    p = Path(path)
+    if not (p.is_file() and is_ours(p) and netcdf_title(p) == RUN_TITLE):
+        return False
+    try:
+        import h5py
+
+        with h5py.File(p, "r") as h:
+            return "steering_path" in h.attrs
+    except Exception:  # noqa: BLE001 - unreadable: not one
+        return False
+
+
 def _cmd_steer(args) -> int:
 
     from .. import __version__
@@ -91,7 +111,7 @@ def _cmd_steer(args) -> int:
     _check_path_options(args)
     from .steer import STEER_TITLE
 
-    out = check_output_file(args.out, (".nc",), kind=STEER_TITLE)
+    out = check_output_file(args.out, (".nc",), kind=STEER_TITLE if not _old_steered(args.out) else None)
     met = check_output_file(args.metrics, (".json",), what="--metrics")
     if args.plot:
         check_output_file(args.plot, (".png", ".pdf", ".svg"), what="--plot")

@@ -2,7 +2,8 @@
 
 Every camera frame (50 fps) the controller observes the centroid with tracking noise and a
 one-frame delay, estimates the cycle-averaged position and heading from the last two periods
-of observations, and sets the field direction towards the path's direction a lookahead ahead,
+of observations, and sets the field direction towards the path's direction (``lookahead``
+ahead; 0 by default in :func:`~flutterswim.steering.steer.steer`, whose path is already rounded),
 corrected towards the path by atan(-e / correction) (e: signed cross-track error), the turn
 rate limited below the step-out rate Omega_max and the field kept within ``lead_max`` of the
 heading (a field far from the body axis bends the filament into a trap, a bent equilibrium).
@@ -11,9 +12,9 @@ Angles use atan2 of cross and dot products, never arccos.
 The heading error is not fed back by default (``heading_gain=0``): the heading estimate is a
 cycle average, a period or more late, and with a gain of 1 the command hunted by +-5 degrees
 at about 0.5 Hz on every straight leg (slewing at the rate limit, 8 degrees/s of needless turning
-on the paper's 10 body-length square). Without it the legs are straight and every path tested
-is followed more closely (cross-track RMS: square 0.082 against 0.090 body lengths, circle of 2
-0.003 against 0.008, figure eight 0.004 against 0.011).
+on the paper's 10 body-length square). Without it (and without lookahead) the legs are straight
+and every path tested is followed more closely (cross-track RMS: square 0.080 against 0.090
+body lengths, circle of 2 0.003 against 0.008, figure eight 0.004 against 0.011).
 """
 
 from __future__ import annotations
@@ -121,7 +122,8 @@ class Controller:
             # the field's lead is saturated (a turn under way): the cross-track integral waits
             # (it wound up over a 45 degree turn onto a line and overshot the line after it)
             self._integral = held
-        # the field leads the heading by the error with feedback, within lead_max of the heading
+        # the field leads the heading by the error (times 1 + heading_gain: 1 by default, no
+        # feedback), within lead_max of the heading
         # (not wrapped: beyond 90 degrees of error, err (1 + gain) passes pi, and its wrap would
         # turn the field the other way, away from the path)
         target = heading + max(-self.lead_max, min(self.lead_max, err * (1.0 + self.heading_gain)))

@@ -229,7 +229,8 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
     for tr_ in it:
         o = dict(tr_.options)
         ppm = o.pop("px_per_mm", px_per_mm)
-        f = o.pop("fps", fps)
+        # a trial's own times set its frame rate (the batch's fps is for trials without them)
+        f = o.pop("fps", None if "times" in o else fps)
         kw = dict(track_kwargs)
         if "field_angle_deg" in o:
             kw["field_angle"] = direction_deg("field_angle_deg", o.pop("field_angle_deg"))

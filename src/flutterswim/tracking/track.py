@@ -595,13 +595,14 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     T = len(frames)
     if times is not None:
         times = _frame_times(times, T)
-        rate = 1.0 / float(np.median(np.diff(times)))
-        if fps is not None and abs(positive("fps", fps) / rate - 1.0) > 0.01:
+        rate = 1.0 / float(np.median(np.diff(times))) if T > 1 else math.nan
+        if fps is not None and T > 1 and abs(positive("fps", fps) / rate - 1.0) > 0.01:
             # (the fits in time count in frame intervals of fps: --fps 10 with 50 fps times was
             # dropped without a word)
             raise ParameterError(f"fps={fps!r} disagrees with the frames' times (median interval "
                                  f"{1.0 / rate:.6g} s, {rate:.6g} fps); give one of them, or fps matching the times")
-        fps = rate if fps is None else fps
+        if fps is None:  # (one frame has no interval: its rate is moot, 1 per second is written)
+            fps = rate if T > 1 else 1.0
     elif fps is None:
         fps = frames.fps
         if fps is None:
