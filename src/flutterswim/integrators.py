@@ -477,6 +477,7 @@ def integrate_filament(
     k = rosw.kernels()
     wall0 = time.perf_counter()
     y, size, out, t_eval, t, i_out, cap, lu, piv, g0, s0, stats = _workspace(fil, pieces, y0, t_eval, scale_cap)
+    t_first = t
     avg, diff, w = fil._avg, fil._diff, fil._weights
     f = np.empty(size)
     h = np.nan
@@ -500,13 +501,23 @@ def integrate_filament(
         if every_frame:
             stops = [x for x in t_eval[i_out:] if t < x < tb] + [tb]
         code = 0
+        chunk = max(1000, max_steps // 100)  # (returns now and then: the "too stiff" check)
         for stop in stops:
-            t, h, i_out, code = k.run(y, f, t, stop, h, t_eval, out, i_out, tab.a, tab.c, tab.b, tab.bt,
-                                      tab.gamma, float(tab.q), rtol, atol, cap, max_step, fixed_step, avg, diff,
-                                      w, fil.eta_par, fil.eta_perp, chi_sigma, phi, max_steps,
-                                      REUSE if reuse else -1.0, MAX_AGE if reuse else 1, lu, piv, g0, s0,
-                                      wstate, stats)
-            if code:
+            while True:
+                budget = min(max_steps, int(stats[0] + stats[1]) + chunk)
+                t, h, i_out, code = k.run(y, f, t, stop, h, t_eval, out, i_out, tab.a, tab.c, tab.b, tab.bt,
+                                          tab.gamma, float(tab.q), rtol, atol, cap, max_step, fixed_step, avg, diff,
+                                          w, fil.eta_par, fil.eta_perp, chi_sigma, phi, budget,
+                                          REUSE if reuse else -1.0, MAX_AGE if reuse else 1, lu, piv, g0, s0,
+                                          wstate, stats)
+                if code != 4 or budget >= max_steps:
+                    break
+                code = 0
+                stiff = _too_stiff(t, t_first, t_end, int(stats[0] + stats[1]), max_steps, fixed_step)
+                if stiff:
+                    status, message = "failed", stiff
+                    break
+            if code or status != "completed":
                 break
             if progress is not None:
                 progress(t)
@@ -521,6 +532,19 @@ def integrate_filament(
     stats_ = SolverStats(tab.name, tab.order, int(stats[0]), int(stats[1]), int(stats[2]), int(stats[3]),
                          int(stats[4]), time.perf_counter() - wall0)
     return Solution(np.asarray(t_eval[:i_out]), out[:i_out], status, message, t, y, stats_)
+
+
+def _too_stiff(t: float, t_first: float, t_end: float, taken: int, max_steps: int, fixed_step: float) -> str:
+    """Why a run is hopelessly stiff, or "": a tenth of max_steps spent and, at its mean step so
+    far (not the current one: small after each field piece's restart), ten times the steps
+    left needed to reach t_end (kappa_E 1e9 times the paper's: 9.2 million steps of 5e-9 tau in
+    110 s, then "maximum number of steps")."""
+    mean_h = (t - t_first) / max(taken, 1)
+    if fixed_step > 0.0 or taken < max_steps // 10 or not t_end - t > 10 * (max_steps - taken) * mean_h:
+        return ""
+    return (f"too stiff: at its mean step {mean_h:.3g} so far the run would need about "
+            f"{(t_end - t) / mean_h if mean_h > 0 else np.inf:.2g} more steps to reach t_end, more than "
+            f"max_steps={max_steps} (at t={t:.6g}, after {taken} steps)")
 
 
 def _integrate_ndf(fil, pieces, t_end, y0, t_eval, tab, rtol, atol, max_step, fixed_step, check, max_steps,
@@ -591,16 +615,9 @@ def _integrate_ndf(fil, pieces, t_end, y0, t_eval, tab, rtol, atol, max_step, fi
                     break
             if code == 0 or status != "completed":
                 break
-            taken = int(stats[0] + stats[1])
-            # hopelessly stiff (kappa_E 1e9 times the paper's: 9.2 million steps of 5e-9 tau in
-            # 110 s, then "maximum number of steps"): said a tenth of the way in, from the mean
-            # step so far (not the current one: small after each field piece's restart)
-            mean_h = (t - t_first) / max(taken, 1)
-            if fixed_step <= 0.0 and taken >= max_steps // 10 and t_end - t > 10 * (max_steps - taken) * mean_h:
-                status, message = "failed", (
-                    f"too stiff: at its mean step {mean_h:.3g} so far the run would need about "
-                    f"{(t_end - t) / mean_h:.2g} more steps to reach t_end, more than max_steps={max_steps} "
-                    f"(at t={t:.6g}, after {taken} steps)")
+            stiff = _too_stiff(t, t_first, t_end, int(stats[0] + stats[1]), max_steps, fixed_step)
+            if stiff:
+                status, message = "failed", stiff
                 break
         h_abs = float(fstate[0])
         if code not in (0, 5):
