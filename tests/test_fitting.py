@@ -286,7 +286,10 @@ def test_parallel_finite_differences_give_the_serial_fit():
     assert par.settings["backend"] == "processes"
     a, b = np.array([ser.B, ser.tau, ser.kappa_E]), np.array([par.B, par.tau, par.kappa_E])
     assert np.allclose(a, b, rtol=1e-7) and np.allclose(ser.sigma_rel, par.sigma_rel, rtol=1e-5)
-    assert np.allclose(a, truth, rtol=5e-3)
+    # the data are the 16-segment model's; where the fit is refined to 32 segments (its
+    # prediction: a parameter moves by resolution_shift_rel) it answers for the finer model
+    # (the refit used to start from the guess, fail and leave the 16-segment answer)
+    assert np.allclose(a, truth, rtol=max(5e-3, ser.settings.get("resolution_shift_rel", 0.0)))
 
 
 def test_fig3e_draws_every_trial_beside_its_voltage_and_the_mean_with_its_sem():

@@ -114,6 +114,15 @@ def _cmd_fit(args) -> int:
     print(f"{out}: B = {res.B * 1e6:.4g} N mm^2 (+-{100 * s[0]:.2g}%), tau = {res.tau:.4g} s (+-{100 * s[1]:.2g}%), "
           f"kappa_E = {res.kappa_E * 1e-3:.4g} 1/mm (+-{100 * s[2]:.2g}%) at {v:g} V; paper cost C = {res.paper_cost:.3g}; "
           f"{res.card.describe()}")
+    for o in res.settings.get("other_solutions", ()):
+        import sys
+
+        where = "inside" if o["in_box"] else "outside"
+        print(f"flutterswim fit: note: another parameter set, {where} the paper's box (0.5-1.5 x the guess), fits "
+              f"these data {'nearly ' if o['in_box'] else ''}as well: B = {o['B_N_m2'] * 1e6:.4g} N mm^2, "
+              f"tau = {o['tau_s']:.4g} s, kappa_E = {o['kappa_E_per_m'] * 1e-3:.4g} 1/mm (chi2 {o['chi2']:.3g}); "
+              "the three descriptors do not tell them apart (shapes, the onset or several voltages do)",
+              file=sys.stderr)
     if res.weakly_determined:
         import sys
 
