@@ -112,8 +112,10 @@ def _cmd_fit(args) -> int:
               file=sys.stderr)
     s = res.sigma_rel
     print(f"{out}: B = {res.B * 1e6:.4g} N mm^2 (+-{100 * s[0]:.2g}%), tau = {res.tau:.4g} s (+-{100 * s[1]:.2g}%), "
-          f"kappa_E = {res.kappa_E * 1e-3:.4g} 1/mm (+-{100 * s[2]:.2g}%) at {v:g} V; paper cost C = {res.paper_cost:.3g}; "
-          f"{res.card.describe()}")
+          f"kappa_E = {res.kappa_E * 1e-3:.4g} 1/mm (+-{100 * s[2]:.2g}%) at {v:g} V"
+          + ("" if res.settings.get("uncertainty_weights") == "sem" else
+             " (1-sigma from an assumed 5 % error per descriptor: no SEMs)")
+          + f"; paper cost C = {res.paper_cost:.3g}; {res.card.describe()}")
     for o in res.settings.get("other_solutions", ()):
         import sys
 

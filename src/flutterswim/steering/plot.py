@@ -24,7 +24,7 @@ def plot_steer(res, path=None):
     fig, (ax, ax2) = plt.subplots(2, 1, figsize=(6, 8), gridspec_kw={"height_ratios": [3, 1]}, constrained_layout=True)
     ax.plot(*(res.path.points * mm).T, color="0.6", lw=1.5, label="path")
     cx, cy = run.x.mean(axis=1), run.y.mean(axis=1)
-    period = res.metrics.get("period_s", None) or 0.38
+    period = res.metrics["period_s"]
     ts, axv = _moving_average(run.t, cx, period)
     _, ayv = _moving_average(run.t, cy, period)
     ax.plot(axv * mm, ayv * mm, color="tab:orange", lw=1.5, label="cycle-averaged centroid")

@@ -179,6 +179,7 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     run = concatenate(parts)
     met = metrics(run, path, reduced, onset, params.l)
     met["path_min_radius_bl"] = r_path / params.l
+    met["period_s"] = reduced.period  # (the stroke the figure averages over; it assumed 0.38 s)
     met["path_feasible"] = bool(r_path >= 0.95 * r_turn)
     met["controller_min_radius_bl"] = r_turn / params.l
     met["trapped"] = bool(math.isfinite(trapped_at)) or met["trapped"]
