@@ -43,11 +43,7 @@ TARGETS: tuple[Target, ...] = (
            fm.build_fig4c, fm.fig4c_params, figures=("fig4c.png",), data=("fig4c.nc",), deps=("paper_run",)),
     Target("fig4de", "Fig. 4d-e: kymographs near onset and at the limit cycle",
            "Kymographs near the onset of swimming and at the limit cycle; the increase in amplitude is "
-           "accompanied by the increase in the average swimmer's velocity (yellow arrow). The curvature maps show "
-           "the shape's curvature; near onset its band along s = 0 is the end hook of the bent equilibria "
-           "(theta_s = -chi sin theta, about theta(0) exp(-chi s), 1/chi = 0.014 l wide) that the start's 0.01 degree "
-           "tilt excites, linearly, some 600-fold (a 6.5 degree hook by 2 s); 48 segments give half of it (it converges "
-           "at first order in the segment length, the limit cycle at second order).",
+           "accompanied by the increase in the average swimmer's velocity (yellow arrow).",
            fm.build_fig4de, fm.fig4de_params, figures=("fig4de.png",), data=("fig4de.nc",), deps=("paper_run",)),
     Target("video_s4", "Video S4: the virtual swimmer",
            "Virtual swimmer from instability onset to steady oscillations.", fm.build_video_s4,

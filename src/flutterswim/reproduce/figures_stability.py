@@ -54,7 +54,7 @@ def build_table1(ctx: Context) -> Outcome:
         g = pr.groups
         derived += [
             compare(f"mu_par = 4 pi mu / (2 ln(2l/b) - 1) [{name}]", None, pr.mu_par * 1e3, unit="mPa s",
-                    paper_text="formula (eq. MOD:eq:resistive_coefficients)"),
+                    paper_text="the paper's formula for the resistive coefficients"),
             compare(f"mu_perp = 4 pi mu / ln(2l/b) [{name}]", None, pr.mu_perp * 1e3, unit="mPa s",
                     paper_text="formula"),
             compare(f"eta_par = mu_par l^4/(B tau) [{name}]", None, g.eta_par, paper_text="defined, not stated"),

@@ -62,7 +62,8 @@ def write_report(out: Path, records: dict, mode: str, *, name: str = "report.htm
         comps = list(rec.outcome.comparisons)
         paper = [c for c in comps if c.from_paper and c.ok is not None]
         ours = [c for c in comps if not c.from_paper and c.ok is not None]
-        rows.append({"name": t.name, "title": t.title, "caption": t.caption, "status": rec.status, "mode": rec.mode,
+        title = rec.outcome.values.get("title", t.title) if isinstance(rec.outcome.values, dict) else t.title
+        rows.append({"name": t.name, "title": title, "caption": t.caption, "status": rec.status, "mode": rec.mode,
                      "reran": rec.reran, "wall_time": rec.wall_time, "error": rec.error, "images": imgs,
                      "videos": [v for v in t.videos if (out / v).is_file()], "rows": comps,
                      "notes": list(rec.outcome.notes), "files": sorted(rec.outputs.items()),
