@@ -41,7 +41,8 @@ def check_out(out: str | os.PathLike, targets) -> Path:
 
     p = check_store_path(out, overwrite=False, what="--out", kind=STORE_KIND)
     names = ["report.html", "manifest.json"] + [f for t in targets for f in t.outputs]
-    check_files_in(p, names, what="--out")
+    # (named as an output: "--out='c/fig6b.nc'" misnamed the folder given as c)
+    check_files_in(p, names, what="output")
     del MARKER
     _check_unedited(p, targets)
     return p
