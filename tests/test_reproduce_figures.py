@@ -308,3 +308,18 @@ def test_fig3e_without_trials_is_called_a_stand_in_in_the_report(built):
     assert "stand-in" in title and "synthetic" in title
     html = (built.out / "report.html").read_text()
     assert title in html and "experimental descriptors against voltage" not in html
+
+
+def test_fig4de_data_hold_all_four_panels(built):
+    """(A review: fig4de.nc held only the crossings of the mean path, the first of four panels.)
+    The crossings across the path, the curvature and the tangent-angle kymographs are there,
+    with units, for both windows; the curvature is the tangent angle's derivative along s."""
+    ds = _open(built, "fig4de.nc")
+    _assert_cf(ds, "fig4de.nc")
+    for k in ("onset", "limit"):
+        for name in ("along_positions", "across_positions", "curvature", "tangent_angle"):
+            assert f"{k}_{name}" in ds, (k, name)
+        kap, th = ds[f"{k}_curvature"].values, ds[f"{k}_tangent_angle"].values
+        fd = np.diff(th, axis=1) / np.diff(ds[f"s_mid_{k}"].values)
+        assert np.max(np.abs(kap[:, 1:-1] - fd)) <= 1e-9 * np.max(np.abs(kap))
+        assert np.isfinite(ds[f"{k}_across_positions"].values).any()

@@ -223,7 +223,7 @@ def draw_kymographs(axs, obj: Any, window: tuple[float, float] | None = None, *,
     lim = float(np.max(np.abs(kap))) or 1.0
     im = axs[2].pcolormesh(bk.t, bk.s / tr.length, kap.T, cmap="RdBu_r", vmin=-lim, vmax=lim, shading="nearest",
                            rasterized=True)
-    axs[2].figure.colorbar(im, ax=axs[2], label="κ = θ_s (1/mm)")
+    axs[2].figure.colorbar(im, ax=axs[2], label="θ_s (1/mm)")  # (κ is the spontaneous curvature)
     axs[2].set_ylabel("s / l")
     axs[2].set_xlabel("t (s)")
     axs[2].set_title("curvature of the shape", fontsize=8)

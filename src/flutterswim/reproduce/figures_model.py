@@ -145,7 +145,7 @@ def fig4de_params(s: Settings) -> dict:
 def build_fig4de(ctx: Context) -> Outcome:
     import xarray as xr
 
-    from ..analysis.kymograph import kymograph_windows
+    from ..analysis.kymograph import body_kymograph, kymograph_windows
     from ..plotting.figures import path_sections
     from .datasets import read_orbit
     from .plots import plot_fig4de
@@ -165,6 +165,20 @@ def build_fig4de(ctx: Context) -> Outcome:
         data[f"{k}_along_positions"] = _var((f"t_{k}", f"k_{k}"), along.positions, "m",
                                             f"crossings of the mean path, position along it ({k}; NaN: none)")
         data[f"{k}_along_s"] = _var((f"t_{k}", f"k_{k}"), along.s, "m", f"arc length of each crossing ({k})")
+        # the figure's other three panels (a review: only the first was in the file)
+        data[f"{k}_across_positions"] = _var((f"t_{k}", f"j_{k}"), across.positions, "m",
+                                             f"crossings of the section moving with the centroid, position across "
+                                             f"the path ({k}; NaN: none)")
+        data[f"{k}_across_s"] = _var((f"t_{k}", f"j_{k}"), across.s, "m", f"arc length of each such crossing ({k})")
+        bk = body_kymograph(tr.window(a, b))
+        tb = f"t_{k}" if bk.t.size == t.size and np.allclose(bk.t, t) else f"tk_{k}"
+        if tb != f"t_{k}":
+            coords[tb] = _var((tb,), bk.t, "s", f"time of the body kymographs ({k} window)")
+        coords[f"s_{k}"] = _var((f"s_{k}",), bk.s, "m", "arc length of the joints")
+        coords[f"s_mid_{k}"] = _var((f"s_mid_{k}",), bk.s_mid, "m", "arc length of the segment midpoints")
+        data[f"{k}_curvature"] = _var((tb, f"s_{k}"), bk.kappa, "1/m", f"curvature of the shape theta_s ({k})")
+        data[f"{k}_tangent_angle"] = _var((tb, f"s_mid_{k}"), bk.theta, "rad",
+                                          f"tangent angle in the body frame, theta - <theta> ({k})")
         attrs[f"{k}_window_s"] = [a, b]
         attrs[f"{k}_average_velocity_m_s"] = v
         attrs[f"{k}_path_angle_rad"] = ang
