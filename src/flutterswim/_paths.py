@@ -214,19 +214,24 @@ def _writable_dir(folder: Path, what: str, path: Path, *, may_create: bool = Fal
         os.unlink(tmp)
 
 
-def netcdf_title(path: str | os.PathLike) -> str:
-    """The ``title`` attribute of a NetCDF-4 file ("" if none or not NetCDF-4)."""
+def netcdf_attrs(path: str | os.PathLike) -> dict:
+    """The global attributes of a NetCDF-4 file ({} if none, unreadable or not NetCDF-4)."""
     p = Path(os.fspath(path))
     try:
         with open(p, "rb") as f:
             if f.read(8) != b"\x89HDF\r\n\x1a\n":
-                return ""
+                return {}
         import h5py
 
         with h5py.File(p, "r") as h:
-            title = h.attrs.get("title", b"")
-    except Exception:  # noqa: BLE001 - unreadable: no title
-        return ""
+            return dict(h.attrs)
+    except Exception:  # noqa: BLE001 - unreadable: no attributes
+        return {}
+
+
+def netcdf_title(path: str | os.PathLike) -> str:
+    """The ``title`` attribute of a NetCDF-4 file ("" if none or not NetCDF-4)."""
+    title = netcdf_attrs(path).get("title", b"")
     return title.decode("utf-8", "replace") if isinstance(title, bytes) else str(title)
 
 

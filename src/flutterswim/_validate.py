@@ -57,6 +57,14 @@ def non_negative(name: str, value: Any) -> float:
     return v
 
 
+def within(name: str, value: Any, lo: float, hi: float, why: str = "") -> float:
+    """A finite number in [lo, hi]; ``why``: what the bounds mean, said with them."""
+    v = finite(name, value)
+    if not lo <= v <= hi:
+        raise ParameterError(f"{name}={value!r} must be in [{lo:g}, {hi:g}]" + (f" ({why})" if why else ""))
+    return v
+
+
 def positive_int(name: str, value: Any, minimum: int = 1, maximum: int | None = None, why: str = "") -> int:
     """An integer in [minimum, maximum]; ``why``: what the maximum guards against, said with it."""
     allowed = f">= {minimum}" if maximum is None else f"in [{minimum}, {maximum}]"

@@ -50,6 +50,8 @@ def register(subparsers) -> None:
 
 
 def _cmd_fit(args) -> int:
+    import sys
+
     import numpy as np
 
     from .._paths import check_output_file
@@ -91,8 +93,6 @@ def _cmd_fit(args) -> int:
                   bootstrap=args.bootstrap, n_segments=args.segments, extrapolate=not args.no_extrapolate,
                   backend=args.backend, workers=args.workers)
     except OutsideModel as exc:  # a failure of the fit, not bad input: one line, exit 1
-        import sys
-
         print(f"flutterswim fit: failed: {' '.join(str(exc).split())}", file=sys.stderr)
         return 1
     from dataclasses import replace
@@ -103,8 +103,6 @@ def _cmd_fit(args) -> int:
         return _verdict(res)
     n = int(summary.n[np.isclose(summary.voltage_V, v)][0])
     if not args.paper_cost and n < FEW_TRIALS:
-        import sys
-
         print(f"flutterswim fit: note: the SEMs at {v:g} V come from {n} trials, so the reported 1-sigma is itself "
               f"uncertain (from {n} trials, within a factor {_sem_factor(n):.2g} either way at 90 %), and it covers "
               "the trials' scatter only, not an error common to them (tracking, frame rate"
@@ -117,8 +115,6 @@ def _cmd_fit(args) -> int:
              " (1-sigma from an assumed 5 % error per descriptor: no SEMs)")
           + f"; paper cost C = {res.paper_cost:.3g}; {res.card.describe()}")
     for o in res.settings.get("other_solutions", ()):
-        import sys
-
         where = "inside" if o["in_box"] else "outside"
         print(f"flutterswim fit: note: another parameter set, {where} the paper's box (0.5-1.5 x the guess), fits "
               f"these data {'nearly ' if o['in_box'] else ''}as well: B = {o['B_N_m2'] * 1e6:.4g} N mm^2, "
@@ -126,12 +122,8 @@ def _cmd_fit(args) -> int:
               "the three descriptors do not tell them apart (shapes, the onset or several voltages do)",
               file=sys.stderr)
     if res.weakly_determined:
-        import sys
-
         print(f"flutterswim fit: note: {res.weakly_determined}", file=sys.stderr)
     if res.at_bound:
-        import sys
-
         print(f"flutterswim fit: note: {', '.join(res.at_bound)} ended on the bound of the paper's box (factor 0.5 or "
               "1.5 of the guess): the data ask for a value beyond it, so that value is the bound's, not the fit's "
               "(without --paper-cost the fit is unbounded)", file=sys.stderr)

@@ -57,7 +57,7 @@ def _parse_range(text: str) -> tuple[str, float, float]:
 def _cmd_branch(args) -> int:
     from .. import defaults
     from .._paths import check_output_file
-    from .._validate import ParameterError, non_negative, positive_int
+    from .._validate import ParameterError, positive_int, within
     from .._validate import n_segments as segments_checked
     from ..params import preset
     from .continuation import MAX_LOOK_BEYOND, MAX_POINTS, continue_orbits, short_of
@@ -65,9 +65,8 @@ def _cmd_branch(args) -> int:
     from .parameter import Axis
 
     name, lo, hi = _parse_range(args.range)
-    if args.look_beyond is not None and non_negative("--look-beyond", args.look_beyond) > MAX_LOOK_BEYOND:
-        raise ParameterError(f"--look-beyond={args.look_beyond!r} is too far; at most {MAX_LOOK_BEYOND:g} times the "
-                             "range")
+    if args.look_beyond is not None:
+        within("--look-beyond", args.look_beyond, 0.0, MAX_LOOK_BEYOND, "times the range")
     if positive_int("--points", args.points, minimum=2) > MAX_POINTS:
         raise ParameterError(f"--points={args.points} is too many; at most {MAX_POINTS} orbits along a branch")
     params = preset(args.preset)

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .. import defaults
-from .._validate import ParameterError, finite, non_negative, positive, positive_int
+from .._validate import ParameterError, finite, positive, positive_int, within
 from .._validate import n_segments as segments_checked
 from .linear import hopf_bracket, hopf_point
 from .normal_form import normal_form
@@ -203,10 +203,8 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     tol = positive("tol", tol)
     max_newton = positive_int("max_newton", max_newton)
     max_points = 10 * n_points + 50 if max_points is None else positive_int("max_points", max_points)
-    look_beyond = non_negative("look_beyond", look_beyond)
-    if look_beyond > MAX_LOOK_BEYOND:  # (1e9 was taken: a branch followed a billion ranges on)
-        raise ParameterError(f"look_beyond={look_beyond!r} is too far; at most {MAX_LOOK_BEYOND:g} times the range "
-                             f"(default {LOOK_BEYOND:g})")
+    # (1e9 was taken: a branch followed a billion ranges on)
+    look_beyond = within("look_beyond", look_beyond, 0.0, MAX_LOOK_BEYOND, f"times the range; default {LOOK_BEYOND:g}")
     base = axis.value()
     lo, hi = sorted((base, to))
     span = hi - lo

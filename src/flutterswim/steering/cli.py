@@ -83,19 +83,11 @@ def _old_steered(path) -> bool:
     steering attributes): steer's own, replaced as before."""
     from pathlib import Path
 
-    from .._paths import is_ours, netcdf_title
+    from .._paths import is_ours, netcdf_attrs, netcdf_title
     from ..result import RUN_TITLE
 
     p = Path(path)
-    if not (p.is_file() and is_ours(p) and netcdf_title(p) == RUN_TITLE):
-        return False
-    try:
-        import h5py
-
-        with h5py.File(p, "r") as h:
-            return "steering_path" in h.attrs
-    except Exception:  # noqa: BLE001 - unreadable: not one
-        return False
+    return p.is_file() and is_ours(p) and netcdf_title(p) == RUN_TITLE and "steering_path" in netcdf_attrs(p)
 
 
 def _cmd_steer(args) -> int:

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import ParameterError, non_negative, positive, positive_int
+from .._validate import ParameterError, positive, positive_int, within
 from ..field import Constant, Field
 from ..params import Parameters
 from .control import Controller, wrap
@@ -103,10 +103,8 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     if not isinstance(params, Parameters):
         raise ParameterError(f"params={params!r} must be flutterswim.Parameters")
     fps = positive("fps", fps)
-    noise_px = non_negative("noise_px", noise_px)
-    if noise_px > MAX_NOISE_PX:  # (1e12 px was taken, and scored)
-        raise ParameterError(f"noise_px={noise_px!r} is more tracking noise than a camera can have on a swimmer it "
-                             f"sees; at most {MAX_NOISE_PX:g} px")
+    # (1e12 px was taken, and scored)
+    noise_px = within("noise_px", noise_px, 0.0, MAX_NOISE_PX, "px of tracking noise on a swimmer the camera sees")
     um_per_px = positive("um_per_px", um_per_px)
     laps = positive("laps", laps)
     rate_fraction = positive("rate_fraction", rate_fraction)

@@ -54,7 +54,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage as ndi
 
-from .._validate import ParameterError, angle, finite, non_negative, positive, positive_int
+from .._validate import ParameterError, angle, finite, non_negative, positive, positive_int, within
 from ..analysis.track import Track
 from .centreline import fit_centreline
 from .io import Frames, open_frames
@@ -483,21 +483,15 @@ MAX_POINTS = 10_000
 MAX_SIGMA_PX = 20.0
 
 
-def _sigma(v) -> float:
-    v = positive("sigma", v)
-    if v > MAX_SIGMA_PX:
-        raise ParameterError(f"sigma={v!r} px is too wide a filter for a line a pixel or two wide; at most "
-                             f"{MAX_SIGMA_PX:g} px (the default, 1.2 px, suits a focused ribbon)")
-    return v
-
-
 # the checks of track()'s options (NaN would switch the checks off: min_contrast, the tolerances)
 _OPTION_CHECKS = {
     "n_points": lambda v: positive_int("n_points", v, 5, MAX_POINTS, "samples along the body; 10^8 ran out of "
                                                                      "memory"),
     "tip_k": lambda v: positive("tip_k", v),
     "tip_floor_px": lambda v: positive("tip_floor_px", v),
-    "sigma": lambda v: None if v is None else _sigma(v),
+    "sigma": lambda v: None if v is None else within("sigma", positive("sigma", v), 0.0, MAX_SIGMA_PX,
+                                                       "px: a wider filter than a line a pixel or two wide; the "
+                                                       "default 1.2 px suits a focused ribbon"),
     # (radians: more than a turn is likely degrees; user -> track -> check_options -> here)
     "field_angle": lambda v: angle("field_angle", v, stacklevel=3), "t0": lambda v: finite("t0", v),
     "min_contrast": lambda v: non_negative("min_contrast", v), "length_tol": lambda v: positive("length_tol", v),
@@ -577,10 +571,9 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     unless most are (a noiseless movie of a body at rest). Per-frame results (all frames, failed ones NaN, with their reasons) are in
     ``track.meta["frames"]``; see the module docstring for the checks.
     """
-    px_per_mm = positive("px_per_mm", px_per_mm)
-    if not PX_PER_MM_RANGE[0] <= px_per_mm <= PX_PER_MM_RANGE[1]:  # (1e-300 gave a body of 2.6e302 mm)
-        raise ParameterError(f"px_per_mm={px_per_mm!r} is not a camera's scale; give pixels per millimetre in "
-                             f"[{PX_PER_MM_RANGE[0]:g}, {PX_PER_MM_RANGE[1]:g}] (the paper's movies: about 71)")
+    # (1e-300 gave a body of 2.6e302 mm)
+    px_per_mm = within("px_per_mm", px_per_mm, *PX_PER_MM_RANGE, "pixels per millimetre of a camera; the paper's "
+                       "movies: about 71")
     # checked before any frame is read
     o = check_options(n_points=n_points, tip_k=tip_k, tip_floor_px=tip_floor_px, sigma=sigma,
                       field_angle=field_angle, t0=t0, min_contrast=min_contrast, length_tol=length_tol,
