@@ -5,10 +5,25 @@ command does: one line and exit status 130, not a traceback (a review of ``repro
 import sys
 
 
+def _interrupted(exc: BaseException) -> bool:
+    """A KeyboardInterrupt in the exception's chain (a compiled module interrupted while it
+    initialises raises ImportError from it). flutterswim._interrupt.interrupted, which cannot
+    be imported here before the package has loaded."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
+
+
 def main() -> int:
     try:
         from flutterswim.cli import main as cli_main
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, ImportError) as exc:
+        if not _interrupted(exc):
+            raise
         sys.stderr.write("flutterswim: interrupted while starting\n")
         return 130
     return cli_main()

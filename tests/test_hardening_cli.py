@@ -216,3 +216,31 @@ def test_ctrl_c_while_the_command_starts_is_one_line_and_130(tmp_path, delay):
         pytest.skip("the command finished before the interrupt")
     assert proc.returncode == 130, err
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1 and "interrupted" in err
+
+
+def test_ctrl_c_while_a_compiled_module_initialises_is_one_line_and_130(monkeypatch, capsys):
+    """A Ctrl-C that lands while a compiled extension initialises (scipy's HiGHS, met in a CI
+    run of the test above) surfaces as "ImportError: initialization failed" with the interrupt
+    as its cause: it printed a traceback and exited 1. An ImportError of another cause is not
+    an interrupt."""
+    import flutterswim_entry
+    from flutterswim import cli
+
+    def interrupted_import():
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as ki:
+            raise ImportError("initialization failed") from ki
+
+    monkeypatch.setattr(cli, "build_parser", interrupted_import)
+    assert cli.main(["simulate"]) == 130
+    err = capsys.readouterr().err
+    assert err == "flutterswim: interrupted\n"
+    with pytest.raises(ImportError):
+        monkeypatch.setattr(cli, "build_parser", lambda: (_ for _ in ()).throw(ImportError("no module")))
+        cli.main(["simulate"])
+    try:
+        interrupted_import()
+    except ImportError as exc:
+        assert flutterswim_entry._interrupted(exc)
+    assert not flutterswim_entry._interrupted(ImportError("no module"))

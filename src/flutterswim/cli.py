@@ -442,6 +442,13 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("flutterswim: interrupted", file=sys.stderr)
         return 130
+    except ImportError as exc:
+        # a Ctrl-C while a compiled module initialises (scipy's HiGHS) surfaces as its
+        # "ImportError: initialization failed", the interrupt its cause: it printed a traceback
+        if not interrupted(exc):
+            raise
+        print("flutterswim: interrupted", file=sys.stderr)
+        return 130
     if not debug:
         _quiet_warnings()
     try:
