@@ -5,10 +5,12 @@ command does: one line and exit status 130, not a traceback (a review of ``repro
 import sys
 
 
-def _interrupted(exc: BaseException) -> bool:
-    """A KeyboardInterrupt in the exception's chain (a compiled module interrupted while it
-    initialises raises ImportError from it). flutterswim._interrupt.interrupted, which cannot
-    be imported here before the package has loaded."""
+def interrupted(exc: BaseException) -> bool:
+    """True if a KeyboardInterrupt is in the exception's chain: a compiled module interrupted
+    while it initialises raises ImportError from it, numba's dispatcher reports an interrupt
+    inside a kernel as "SystemError: ... returned a result with an exception set". Here, not in
+    the package, so that the entry point has it before the package loads
+    (``flutterswim._interrupt`` re-exports it)."""
     seen = set()
     while exc is not None and id(exc) not in seen:
         if isinstance(exc, KeyboardInterrupt):
@@ -22,7 +24,7 @@ def main() -> int:
     try:
         from flutterswim.cli import main as cli_main
     except (KeyboardInterrupt, ImportError) as exc:
-        if not _interrupted(exc):
+        if not interrupted(exc):
             raise
         sys.stderr.write("flutterswim: interrupted while starting\n")
         return 130

@@ -242,5 +242,5 @@ def test_ctrl_c_while_a_compiled_module_initialises_is_one_line_and_130(monkeypa
     try:
         interrupted_import()
     except ImportError as exc:
-        assert flutterswim_entry._interrupted(exc)
-    assert not flutterswim_entry._interrupted(ImportError("no module"))
+        assert flutterswim_entry.interrupted(exc)
+    assert not flutterswim_entry.interrupted(ImportError("no module"))

@@ -1,18 +1,8 @@
-"""Telling an interrupt (Ctrl-C) from a failure."""
+"""Telling an interrupt (Ctrl-C) from a failure: :func:`flutterswim_entry.interrupted`, which
+the command's entry point needs before the package loads."""
 
 from __future__ import annotations
 
+from flutterswim_entry import interrupted
+
 __all__ = ["interrupted"]
-
-
-def interrupted(exc: BaseException) -> bool:
-    """True if a KeyboardInterrupt is in the exception's chain (numba's dispatcher reports an
-    interrupt inside a kernel as "SystemError: ... returned a result with an exception set")."""
-    seen = set()
-    e: BaseException | None = exc
-    while e is not None and id(e) not in seen:
-        if isinstance(e, KeyboardInterrupt):
-            return True
-        seen.add(id(e))
-        e = e.__cause__ or e.__context__
-    return False
