@@ -80,3 +80,57 @@ def test_a_stop_reason_keeps_its_own_time():
     assert r.status == "stopped" and "self-intersection" in r.message
     said = float(r.message.split("t=")[1].split()[0])
     assert said == pytest.approx(r.t_final, rel=1e-5)
+
+
+_TRANSIENT = {"fail": {2.0, 4.0}, "calls": []}
+
+
+def transient(task):
+    x = task["values"]["chi"]
+    _TRANSIENT["calls"].append(x)
+    if x in _TRANSIENT["fail"]:
+        raise MemoryError(f"out of memory at chi={x}")
+    return {"a": 10 * x}
+
+
+transient.variables = ["a"]
+
+
+@pytest.mark.parametrize("continuation", [False, True])
+def test_a_rerun_keeps_failed_points_unless_asked_to_retry_them(tmp_path, continuation, capsys):
+    """A rerun resumes without recomputing anything recorded, failures included; with
+    retry_failed only the failed points run again, and a transient failure then succeeds."""
+    out = str(tmp_path / "t.zarr")
+    kw = dict(out=out, backend="serial", point_fn=transient, progress=False, continuation=continuation)
+    _TRANSIENT.update(fail={2.0, 4.0}, calls=[])
+    ds = sweep({"chi": [1.0, 2.0, 3.0, 4.0]}, **kw)
+    assert int(ds.attrs["n_failed"]) == (4 if continuation else 2)
+    assert "--retry-failed" in capsys.readouterr().err
+    _TRANSIENT.update(fail=set(), calls=[])
+    again = sweep({"chi": [1.0, 2.0, 3.0, 4.0]}, **kw)
+    assert _TRANSIENT["calls"] == [] and int(again.attrs["n_failed"]) == int(ds.attrs["n_failed"])
+    fixed = sweep({"chi": [1.0, 2.0, 3.0, 4.0]}, retry_failed=True, **kw)
+    assert sorted(_TRANSIENT["calls"]) == sorted([2.0, 4.0] * (2 if continuation else 1))
+    assert int(fixed.attrs["n_failed"]) == 0 and bool(fixed["done"].all())
+    np.testing.assert_array_equal(fixed["a"].values.ravel(), np.tile([10.0, 20.0, 30.0, 40.0],
+                                                                     2 if continuation else 1))
+    assert not any(fixed["reason"].values.ravel())
+
+
+def test_the_command_line_retries_failed_points(tmp_path, monkeypatch):
+    import importlib
+
+    from flutterswim.cli import main
+
+    run = importlib.import_module("flutterswim.sweep.run")
+    seen = {}
+
+    def fake(*a, **kw):
+        seen.update(kw)
+        raise ParameterError("stop here")
+
+    monkeypatch.setattr(run, "sweep", fake)
+    assert main(["sweep", "chi=1,2", "--out", str(tmp_path / "s.zarr"), "--retry-failed"]) == 2
+    assert seen["retry_failed"] is True
+    assert main(["sweep", "chi=1,2", "--out", str(tmp_path / "s.zarr")]) == 2
+    assert seen["retry_failed"] is False

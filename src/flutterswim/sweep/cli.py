@@ -25,6 +25,8 @@ def register(subparsers) -> None:
     p.add_argument("--continuation", action="store_true", help="start each point from the previous one, up then down")
     p.add_argument("--overwrite", action="store_true",
                    help="replace an existing flutterswim store at --out (nothing else is ever replaced)")
+    p.add_argument("--retry-failed", action="store_true",
+                   help="resuming: compute again the points recorded as failed (by default they are kept)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (failures are still listed)")
     st = PointSettings()
     for name, typ, help_ in (
@@ -63,7 +65,7 @@ def _cmd_sweep(args) -> int:
     backend = args.backend or ("dask" if args.scheduler else "processes")
     ds = sweep(args.axes, args.preset, out=args.out, backend=backend, workers=args.workers, scheduler=args.scheduler,
                mode=args.mode, continuation=args.continuation, settings=settings or None,
-               progress=not args.no_progress, overwrite=args.overwrite)
+               progress=not args.no_progress, overwrite=args.overwrite, retry_failed=args.retry_failed)
     missing = int(ds.attrs["n_points"]) - int(ds.attrs["n_done"])  # a worker lost with its point: not saved
     print(f"{args.out}: {ds.attrs['n_done']}/{ds.attrs['n_points']} points, {ds.attrs['n_failed']} failed"
           + (f", {missing} not computed (rerun the same command to compute them)" if missing else ""))

@@ -94,6 +94,7 @@ def sweep(
     progress: bool = True,
     overwrite: bool = False,
     max_points: int | None = None,
+    retry_failed: bool = False,
 ):
     """Run a parameter sweep and return an ``xarray.Dataset`` indexed by the swept parameters.
 
@@ -110,7 +111,9 @@ def sweep(
     simulation (tests, custom measurements; for the "processes" backend it must live in an
     importable module, not in the main script; give its ``variables`` and optionally
     ``required``, the variables that must be finite, as attributes). ``max_points``: stop
-    after computing that many points (the rest stay undone).
+    after computing that many points (the rest stay undone). ``retry_failed``: on a rerun,
+    compute again the points recorded as failed (a transient failure: memory, a lost
+    connection); by default a rerun keeps them.
 
     Everything is checked before any point runs (definition, settings, grid size, output
     path). A failing point (exception, non-finite values) is recorded with its message and
@@ -141,7 +144,7 @@ def sweep(
         store = SweepStore.open(out, spec, variables, n_state, overwrite=overwrite)
         try:
             _run(store, spec, fn, variables, backend=backend, workers=workers, scheduler=scheduler,
-                 progress=progress, max_points=max_points, temporary=tmp is not None)
+                 progress=progress, max_points=max_points, temporary=tmp is not None, retry_failed=retry_failed)
             ds = to_dataset(store)
         except Exception:
             # the backend did not start (no scheduler answered, ...) before any point was saved:
@@ -165,8 +168,10 @@ def sweep(
 
 
 def _run(store: SweepStore, spec: SweepSpec, fn, variables, *, backend, workers, scheduler, progress,
-         max_points, temporary=False) -> None:
+         max_points, temporary=False, retry_failed=False) -> None:
     done = store.done_mask()
+    if retry_failed:  # failed points count as not done: computed again, in order
+        done = done & ~store.read()["failed"]
     todo = [k for k in range(spec.n_points) if not done[k]]
     if max_points is not None:
         todo = todo[: int(max_points)]
@@ -245,7 +250,8 @@ def _summary(store: SweepStore, file=None, lost: int = 0) -> None:
     data = store.read()
     bad = np.nonzero(data["failed"])[0]
     if bad.size:
-        print(f"sweep: {bad.size} of {store.spec.n_points} points failed:", file=file)
+        print(f"sweep: {bad.size} of {store.spec.n_points} points failed (a rerun keeps them; "
+              "retry_failed / --retry-failed computes them again):", file=file)
         for k in bad[:20]:
             tag = "" if data["done"][k] else " (not saved; rerun to recompute)"
             print(f"  point {k} {store.spec.point(int(k))[2]}: {data['message'][k]}{tag}", file=file)
