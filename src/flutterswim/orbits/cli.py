@@ -97,14 +97,15 @@ def _cmd_branch(args) -> int:
     bracket = (hopf_bracket(axis, n, lo, hi, prefer=base)
                or (None if near == ref else hopf_bracket(axis, n, ref, near)))
     hp = hopf_point(params, name, n_segments=n, bracket=bracket, start=ref)
+    from .continuation import branch_side, unreachable
     from .normal_form import normal_form
 
     nf = normal_form(hp)
-    side = nf.direction if nf.supercritical else -nf.direction
+    side = branch_side(nf)
     to = hi if side > 0 else lo
-    if (to - hp.value) * side <= 0:  # (continue_orbits would name the Hopf point it finds from the base value)
-        raise ParameterError(f"range={args.range!r} holds no stroke branch: it exists for {name} "
-                             f"{'above' if side > 0 else 'below'} the Hopf point {name}={hp.value:.6g}")
+    why = unreachable(nf, hp.value, to, name)
+    if why:  # (continue_orbits would name the Hopf point it finds from the base value)
+        raise ParameterError(f"range={args.range!r} holds no stroke branch: {why}")
     extra = {} if args.look_beyond is None else {"look_beyond": args.look_beyond}
     import warnings
 

@@ -162,6 +162,24 @@ def _systems(axis: Axis, value: float, n: int) -> ShapeSystem:
     return ShapeSystem.of(axis.at(value), n)
 
 
+def branch_side(nf) -> int:
+    """+1 if the stable strokes lie above the Hopf point, -1 below: a supercritical branch's
+    side (``nf.direction``); a subcritical branch leaves towards ``nf.direction`` as unstable
+    orbits and folds back to the other side, where the continuation ends."""
+    return nf.direction if nf.supercritical else -nf.direction
+
+
+def unreachable(nf, hopf_value: float, to: float, parameter: str) -> str:
+    """Why the branch from the Hopf point cannot end at ``to`` ("" if it may). A supercritical
+    branch exists on one side only; a subcritical one on both (from its fold, unknown before
+    the branch is followed, to beyond the Hopf point: bistable between them)."""
+    side = branch_side(nf)
+    if nf.supercritical and (to - hopf_value) * side <= 0:
+        return (f"the stroke branch exists for {parameter} {'above' if side > 0 else 'below'} the Hopf point "
+                f"{hopf_value:.6g} (supercritical)")
+    return ""
+
+
 @one_blas_thread
 def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
                     n_segments: int = defaults.SWEEP_N_SEGMENTS, steps: int | None = None, tol: float = 1e-10,
@@ -211,10 +229,11 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     hopf = hopf_point(params, parameter, n_segments=n_segments,
                       bracket=None if span == 0 else hopf_bracket(axis, n_segments, base, to))
     nf = normal_form(hopf)
-    side = nf.direction if nf.supercritical else -nf.direction
-    if (to - hopf.value) * side <= 0:
-        raise ParameterError(f"to={to:g}: the stroke branch exists for {parameter} "
-                             f"{'above' if side > 0 else 'below'} the Hopf point {hopf.value:.6g}")
+    side = branch_side(nf)
+    why = unreachable(nf, hopf.value, to, parameter)
+    if why:
+        raise ParameterError(f"to={to:g}: {why}")
+    first_leg = not nf.supercritical  # (a subcritical branch first runs to its fold, then turns back)
     length_p = abs(to - hopf.value)
     # the shape moves along the orbit as well as in amplitude: a few times the amplitude range
     length_u = 3.0 * math.sqrt(nf.amplitude2_slope * length_p)
@@ -272,7 +291,16 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
             tangent = tangent / math.sqrt(np.sum((tangent * w) ** 2))
             # at most 1/n_points of the parameter range per step, so that there are n_points or more
             step_ds = min(ds, reach / (n_points * max(abs(tangent[-1]), 1e-300)))
-            finishing = (xk[-1] + step_ds * tangent[-1] - target) * side >= 0 and tangent[-1] * side > 0
+            if first_leg and len(X) > 1 and tangent[-1] * side > 0:  # the subcritical branch has folded
+                first_leg = False
+                fold = min(values, key=lambda v: v * side)
+                if (to - fold) * side < 0:
+                    message = (f"no stroke at {parameter}={to:g}: the branch leaves the Hopf point {parameter}="
+                               f"{hopf.value:.6g} as unstable orbits (subcritical) and folds back at {parameter}="
+                               f"{fold:.6g} before reaching it")
+                    break
+            finishing = (not first_leg and (xk[-1] + step_ds * tangent[-1] - target) * side >= 0
+                         and tangent[-1] * side > 0)
             try:
                 if finishing:
                     xn, fl, res, it = _newton_natural(axis, n_segments, steps, xk, last_flow, target, tol, max_newton)

@@ -76,9 +76,21 @@ class Bifurcation:
     fixed: float
 
 
+#: the followed root is compared with the leading eigenvalue from scratch at every CHECK_STRIDE-th
+#: value, the last, and wherever it moves by more than CHECK_JUMP (relative) from one value to the next
+CHECK_STRIDE = 50
+CHECK_JUMP = 0.05
+
+
 def bifurcation(*, parameter: str, values, fixed: float, max_step: float = 0.1) -> Bifurcation:
     """Re/Im of omega_max vs chi (fixed eta_perp) or vs eta_perp (fixed chi), by root following
-    from the leading eigenvalue at the largest value (steps refined to <= max_step)."""
+    from the leading eigenvalue at the largest value (steps refined to <= max_step).
+
+    The followed root is checked against :func:`leading_eigenvalue` (every CHECK_STRIDE-th
+    value, the last, and wherever it jumps). Where another pair leads (beyond the paper's
+    region: at eta_perp = 1000 and chi ~ 12 the root followed from chi = 130 is the second),
+    the values since the last good check are taken from scratch and the following restarts
+    there; a lead that changes hands and back between two checks is not seen."""
     from .stability_map import _refine
 
     v = np.atleast_1d(np.asarray(values, dtype=float))
@@ -100,14 +112,55 @@ def bifurcation(*, parameter: str, values, fixed: float, max_step: float = 0.1) 
     order = np.argsort(-np.abs(v))
     path, idx = _refine(v[order], max_step)
     if parameter == "chi":
-        seed = leading_eigenvalue(float(path[0]), fixed, n=48).omega
-        res = follow_root(seed, path, fixed)
+        def leading(x):
+            return leading_eigenvalue(float(x), fixed, n=48).omega
+
+        def follow(w0, p):
+            return follow_root(w0, p, fixed).omega
     else:
-        seed = leading_eigenvalue(fixed, float(path[0]), n=48).omega
-        res = follow_root(seed, fixed, path)
+        def leading(x):
+            return leading_eigenvalue(fixed, float(x), n=48).omega
+
+        def follow(w0, p):
+            return follow_root(w0, fixed, p).omega
     om = np.empty(v.size, dtype=complex)
-    om[order] = res.omega[idx]
+    om[order] = _follow_checked(path, idx, leading, follow)
     return Bifurcation(parameter, v, om, fixed)
+
+
+def _same(a: complex, b: complex) -> bool:
+    return bool(np.isfinite(a) and np.isfinite(b) and abs(a - b) <= 1e-6 * max(1.0, abs(b)))
+
+
+def _follow_checked(path: np.ndarray, idx: np.ndarray, leading, follow) -> np.ndarray:
+    """The leading eigenvalue at path[idx] (idx increasing): ``follow(w0, path[k:])`` (the
+    root through w0 along the path) from ``leading(path[0])``, checked against ``leading`` at
+    every CHECK_STRIDE-th value, the last and wherever it jumps; from a wrong check on, the
+    values since the last good check come from ``leading`` and the following restarts."""
+    m = idx.size
+    om = np.full(m, complex(np.nan, np.nan))
+    q0, good = 0, 0
+    om[0] = leading(path[idx[0]])
+    while q0 < m:
+        start = idx[q0]
+        om[q0:] = follow(om[q0], path[start:])[idx[q0:] - start]
+        wrong = None
+        for q in range(q0 + 1, m):
+            jump = not (abs(om[q] - om[q - 1]) <= CHECK_JUMP * max(1.0, abs(om[q - 1])))
+            if (q - q0) % CHECK_STRIDE == 0 or q == m - 1 or jump:
+                ref = leading(path[idx[q]])
+                if not _same(om[q], ref):
+                    wrong = q
+                    break
+                good = q
+        if wrong is None:
+            break
+        for q in range(good + 1, wrong + 1):
+            om[q] = leading(path[idx[q]])
+        q0 = good = wrong
+        if q0 == m - 1:
+            break
+    return om
 
 
 def animate_mode(mode: Eigenmode, path, *, frames: int = 40, amplitude: float = 0.15, fps: int = 20) -> None:

@@ -4,6 +4,12 @@ At each eta_perp solve g(i beta; chi, eta_perp) = 0 for the real unknowns (chi, 
 Newton (g: reduced characteristic function; beta: angular frequency at onset, 1/tau), and
 continue in eta_perp from a seed located with the leading eigenvalue. The map is symmetric,
 so the curve is reported for chi > 0 (the other branch is -chi_cr).
+
+Continuation follows one pair's crossing. Beyond eta_perp ~ 400 another pair can cross first,
+and a coarse grid can step onto another pair's crossing (even at chi < 0): the followed points
+are checked against the leading eigenvalue (every CHECK_STRIDE-th point, and wherever chi_cr
+jumps by more than CHECK_JUMP between neighbours), and a point that is not the onset is found
+again from scratch (:func:`critical_chi`), the continuation going on from it.
 """
 
 from __future__ import annotations
@@ -18,6 +24,11 @@ from .leading import leading_eigenvalue
 from .stability_map import _uniform
 
 __all__ = ["NeutralCurve", "neutral_curve", "critical_chi"]
+
+#: the followed curve is checked against the leading eigenvalue at every CHECK_STRIDE-th point
+#: and wherever chi_cr moves by more than CHECK_JUMP (relative) from one point to the next
+CHECK_STRIDE = 50
+CHECK_JUMP = 0.05
 
 
 @dataclass(frozen=True)
@@ -65,12 +76,16 @@ def _seed(eta: float, chi_max: float, tol: float) -> tuple[float, float]:
                     c1, w1 = cm, wm
                 else:
                     c0, w0 = cm, wm
+            if c0 > chi_max:  # (the onset lies beyond chi_max: NaN, as documented)
+                return np.nan, np.nan
             t = -w0.real / (w1.real - w0.real)
             cg, bg = c0 + t * (c1 - c0), w0.imag + t * (w1.imag - w0.imag)
             lam = np.empty(4, dtype=np.complex128)
             c, b, it = _kernels._hopf_newton(cg, bg, eta, lam, False, tol, 50)
-            if it < 0:
-                raise RuntimeError(f"Hopf Newton did not converge at eta_perp={eta}")
+            if it < 0 or not 0 < c <= chi_max:
+                raise RuntimeError(f"the Hopf point at eta_perp={eta:.6g} was bracketed at chi in [{c0:.6g}, "
+                                   f"{c1:.6g}] but its Newton solve did not converge (eta_perp is validated for "
+                                   "0.1-5000)")
             return c, b
         prev = (chi, le.omega)
         lo_chi = chi
@@ -115,9 +130,50 @@ def neutral_curve(eta_perp=None, *, eta_range: tuple[float, float] = (0.0, 350.0
     if not np.isfinite(c0):
         return NeutralCurve(eta, chi_cr, beta, its)
     for sl in (slice(k0, valid[0] - 1 if valid[0] > 0 else None, -1), slice(k0, None)):
-        e = np.ascontiguousarray(eta[sl])
-        oc, ob = np.empty(e.size), np.empty(e.size)
-        oi = np.empty(e.size, dtype=np.int64)
-        _kernels._neutral_follow(e, c0, b0, tol, 50, chi_max, oc, ob, oi)
-        chi_cr[sl], beta[sl], its[sl] = oc, ob, oi
+        chi_cr[sl], beta[sl], its[sl] = _follow(np.ascontiguousarray(eta[sl]), c0, b0, chi_max, tol)
     return NeutralCurve(eta, chi_cr, beta, its)
+
+
+def _is_onset(c: float, b: float, eta: float) -> bool:
+    """(c, b) is the leading pair's crossing at eta: c > 0 and omega_max(c, eta) = i b."""
+    if not (np.isfinite(c) and c > 0):
+        return False
+    w = leading_eigenvalue(float(c), float(eta)).omega
+    return abs(w.real) <= 1e-6 * max(1.0, abs(w)) and abs(w.imag - abs(b)) <= 1e-6 * max(1.0, abs(b))
+
+
+def _follow(e: np.ndarray, c0: float, b0: float, chi_max: float, tol: float):
+    """(chi_cr, beta, iterations) along ``e`` (ordered away from the seed (c0, b0) at e[0]):
+    Hopf-Newton continuation, checked against the leading eigenvalue; a checked point that is
+    not the onset is found again from scratch, with the unchecked points since the last good
+    check, and the continuation restarts from it. From the first eta_perp whose onset lies
+    beyond chi_max (confirmed from scratch) the curve is NaN."""
+    n = e.size
+    chi_cr, beta, its = np.full(n, np.nan), np.full(n, np.nan), np.full(n, -1, dtype=np.int64)
+    k, c, b, good = 0, c0, b0, -1  # follow from index k with the seed (c, b); good: last point known right
+    while k < n:
+        oc, ob, oi = np.empty(n - k), np.empty(n - k), np.empty(n - k, dtype=np.int64)
+        _kernels._neutral_follow(np.ascontiguousarray(e[k:]), c, b, tol, 50, chi_max, oc, ob, oi)
+        chi_cr[k:], beta[k:], its[k:] = oc, ob, oi
+        wrong = None
+        for j in range(k, n):
+            prev = chi_cr[j - 1] if j > 0 else c0
+            if not np.isfinite(chi_cr[j]):
+                wrong = j  # the continuation stopped: confirmed (or not) from scratch
+                break
+            if ((j - k) % CHECK_STRIDE == 0 or j == n - 1 or chi_cr[j] <= 0
+                    or abs(chi_cr[j] - prev) > CHECK_JUMP * abs(prev)):
+                if not _is_onset(chi_cr[j], beta[j], e[j]):
+                    wrong = j
+                    break
+                good = j
+        if wrong is None:
+            break
+        for j in range(good + 1, wrong + 1):  # (the unchecked points may be on the other pair too)
+            chi_cr[j], beta[j] = _seed(float(e[j]), chi_max, tol)
+            its[j] = 0 if np.isfinite(chi_cr[j]) else -1
+        if not np.isfinite(chi_cr[wrong]):
+            chi_cr[wrong:], beta[wrong:], its[wrong:] = np.nan, np.nan, -1
+            break
+        k, c, b, good = wrong + 1, chi_cr[wrong], beta[wrong], wrong
+    return chi_cr, beta, its
