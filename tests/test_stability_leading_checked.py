@@ -59,3 +59,44 @@ def test_a_map_whose_followed_root_is_not_the_leading_one_says_so():
         warnings.simplefilter("error")
         p = stability_map(eta_perp=np.arange(10.0, 351.0, 10.0), chi=np.arange(-130.0, 131.0, 5.0))
     assert p.check_points > 30 and p.check_max_rel_diff < 1e-8  # the paper's region: the leading root
+
+
+def test_the_eigenmode_panels_do_not_overlap():
+    """A review: eigenmodes.png's second panel's y label ran into the first panel."""
+    from flutterswim.stability import eigenmodes
+    from flutterswim.stability.plots import plot_modes
+
+    fig = plot_modes(eigenmodes(70.7, 71.5))
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    a0, a1 = fig.axes[:2]
+    label = a1.yaxis.label.get_window_extent(r)
+    assert label.x0 > a0.get_tightbbox(r).x1  # the label lies right of everything of the first panel
+
+
+@pytest.mark.parametrize("args,kw,match", [((1e300, 71.5), {}, r"chi=1e\+300 must be in"),
+                                           ((70.0, 1e300), {}, r"eta_perp=1e\+300 must be in"),
+                                           ((1e6, 71.5), {}, r"chi=1000000.0 must be in"),
+                                           ((70.0, 71.5), {"n": 10**5}, r"n=100000 must be an integer in")])
+def test_inputs_beyond_the_checked_range_are_refused_by_name(args, kw, match):
+    """chi = 1e300 ended in an IndexError, eta_perp = 1e300 in omega = -1 without a word, n = 1e5
+    in a 75 GiB allocation."""
+    from flutterswim._validate import ParameterError
+
+    with pytest.raises(ParameterError, match=match):
+        leading_eigenvalue(*args, **kw)
+
+
+def test_sizes_and_physical_parameters_are_named():
+    import flutterswim as fs
+    from flutterswim._validate import ParameterError
+    from flutterswim.stability import physical_stability
+
+    with pytest.raises(ParameterError, match=r"MAX_MAP_POINTS"):
+        neutral_curve(eta_range=(0.0, 1e9))
+    with pytest.raises(ParameterError, match=r"kappa_E=1000000000000.0.*chi="):
+        physical_stability(fs.PAPER.replace(kappa_E=1e12))
+    # the checked range itself still answers, confirmed by Newton, without a warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert leading_eigenvalue(1e4, 71.5).polished and leading_eigenvalue(70.0, 1e6).polished

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import finite, positive, positive_int
+from .._validate import finite, positive, positive_int, within
 from .newton import follow_root, newton_root
 from .spectral import spectrum
 
@@ -21,6 +21,13 @@ __all__ = ["LeadingEigenvalue", "leading_eigenvalue", "FREE_FREE_K1"]
 
 #: Below this |chi| the leading roots are continued from +-SMALL_CHI (accumulation at -1).
 SMALL_CHI = 0.05
+
+#: the range the solver is checked on and accepts: |chi| up to MAX_CHI, eta_perp up to
+#: MAX_ETA_PERP, collocation degree up to MAX_DEGREE (chi = 1e300 ended in an IndexError,
+#: eta_perp = 1e300 in omega = -1, n = 1e5 in a 75 GiB allocation)
+MAX_CHI = 1e5
+MAX_ETA_PERP = 1e7
+MAX_DEGREE = 512
 
 #: First positive root of cos k cosh k = 1 (free-free beam).
 FREE_FREE_K1 = 4.730040744862704
@@ -78,11 +85,13 @@ def leading_eigenvalue(chi: float, eta_perp: float, *, n: int = 32, candidates: 
     0 < |chi| < 0.05 the eigenvalues crowd the accumulation point -1 (omega + 1 ~ chi), so the
     two leading roots are followed from chi = +-0.05 along a geometric path instead.
     Checked for eta_perp >= 0.1 and |chi| <= 1000; at eta_perp <~ 1e-2 with |chi| >~ 100 raise
-    ``n`` and compare.
+    ``n`` and compare. |chi| > MAX_CHI and eta_perp > MAX_ETA_PERP are refused; an answer that
+    Newton could not confirm (``polished`` False) comes with a RuntimeWarning.
     """
-    chi = finite("chi", chi)
-    eta_perp = positive("eta_perp", eta_perp)
-    n = positive_int("n", n, minimum=8)
+    chi = within("chi", finite("chi", chi), -MAX_CHI, MAX_CHI, "the range the solver is checked on")
+    eta_perp = within("eta_perp", positive("eta_perp", eta_perp), 0.0, MAX_ETA_PERP,
+                      "the range the solver is checked on")
+    n = positive_int("n", n, minimum=8, maximum=MAX_DEGREE, why="the collocation's degree")
     candidates = positive_int("candidates", candidates)
     if chi == 0.0:
         bend = [-(FREE_FREE_K1**4) / eta_perp, -(7.853204624095838**4) / eta_perp]
@@ -107,5 +116,13 @@ def leading_eigenvalue(chi: float, eta_perp: float, *, n: int = 32, candidates: 
         w = np.where(w.imag < 0, w.conj(), w)
         w = np.array(_distinct_pairs(w[np.argsort(-w.real, kind="stable")], 2) + [complex(np.nan, np.nan)])
         return LeadingEigenvalue(complex(w[0]), complex(w[1]), chi, eta_perp, True)
+    if not cand:
+        raise RuntimeError(f"no eigenvalue found at chi={chi:.6g}, eta_perp={eta_perp:.6g}: the collocation of "
+                           f"degree n={n} gave none that is finite")
     second = cand[1] if len(cand) > 1 else complex(math.nan, math.nan)
+    import warnings
+
+    warnings.warn(f"leading eigenvalue at chi={chi:.6g}, eta_perp={eta_perp:.6g} not confirmed by Newton on the "
+                  f"characteristic function ({cand[0].real:.6g}{cand[0].imag:+.6g}i from the collocation of degree "
+                  f"n={n}): raise n and compare", RuntimeWarning, stacklevel=2)
     return LeadingEigenvalue(cand[0], second, chi, eta_perp, False)

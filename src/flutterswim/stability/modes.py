@@ -174,13 +174,15 @@ def animate_mode(mode: Eigenmode, path, *, frames: int = 40, amplitude: float = 
 
     beta = mode.omega.imag if mode.omega.imag != 0 else 1.0
     t = np.linspace(0.0, 2 * np.pi / abs(beta), frames, endpoint=False)
-    fig, ax = plt.subplots(figsize=(4, 2.4))
+    fig, ax = plt.subplots(figsize=(4, 2.4), layout="constrained")
     (line,) = ax.plot(mode.s, amplitude * mode.r.real, lw=2)
     ax.set_xlim(0, 1)
     ax.set_ylim(-1.2 * amplitude, 1.2 * amplitude)
     ax.set_aspect("equal")
-    ax.set_xlabel("s")
-    ax.set_title(f"omega = {mode.omega.real:.3f} + {mode.omega.imag:.3f}i", fontsize=8)
+    ax.set_xlabel("s / l")
+    ax.set_ylabel("r / l (scaled)")
+    ax.set_title(f"mode {mode.rank}: omega = {mode.omega.real:.3f} + {mode.omega.imag:.3f}i (1/tau); "
+                 f"amplitude {amplitude:g}", fontsize=8)
 
     def update(k):
         line.set_ydata(amplitude * (mode.r * np.exp(1j * beta * t[k])).real)

@@ -18,10 +18,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import ParameterError, finite, positive
+from .._validate import ParameterError, positive
 from . import _kernels
 from .leading import leading_eigenvalue
-from .stability_map import _uniform
+from .stability_map import _grid
 
 __all__ = ["NeutralCurve", "neutral_curve", "critical_chi"]
 
@@ -107,14 +107,7 @@ def neutral_curve(eta_perp=None, *, eta_range: tuple[float, float] = (0.0, 350.0
     The seed is at ``seed_eta`` (default: the largest eta_perp); the curve is continued both
     ways. eta_perp <= 0 (no drag, degenerate) gives NaN.
     """
-    if eta_perp is None:
-        lo, hi = finite("eta_range[0]", eta_range[0]), finite("eta_range[1]", eta_range[1])
-        step = positive("step", step)
-        eta = _uniform(lo, hi, step)
-    else:
-        eta = np.atleast_1d(np.asarray(eta_perp, dtype=float))
-    if eta.ndim != 1 or eta.size == 0 or not np.all(np.isfinite(eta)) or np.any(np.diff(eta) <= 0):
-        raise ParameterError("eta_perp must be a non-empty, finite, strictly increasing 1-D array")
+    eta = _grid(eta_perp, eta_range, step, "eta_perp")  # (at most MAX_MAP_POINTS values, checked first)
     if eta[0] < 0:
         raise ParameterError(f"eta_perp={eta[0]!r} must be >= 0 (eta_perp = 0 gives NaN)")
     chi_max = positive("chi_max", chi_max)

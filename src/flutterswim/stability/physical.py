@@ -42,7 +42,11 @@ def physical_stability(params: Parameters, *, chi_max: float = 1e4) -> PhysicalS
     if not isinstance(params, Parameters):
         raise ParameterError(f"params={params!r} must be a flutterswim.Parameters instance")
     g = params.groups
-    om = leading_eigenvalue(g.chi, g.eta_perp).omega
+    try:
+        om = leading_eigenvalue(g.chi, g.eta_perp).omega
+    except ParameterError as exc:  # (named by the groups: say which parameters make them)
+        raise ParameterError(f"params (kappa_E={params.kappa_E!r}, B={params.B!r}, tau={params.tau!r}, "
+                             f"mu={params.mu!r}) give {exc}") from None
     chi_cr, beta_cr = critical_chi(g.eta_perp, chi_max=chi_max)
     tau = params.tau
     return PhysicalStability(

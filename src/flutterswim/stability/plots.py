@@ -64,7 +64,7 @@ def plot_map(smap, *, neutral=None, path=None, ax=None, operating_point=None,
 def plot_bifurcation(curves, *, path=None):
     """Re (blue) and Im (orange) of omega_max vs the varied parameter, one panel per Bifurcation."""
     plt = _plt()
-    fig, axes = plt.subplots(1, len(curves), figsize=(4.5 * len(curves), 3.2), squeeze=False)
+    fig, axes = plt.subplots(1, len(curves), figsize=(4.5 * len(curves), 3.2), squeeze=False, layout="constrained")
     for ax, b in zip(axes[0], curves):
         ax.plot(b.values, b.omega.real, color="tab:blue", label=r"Re $\omega_{max}$ (growth rate)")
         ax.plot(b.values, b.omega.imag, color="tab:orange", label=r"Im $\omega_{max}$ (angular frequency)")
@@ -81,7 +81,7 @@ def plot_bifurcation(curves, *, path=None):
 def plot_modes(modes, *, path=None):
     """Real (blue) and imaginary (orange) parts of normalised r(s), one panel per Eigenmode."""
     plt = _plt()
-    fig, axes = plt.subplots(1, len(modes), figsize=(4.5 * len(modes), 3.0), squeeze=False)
+    fig, axes = plt.subplots(1, len(modes), figsize=(4.5 * len(modes), 3.0), squeeze=False, layout="constrained")
     for ax, m in zip(axes[0], modes):
         ax.plot(m.s, m.r.real, color="tab:blue", label="Re r")
         ax.plot(m.s, m.r.imag, color="tab:orange", label="Im r")
