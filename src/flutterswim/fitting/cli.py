@@ -34,6 +34,9 @@ def register(subparsers) -> None:
     p.add_argument("--paper-cost", action="store_true", help="the paper's cost and bounds instead of SEM-weighted least squares")
     p.add_argument("--profiles", action="store_true", help="also compute profile likelihoods (slower)")
     p.add_argument("--bootstrap", type=int, default=0, help="parametric bootstrap refits (default 0)")
+    p.add_argument("--starts", type=int, default=0,
+                   help="also fit from this many starts over the paper's box and report every other parameter set "
+                        "that fits as well (each start is a fit of 10-40 s; default 0)")
     p.add_argument("--segments", type=int, default=24,
                    help="segments of the model filament (default 24): the descriptors are extrapolated to the "
                         "continuum from N and 2N segments (within 0.05 %% of it at the paper's point)")
@@ -67,13 +70,16 @@ def _cmd_fit(args) -> int:
     if args.workers is not None and args.backend is None:  # (it was ignored without a word)
         raise ParameterError(f"--workers={args.workers} needs --backend (processes, dask-local, ...): without one "
                              "the fit runs in this process")
-    from .fit import MAX_BOOTSTRAP
+    from .fit import MAX_BOOTSTRAP, MAX_STARTS
 
     # before the data are read or anything is fitted
     positive_int("--bootstrap", args.bootstrap, 0, MAX_BOOTSTRAP, "each draw is a refit: 10^4 take hours")
-    if args.joint and (args.paper_cost or args.profiles or args.bootstrap):
-        raise ParameterError("--joint fits by the SEM-weighted cost, without profiles or bootstrap: --paper-cost, "
-                             "--profiles and --bootstrap are for one voltage")
+    positive_int("--starts", args.starts, 0, MAX_STARTS, "each start is a fit of 10-40 s")
+    if args.joint and (args.paper_cost or args.profiles or args.bootstrap or args.starts):
+        raise ParameterError("--joint fits by the SEM-weighted cost, without profiles, bootstrap or starts: "
+                             "--paper-cost, --profiles, --bootstrap and --starts are for one voltage")
+    if args.starts and args.paper_cost:
+        raise ParameterError(f"--starts={args.starts} searches with the SEM-weighted cost; --paper-cost takes none")
     trials = read_trials(args.trials)
     summary = summarise(trials)
     if args.joint:
@@ -91,7 +97,7 @@ def _cmd_fit(args) -> int:
         res = fit(mean, sem if np.all(np.isfinite(sem)) else None, base=base,
                   cost="paper" if args.paper_cost else "sem", tip=args.tip, profiles=args.profiles,
                   bootstrap=args.bootstrap, n_segments=args.segments, extrapolate=not args.no_extrapolate,
-                  backend=args.backend, workers=args.workers)
+                  backend=args.backend, workers=args.workers, starts=args.starts)
     except OutsideModel as exc:  # a failure of the fit, not bad input: one line, exit 1
         print(f"flutterswim fit: failed: {' '.join(str(exc).split())}", file=sys.stderr)
         return 1
@@ -117,10 +123,16 @@ def _cmd_fit(args) -> int:
     for o in res.settings.get("other_solutions", ()):
         where = "inside" if o["in_box"] else "outside"
         print(f"flutterswim fit: note: another parameter set, {where} the paper's box (0.5-1.5 x the guess), fits "
-              f"these data {'nearly ' if o['in_box'] else ''}as well: B = {o['B_N_m2'] * 1e6:.4g} N mm^2, "
-              f"tau = {o['tau_s']:.4g} s, kappa_E = {o['kappa_E_per_m'] * 1e-3:.4g} 1/mm (chi2 {o['chi2']:.3g}); "
+              f"these data {'as well' if o['chi2'] <= res.cost + 1.0 else 'nearly as well'}: "
+              f"B = {o['B_N_m2'] * 1e6:.4g} N mm^2, tau = {o['tau_s']:.4g} s, "
+              f"kappa_E = {o['kappa_E_per_m'] * 1e-3:.4g} 1/mm (chi2 {o['chi2']:.3g}, the fit's {res.cost:.3g}); "
               "the three descriptors do not tell them apart (shapes, the onset or several voltages do)",
               file=sys.stderr)
+    if args.starts:
+        st = res.settings.get("starts", {})
+        print(f"flutterswim fit: {args.starts} starts over the paper's box: {st.get('converged', 0)} converged, "
+              f"{st.get('no_stroke_at_start', 0)} without a stroke at the start; {st.get('distinct_solutions', 0)} "
+              "distinct solution(s) fit as well", file=sys.stderr)
     if res.weakly_determined:
         print(f"flutterswim fit: note: {res.weakly_determined}", file=sys.stderr)
     if res.at_bound:

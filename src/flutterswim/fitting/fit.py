@@ -36,6 +36,10 @@ BOX = (0.5, 1.5)
 WEAK_SIGMA_REL = 0.3
 #: most parametric bootstrap draws
 MAX_BOOTSTRAP = 10_000
+#: most extra starts of a multi-start search (each is a fit: 10-40 s)
+MAX_STARTS = 64
+#: solutions whose parameters differ from each other by less than this (relative) are one
+SAME_SOLUTION_REL = 0.01
 PENALTY = 1e3  # weighted residual when there is no stable stroke
 
 
@@ -199,7 +203,7 @@ def _outside(mean, why: str) -> str:
 def fit(measured, sem=None, *, base: Parameters | None = None, guess=PAPER_GUESS, cost: str = "sem",
         tip: str = "trailing", model=None, profiles: bool = False, bootstrap: int = 0,
         n_segments: int = 24, extrapolate: bool = True, seed: int = 0, backend: str | None = None,
-        workers: int | None = None) -> FitResult:
+        workers: int | None = None, starts: int = 0) -> FitResult:
     """Fit (B, tau, kappa_E) to ``measured`` = (period [s], advance [mm], lateral [mm]) with
     standard errors ``sem`` (same units; required for the default cost and for uncertainties).
 
@@ -211,17 +215,32 @@ def fit(measured, sem=None, *, base: Parameters | None = None, guess=PAPER_GUESS
     1.8 % above the continuum and moves the fitted B, tau, kappa_E by 4-6 %);
     ``backend``, ``workers``:
     a sweep backend (``"processes"``, ``"dask-local"``, ...) on which the finite-difference
-    orbits of each Jacobian are computed in parallel (default: in this process)."""
+    orbits of each Jacobian are computed in parallel (default: in this process).
+
+    ``starts``: search for other solutions from that many starts, the guess and then points
+    spread over the paper's box (0.5-1.5 x the guess; a scrambled Halton sequence drawn with
+    ``seed``), each by least squares deflated against the solutions known so far (so that a
+    known solution no longer attracts it), and report every other parameter set that fits about
+    as well (chi2 within 4 of the best) in ``settings["other_solutions"]``.
+    Three descriptors can be matched exactly at two parameter sets (at (1.5, 0.7, 1.5) x the
+    guess: B, tau, kappa_E 18, 14 and 13 % lower fit as well); a single fit finds one of them
+    and its 1-sigma does not show the other. A start that reaches a clearly better solution
+    (chi2 lower by more than 1) replaces the first fit. Each start is a fit (10-40 s); for
+    the SEM-weighted cost only."""
     # (before any orbit is computed; each draw is a refit of seconds)
     bootstrap = positive_int("bootstrap", bootstrap, 0, MAX_BOOTSTRAP, "each draw is a refit: 10^4 take hours")
+    starts = positive_int("starts", starts, 0, MAX_STARTS, "each start is a fit of 10-40 s")
+    if starts and cost != "sem":
+        raise ParameterError(f"starts={starts} searches with the SEM-weighted cost; cost={cost!r} (the paper's) "
+                             "takes none")
     if backend is None or not hasattr(model if model is not None else DescriptorModel, "prefetch"):
         return _fit(measured, sem, base=base, guess=guess, cost=cost, tip=tip, model=model, profiles=profiles,
-                    bootstrap=bootstrap, n_segments=n_segments, extrapolate=extrapolate, seed=seed)
+                    bootstrap=bootstrap, n_segments=n_segments, extrapolate=extrapolate, seed=seed, starts=starts)
     base_ = preset("paper") if base is None else base
     model = DescriptorModel(base_, tip=tip, n_segments=n_segments, extrapolate=extrapolate) if model is None else model
     return on_backend(model, backend, workers, lambda: _fit(
         measured, sem, base=base, guess=guess, cost=cost, tip=tip, model=model, profiles=profiles,
-        bootstrap=bootstrap, n_segments=n_segments, extrapolate=extrapolate, seed=seed))
+        bootstrap=bootstrap, n_segments=n_segments, extrapolate=extrapolate, seed=seed, starts=starts))
 
 
 def on_backend(model, backend: str, workers: int | None, call) -> FitResult:
@@ -296,7 +315,7 @@ def refine_while_stalled(run, model, stalled, misfit):
 
 
 def _fit(measured, sem=None, *, base, guess, cost, tip, model, profiles, bootstrap, n_segments, extrapolate,
-         seed) -> FitResult:
+         seed, starts=0) -> FitResult:
     base_ = preset("paper") if base is None else base
     if not isinstance(base_, Parameters):
         raise ParameterError(f"base={base!r} must be flutterswim.Parameters")
@@ -319,6 +338,10 @@ def _fit(measured, sem=None, *, base, guess, cost, tip, model, profiles, bootstr
     # (--profiles at the paper's point over 13 minutes against about 2)
     res, kept = _refine_if_sensitive(res, model, run, base_)
     res = _prefer_the_box(res, kept, run, guess)
+    if starts:
+        res = _search_starts(res, starts, seed, guess, base_, kept, lambda start: _fit_once(
+            measured, sem, base=base, guess=guess, cost=cost, tip=tip, model=kept, n_segments=n_segments,
+            start=start))
     res = replace(res, wall_time_s=time.perf_counter() - t_start)  # (all its passes: the JSON's time)
     return _with_extras(res, model, base_, profiles, bootstrap, seed)
 
@@ -350,6 +373,101 @@ def _prefer_the_box(res: "FitResult", model, run, guess) -> "FitResult":
            "is reported" if first is alt else "a parameter set inside the paper's box fits nearly as well")
     return replace(first, settings={**first.settings, "other_solutions": [other]},
                    message=f"{first.message} ({why}; see other_solutions)")
+
+
+def start_points(guess, n: int, seed: int = 0) -> np.ndarray:
+    """``n`` (B, tau, kappa_E) spread over the paper's box: a scrambled Halton sequence in the
+    log factors of ``guess``, kept off the box's faces (factors 0.55-1.45)."""
+    from scipy.stats import qmc
+
+    u = qmc.Halton(d=3, scramble=True, seed=seed).random(n)
+    lo, hi = math.log(0.55), math.log(1.45)
+    return np.asarray(guess, float) * np.exp(lo + (hi - lo) * u)
+
+
+def _distinct(a: "FitResult", b) -> bool:
+    p = np.array([a.B, a.tau, a.kappa_E])
+    q = np.array([b.B, b.tau, b.kappa_E]) if isinstance(b, FitResult) else np.array(
+        [b["B_N_m2"], b["tau_s"], b["kappa_E_per_m"]])
+    return bool(np.max(np.abs(np.log(p / q))) > SAME_SOLUTION_REL)
+
+
+def _deflated(model, x0, mean, sem, known) -> np.ndarray:
+    """From ``x0``, a zero of the weighted residual r(x) away from the ``known`` solutions
+    (identifiable coordinates): least squares of the deflated residual
+    r(x) prod_k (1 / |x - x_k|^2 + 1) (deflation: Farrell, Birkisson & Funke, SIAM J. Sci.
+    Comput. 2015), which a known solution no longer attracts; returns where it ended."""
+    from scipy.optimize import least_squares
+
+    penalty = Penalty()
+
+    def factor(x):
+        m, g = 1.0, np.zeros(3)
+        for xk in known:
+            d2 = float(np.sum((x - xk) ** 2))
+            mk = 1.0 / d2 + 1.0
+            m *= mk
+            g += -2.0 * (x - xk) / (d2 * d2 * mk)
+        return m, m * g
+
+    def fun(x):
+        return _weighted(model, x, mean, sem, penalty)[0] * factor(x)[0]
+
+    def jac(x):
+        y = model(x)
+        m, gm = factor(x)
+        return m * model_jacobian(model, x, y) / sem[:, None] + np.outer((y - mean) / sem, gm)
+
+    return least_squares(fun, x0, jac=jac, method="trf", xtol=1e-12, ftol=1e-14, gtol=1e-14, max_nfev=60).x
+
+
+def _search_starts(res: "FitResult", n: int, seed: int, guess, base, model, fit_from) -> "FitResult":
+    """``res`` and the other solutions found from ``n`` starts, the guess first and then
+    :func:`start_points` over the paper's box: from each, a search deflated against the
+    solutions known so far (:func:`_deflated`), then ``fit_from(start)`` at its end. Converged
+    fits with chi2 within 4 of the best, distinct from each other, go to
+    ``settings["other_solutions"]``; one better than ``res`` by more than 1 in chi2 is reported
+    instead of it. ``settings["starts"]`` counts the starts."""
+    from tqdm.auto import tqdm
+
+    if not (res.converged and res.cost_kind == "sem"):
+        return res
+    sem = np.asarray(res.sem, float)
+    known = [to_identifiable(base, res.B, res.tau, res.kappa_E)] + [
+        to_identifiable(base, o["B_N_m2"], o["tau_s"], o["kappa_E_per_m"])
+        for o in res.settings.get("other_solutions", [])]
+    found, skipped, failed = [], 0, 0
+    starts = np.vstack([np.asarray(guess, float)[None], start_points(guess, n - 1, seed)]) if n > 1 \
+        else np.asarray(guess, float)[None]
+    for start in tqdm(starts, desc="fit starts", unit="start", disable=None, leave=False):
+        try:
+            x = _deflated(model, to_identifiable(base, *start), res.measured, sem, known)
+            r = fit_from(to_physical(base, x))
+        except (NotSwimming, Unresolved):  # no stroke at the start, or none resolved there
+            skipped += 1
+            continue
+        if not r.converged:
+            failed += 1
+            continue
+        found.append(r)
+        known.append(to_identifiable(base, r.B, r.tau, r.kappa_E))
+    best = min([res] + found, key=lambda r: r.cost)
+    if best is not res and not best.cost < res.cost - 1.0:
+        best = res  # (as good: the first fit stays, the others are reported)
+    others = [o for o in res.settings.get("other_solutions", []) if _distinct(best, o)]
+    for r in sorted([res] + found, key=lambda r: r.cost):
+        if r.cost <= best.cost + 4.0 and _distinct(best, r) and all(_distinct(r, o) for o in others):
+            others.append({"B_N_m2": r.B, "tau_s": r.tau, "kappa_E_per_m": r.kappa_E, "chi2": r.cost,
+                           "in_box": _in_box(r, guess)})
+    note = {"n": n, "seed": seed, "converged": len(found), "not_converged": failed, "no_stroke_at_start": skipped,
+            "distinct_solutions": 1 + len(others), "method": "deflated least squares from each start"}
+    message = best.message
+    if best is not res:
+        message = f"{message} (a start found this, chi2 {best.cost:.3g} against the first fit's {res.cost:.3g})"
+    if len(others) > len(res.settings.get("other_solutions", [])):
+        message = f"{message} ({len(others)} other parameter set(s) fit as well: see other_solutions)"
+    return replace(best, message=message, settings={**best.settings, "starts": note,
+                                                    **({"other_solutions": others} if others else {})})
 
 
 def _with_extras(res: "FitResult", model, base, profiles: bool, bootstrap: int, seed) -> "FitResult":
