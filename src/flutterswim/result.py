@@ -128,7 +128,8 @@ class SimulationResult:
                 "units": "1", "long_name": "final integrator state, dimensionless: r0/l (2), theta [rad] "
                 "(N), kappa l (N+1)"}),
         }
-        for name, unit, long in (("A", fu, "internal force along e1"), ("V", fu, "internal force along e2"),
+        for name, unit, long in (("A", fu, "internal force, tangential component A"),
+                                 ("V", fu, "internal force, normal component V"),
                                  ("M", f"{fu} {lu}", "bending moment")):
             arr = getattr(self, name)
             if arr is not None:

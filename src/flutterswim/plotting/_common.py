@@ -26,9 +26,13 @@ def new_figure(figsize: tuple[float, float], dpi: float = 150):
     return fig
 
 
-def mm_factor(track) -> float:
-    """Multiply track lengths by this to get mm."""
-    return track.scale_m * 1e3
+def figure_units(track) -> tuple[float, str, str]:
+    """(factor, length unit, time unit) of a figure: track lengths times ``factor`` are in the
+    length unit; mm and s, or l and tau for a dimensionless run (fs.Groups), whose lengths are
+    in body lengths and times in tau (shown in mm and s they read 1000 times too long)."""
+    if track.meta.get("dimensionless"):
+        return track.scale_m, "l", "τ"
+    return track.scale_m * 1e3, "mm", "s"
 
 
 def field_arrow(ax, angle: float, *, anchor=(0.08, 0.85), length_pt: float = 28.0, label: str = "E"):

@@ -15,7 +15,7 @@ import numpy as np
 from .._validate import ParameterError
 from ..analysis.cycles import tip_index
 from ..analysis.track import as_track
-from ._common import SWIM_COLOR, TIP_COLOR, field_arrow, mm_factor, new_figure, set_field_arrow
+from ._common import SWIM_COLOR, TIP_COLOR, field_arrow, figure_units, new_figure, set_field_arrow
 
 __all__ = ["animate", "frame_times", "MAX_FPS", "MAX_VIDEO_FRAMES"]
 
@@ -90,7 +90,7 @@ def animate(
 
     check_output_file(p, (".mp4", ".gif"), what="path")
 
-    f = mm_factor(tr)
+    f, L, T = figure_units(tr)
     it = tip_index(tr, tip)
     X, Y = tr.x * f, tr.y * f
     xc, yc = tr.centroid()
@@ -115,8 +115,8 @@ def animate(
     ax.set_xlim(xmin, xmax)
     ax.set_ylim(ymin, ymax)
     ax.set_aspect("equal", adjustable="box")
-    ax.set_xlabel("x (mm)")
-    ax.set_ylabel("y (mm)")
+    ax.set_xlabel(f"x ({L})")
+    ax.set_ylabel(f"y ({L})")
     tip_line, = ax.plot([], [], color=TIP_COLOR, lw=0.8, animated=True)
     cen_line, = ax.plot([], [], color=SWIM_COLOR, lw=1.0, animated=True)
     body, = ax.plot([], [], color="#1a7f37", lw=2.5, solid_capstyle="round", animated=True)
@@ -142,7 +142,7 @@ def animate(
             ax.draw_artist(tip_line)
             ax.draw_artist(cen_line)
         body.set_data(X[i], Y[i])
-        stamp.set_text(f"t = {tr.t[i]:6.2f} s")
+        stamp.set_text(f"t = {tr.t[i]:6.2f} {T}")
         set_field_arrow(arrow, float(tr.field_angle[i]))
         ax.draw_artist(body)
         ax.draw_artist(stamp)

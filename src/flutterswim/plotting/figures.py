@@ -2,7 +2,7 @@
 
 Every function takes a Track or a result-like object and ``path``: with a path the figure is
 saved (PNG/PDF/SVG from the suffix) and the path is returned; without, the matplotlib Figure
-is returned. Lengths are shown in mm, times in s.
+is returned. Lengths are shown in mm, times in s (a dimensionless run's in l and tau).
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from ..analysis.descriptors import per_cycle
 from ..analysis.kymograph import body_kymograph, kymograph_windows, line_kymograph
 from ..analysis.track import as_track
 from ._common import (
-    FIELD_COLOR, GREEN_CMAP, SWIM_COLOR, TIP_COLOR, field_arrow, finish, mm_factor, new_figure, window_indices,
+    FIELD_COLOR, GREEN_CMAP, SWIM_COLOR, TIP_COLOR, field_arrow, finish, figure_units, new_figure, window_indices,
 )
 
 __all__ = ["plot_ghosts", "plot_swimmer", "plot_descriptors", "plot_kymographs", "plot_summary", "draw_ghosts",
@@ -46,7 +46,7 @@ def draw_ghosts(ax, obj: Any, window: tuple[float, float], *, n_ghosts: int = 8,
     import matplotlib
 
     tr = as_track(obj)
-    f = mm_factor(tr)
+    f, L, T = figure_units(tr)
     idx = window_indices(tr.t, window)
     pick = idx[np.unique(np.linspace(0, idx.size - 1, max(2, n_ghosts)).round().astype(int))]
     cmap = matplotlib.colormaps[GREEN_CMAP]
@@ -62,11 +62,11 @@ def draw_ghosts(ax, obj: Any, window: tuple[float, float], *, n_ghosts: int = 8,
     shapes = Line2D([], [], color=cmap(0.7), lw=1.6, label="filament, light to dark in time")
     ax.legend(handles=ax.get_legend_handles_labels()[0] + [shapes], fontsize=6, loc="best", frameon=False)
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("x (mm)")
-    ax.set_ylabel("y (mm)")
+    ax.set_xlabel(f"x ({L})")
+    ax.set_ylabel(f"y ({L})")
     if field:
         field_arrow(ax, float(np.mean(tr.field_angle[idx])))
-    ax.set_title(title or f"t = {window[0]:.2f}–{window[1]:.2f} s", fontsize=9)
+    ax.set_title(title or f"t = {window[0]:.2f}–{window[1]:.2f} {T}", fontsize=9)
 
 
 def plot_ghosts(obj: Any, path: str | Path | None = None, *, cycle: int | None = None,
@@ -87,7 +87,7 @@ def plot_swimmer(obj: Any, path: str | Path | None = None, *, time: float | None
     """The filament at ``time`` (default: the last frame), with the tip trajectory up to that
     time, the centroid path and the field arrow."""
     tr = as_track(obj)
-    f = mm_factor(tr)
+    f, L, T = figure_units(tr)
     i = tr.n_frames - 1 if time is None else int(np.argmin(np.abs(tr.t - float(time))))
     it = tip_index(tr, tip)
     fig = new_figure(figsize, dpi)
@@ -101,9 +101,9 @@ def plot_swimmer(obj: Any, path: str | Path | None = None, *, time: float | None
     ax.plot(tr.x[i, it] * f, tr.y[i, it] * f, "o", color=TIP_COLOR, ms=3)
     field_arrow(ax, float(tr.field_angle[i]))
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("x (mm)")
-    ax.set_ylabel("y (mm)")
-    ax.set_title(f"t = {tr.t[i]:.3f} s", fontsize=9)
+    ax.set_xlabel(f"x ({L})")
+    ax.set_ylabel(f"y ({L})")
+    ax.set_title(f"t = {tr.t[i]:.3f} {T}", fontsize=9)
     if trail:
         ax.legend(fontsize=7, loc="lower right", frameon=False)
     return finish(fig, path)
@@ -116,13 +116,13 @@ def plot_descriptors(obj: Any, path: str | Path | None = None, *, cycles: Cycles
     nonreciprocity; the transient is shaded and the limit-cycle time marked."""
     tr = as_track(obj)
     cyc = detect_cycles(tr) if cycles is None else cycles
-    f = mm_factor(tr)
+    f, L, T = figure_units(tr)
     fig = new_figure(figsize, dpi)
     axs = fig.subplots(4, 1, sharex=True)
     if cyc.n_cycles == 0:
         for ax in axs:
             ax.text(0.5, 0.5, "no complete cycle", transform=ax.transAxes, ha="center")
-        axs[-1].set_xlabel("t (s)")
+        axs[-1].set_xlabel(f"t ({T})")
         return finish(fig, path)
     pc = per_cycle(tr, cyc)
     tm = cyc.mids
@@ -135,19 +135,19 @@ def plot_descriptors(obj: Any, path: str | Path | None = None, *, cycles: Cycles
         c0 = float(np.mean(la - cyc.growth_rate * tm[sel]))
         tt = np.linspace(a, b, 20)
         ax.semilogy(tt, np.exp(c0 + cyc.growth_rate * tt), "--", color="k", lw=1,
-                    label=f"fit: {cyc.growth_rate:.3g} ± {cyc.growth_rate_stderr:.1g} 1/s")
-    ax.set_ylabel("amplitude (mm)")
+                    label=f"fit: {cyc.growth_rate:.3g} ± {cyc.growth_rate_stderr:.1g} 1/{T}")
+    ax.set_ylabel(f"amplitude ({L})")
     ax.legend(fontsize=7, frameon=False)
     axs[1].plot(tm, pc["period"], "o-", ms=3, color="#1f77b4")
-    axs[1].set_ylabel("period (s)")
+    axs[1].set_ylabel(f"period ({T})")
     axs[2].plot(tm, pc["advance"] * f, "o-", ms=3, color=SWIM_COLOR, label="advance / cycle")
     axs[2].plot(tm, pc["tip_p2p"] * f, "s-", ms=3, color=TIP_COLOR, label="tip lateral p-p")
-    axs[2].set_ylabel("length (mm)")
+    axs[2].set_ylabel(f"length ({L})")
     axs[2].legend(fontsize=7, frameon=False)
     axs[3].plot(tm, pc["nonreciprocity"], "o-", ms=3, color="0.3")
     axs[3].axhline(0, color="0.7", lw=0.8)
     axs[3].set_ylabel("nonreciprocity (–)")
-    axs[3].set_xlabel("t (s)")
+    axs[3].set_xlabel(f"t ({T})")
     for ax in axs:
         if cyc.limit_cycle:
             ax.axvspan(tr.t[0], cyc.limit_cycle_time, color="0.9", zorder=0)
@@ -197,42 +197,42 @@ def draw_kymographs(axs, obj: Any, window: tuple[float, float] | None = None, *,
     tr = as_track(obj)
     if window is not None:
         tr = tr.window(*window)
-    f = mm_factor(tr)
+    f, L, T = figure_units(tr)
     along, across, ang = path_sections(tr)
-    panels = [(along, "position along the path (mm)",
+    panels = [(along, f"position along the path ({L})",
                f"crossings of the mean path ({int(round(math.degrees(ang))) + 0}° to x)"),
-              (across, "position across the path (mm)", "crossings of the section moving with the centroid")]
+              (across, f"position across the path ({L})", "crossings of the section moving with the centroid")]
     if h_level is not None:
         k = line_kymograph(tr, "horizontal", h_level)
-        panels[0] = (k, "x (mm)", f"crossings of y = {k.level * f:.3g} mm")
+        panels[0] = (k, f"x ({L})", f"crossings of y = {k.level * f:.3g} {L}")
     if v_level is not None:
         k = line_kymograph(tr, "vertical", v_level)
-        panels[1] = (k, "y (mm)", f"crossings of x = {k.level * f:.3g} mm")
+        panels[1] = (k, f"y ({L})", f"crossings of x = {k.level * f:.3g} {L}")
     for ax, (k, ylab, title) in zip(axs[:2], panels):
         tt = np.broadcast_to(k.t[:, None], k.positions.shape)
         ok = np.isfinite(k.positions)
         sc = ax.scatter(tt[ok], k.positions[ok] * f, c=k.s[ok] / tr.length, s=2, cmap="viridis", vmin=0, vmax=1,
                         linewidths=0)
         ax.set_title(title, fontsize=8)
-        ax.set_xlabel("t (s)")
+        ax.set_xlabel(f"t ({T})")
         ax.set_ylabel(ylab)
         ax.set_xlim(tr.t[0], tr.t[-1])
     axs[1].figure.colorbar(sc, ax=axs[1], label="s / l of the crossing point (both panels)")
     bk = body_kymograph(tr)
-    kap = bk.kappa / f  # 1/mm
+    kap = bk.kappa / f  # 1/mm (1/l)
     lim = float(np.max(np.abs(kap))) or 1.0
     im = axs[2].pcolormesh(bk.t, bk.s / tr.length, kap.T, cmap="RdBu_r", vmin=-lim, vmax=lim, shading="nearest",
                            rasterized=True)
-    axs[2].figure.colorbar(im, ax=axs[2], label="θ_s (1/mm)")  # (κ is the spontaneous curvature)
+    axs[2].figure.colorbar(im, ax=axs[2], label=f"θ_s (1/{L})")  # (κ is the spontaneous curvature)
     axs[2].set_ylabel("s / l")
-    axs[2].set_xlabel("t (s)")
+    axs[2].set_xlabel(f"t ({T})")
     axs[2].set_title("curvature of the shape", fontsize=8)
     lim = float(np.max(np.abs(bk.theta))) or 1.0
     im = axs[3].pcolormesh(bk.t, bk.s_mid / tr.length, bk.theta.T, cmap="PuOr_r", vmin=-lim, vmax=lim,
                            shading="nearest", rasterized=True)
     axs[3].figure.colorbar(im, ax=axs[3], label="θ − ⟨θ⟩ (rad)")
     axs[3].set_ylabel("s / l")
-    axs[3].set_xlabel("t (s)")
+    axs[3].set_xlabel(f"t ({T})")
     axs[3].set_title("tangent angle (body frame)", fontsize=8)
 
 
@@ -261,7 +261,8 @@ def plot_summary(obj: Any, path: str | Path | None = None, *, cycles: Cycles | N
     for col, (name, (a, b)) in enumerate(wins.items()):
         ax = fig.add_subplot(gs[0, 2 * col : 2 * col + 2])
         per = (b - a) / max(1, n_cycles)
-        draw_ghosts(ax, tr, (a, min(b, a + per)), tip_trail=full, title=f"{name}: t = {a:.2f}–{a + per:.2f} s")
+        draw_ghosts(ax, tr, (a, min(b, a + per)), tip_trail=full,
+                    title=f"{name}: t = {a:.2f}–{a + per:.2f} {figure_units(tr)[2]}")
         axs = [fig.add_subplot(gs[1 + r, 2 * col + c]) for r in range(2) for c in range(2)]
         draw_kymographs(axs, tr, (a, b))
     return finish(fig, path)

@@ -161,7 +161,8 @@ def from_csv(path: str | Path) -> Field:
 def add_field_options(p) -> None:
     """Field options of ``flutterswim simulate``."""
     g = p.add_argument_group("field schedule (angles in degrees, times in s)")
-    g.add_argument("--field-angle", type=float, default=None, help="constant field direction [deg]")
+    g.add_argument("--field-angle", type=float, default=None,
+                   help="constant field direction [deg]; the filament starts along it (tilted 0.01 deg)")
     g.add_argument("--field-rotate", type=float, default=None, help="seconds per turn of a rotating field (negative: clockwise)")
     g.add_argument("--field-start", type=float, default=None,
                    help="time at which the rotation, step or ramp starts [s] (default 0)")
@@ -169,7 +170,9 @@ def add_field_options(p) -> None:
     g.add_argument("--field-ramp", type=float, nargs=2, default=None, metavar=("ANGLE_DEG", "DURATION_S"),
                    help="turn linearly to ANGLE_DEG over DURATION_S from --field-start")
     g.add_argument("--field-csv", default=None,
-                   help="CSV of t, angle[, strength] in s and degrees, or the units its header names (t_ms, angle_rad)")
+                   help="CSV of t, angle[, strength] in s and degrees, or the units its header names (t_ms, angle_rad); "
+                        "linear between rows (0,0 then 10,180 is a 10 s turn; for a step give two rows a moment apart, "
+                        "or use --field-step)")
 
 
 def field_from_args(args) -> Field | None:
