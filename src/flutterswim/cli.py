@@ -349,6 +349,29 @@ _EXTRA_OF = {"xarray": "io", "h5netcdf": "io", "h5py": "io", "zarr": "io", "matp
              "tqdm": "cli", "numba": "fast", "jinja2": "report", "skimage": "track",
              "tifffile": "track"}
 
+#: optional packages each command needs for what it writes, checked before it computes (a
+#: command that computed for minutes, or tracked a whole movie, then could not write its file
+#: wasted that time: a review met it with branch, simulate, track, stability and steer)
+_NEEDS = {"simulate": ("xarray", "h5netcdf"), "branch": ("xarray", "h5netcdf"), "steer": ("xarray", "h5netcdf"),
+          "stability": ("xarray", "h5netcdf", "matplotlib"), "sweep": ("zarr", "xarray"),
+          "track": ("skimage", "tifffile", "xarray", "h5netcdf"), "track-batch": ("skimage", "tifffile"),
+          "reproduce": ("jinja2", "matplotlib", "xarray", "h5netcdf", "imageio", "imageio_ffmpeg")}
+
+
+def _check_optional(args: argparse.Namespace) -> None:
+    """Raise ModuleNotFoundError (one line, naming the extra: :func:`_describe_error`) for an
+    optional package the command ``args`` will need, before it does any work."""
+    import importlib.util
+
+    need = list(_NEEDS.get(args.command, ()))
+    if getattr(args, "plot", None) or getattr(args, "kymograph", None):
+        need.append("matplotlib")
+    if getattr(args, "scheduler", None) or getattr(args, "backend", None) in ("dask", "dask-local"):
+        need.append("distributed")
+    for name in need:
+        if importlib.util.find_spec(name) is None:
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+
 
 #: Python API parameters whose option is not spelt --name-with-dashes
 _OPTION_OF = {"n_segments": "--segments", "n_cycles": "--cycles", "n_last": "--last", "n_points": "--points",
@@ -458,6 +481,7 @@ def main(argv: list[str] | None = None) -> int:
     if not debug:
         _quiet_warnings()
     try:
+        _check_optional(args)
         return int(args.func(args) or 0)
     except KeyboardInterrupt as exc:
         if debug:
