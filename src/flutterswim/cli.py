@@ -346,7 +346,7 @@ def _one_line(text: str) -> str:
 # the extra of pyproject.toml that brings each optional package (the import name)
 _EXTRA_OF = {"xarray": "io", "h5netcdf": "io", "h5py": "io", "zarr": "io", "matplotlib": "plot",
              "imageio": "video", "imageio_ffmpeg": "video", "dask": "dask", "distributed": "dask",
-             "tqdm": "cli", "numba": "fast", "jinja2": "report", "skimage": "track",
+             "numba": "fast", "jinja2": "report", "skimage": "track",
              "tifffile": "track"}
 
 #: optional packages each command needs for what it writes, checked before it computes (a
