@@ -200,3 +200,26 @@ def test_reversed_and_unsettled_strokes_are_marked_where_they_are():
     np.testing.assert_allclose(circles[0].get_xdata(), x[(x > 0.85) & (x < 1.05)])
     np.testing.assert_allclose(circles[0].get_ydata(), 0.4 / x[(x > 0.85) & (x < 1.05)])
     plt.close(fig)
+
+
+def test_plot_sweep_of_a_grid_names_the_store_and_its_axes(tmp_path, capsys):
+    """A 2-d store: the error named an internal function ('plot_sweep needs a 1-d sweep;
+    advance_per_cycle_bl has dims [...]') (a review)."""
+    from flutterswim.cli import main
+
+    out = tmp_path / "g.zarr"
+    sweep({"kappa_E_ratio": [0.8, 1.0], "eta_perp": [3.0, 4.0]}, out=str(out), backend="serial", point_fn=fake,
+          progress=False)
+    capsys.readouterr()
+    assert main(["plot-sweep", str(out)]) == 2
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert len(err) == 1 and "store=" in err[0] and "2 axes (kappa_E_ratio, eta_perp)" in err[0] and "needs a 1-d sweep" not in err[0]
+    assert not (tmp_path / "g.png").exists()
+
+
+def test_sweep_takes_the_option_names_of_the_other_commands():
+    from flutterswim.cli import build_parser
+
+    a = build_parser().parse_args(["sweep", "chi=1,2", "--out", "s.zarr", "--segments", "16", "--cycles", "3",
+                                   "--quiet"])
+    assert (a.n_segments, a.n_cycles, a.no_progress) == (16, 3, True)

@@ -60,7 +60,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"mean speed              {d.speed_mm_s:.4f} mm/s  ({d.speed_bl_s:.4f} body lengths/s)")
     print(f"lateral p2p, leading    {d.leading_lateral_p2p_mm:.4f} mm ({d.leading_end} end leads)")
     print(f"lateral p2p, trailing   {d.trailing_lateral_p2p_mm:.4f} mm")
-    print(f"swimming direction      {d.direction_to_field_deg:.3f} deg from the field "
+    print(f"swimming direction      {round(d.direction_to_field_deg, 3) + 0.0:.3f} deg from the field "
           f"({'towards' if d.towards_field else 'against'} E, i.e. towards the cathode)")
     print(f"wrote {out / 'paper_run.nc'}, {out / 'paper_swimmer.png'}, {out / 'paper_descriptors.json'}")
     return 0

@@ -14,22 +14,25 @@ def register(subparsers) -> None:
                               description="Path following on the full model: the field is turned by a controller "
                                           "that observes the swimmer at 50 fps with tracking noise and a one-frame "
                                           "delay (or by a pre-planned schedule with --open-loop).")
-    p.add_argument("--preset", default="paper")
-    p.add_argument("--path", choices=("square", "circle", "figure8", "waypoints"), default="square")
+    p.add_argument("--preset", default="paper", help="parameter preset (default: paper)")
+    p.add_argument("--path", choices=("square", "circle", "figure8", "waypoints"), default="square",
+                   help="path to follow (default: square)")
     p.add_argument("--side", default=None, help="square side: body lengths, or with a unit (37mm, 3.7cm, 2bl); default 10")
     p.add_argument("--radius", default=None, help="circle radius: body lengths or with a unit (default 2)")
     p.add_argument("--size", default=None, help="figure-eight length: body lengths or with a unit (default 14: its tightest bend, 1.46 body lengths, is wider than the controller's turn, 1.39)")
     p.add_argument("--waypoints", default=None, help="CSV of x, y [body lengths, or the unit a header names: x_mm,y_mm] for --path waypoints")
     p.add_argument("--open-loop", action="store_true", help="pre-planned field schedule instead of feedback")
-    p.add_argument("--noise-px", type=float, default=0.2)
-    p.add_argument("--um-per-px", type=float, default=14.0)
-    p.add_argument("--segments", type=int, default=24)
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--out", default="steer.nc")
-    p.add_argument("--metrics", default="steer.json")
+    p.add_argument("--noise-px", type=float, default=0.2,
+                   help="tracking noise of the observed position, standard deviation [px] (default 0.2)")
+    p.add_argument("--um-per-px", type=float, default=14.0,
+                   help="the observing camera's pixel size [um per px] (default 14)")
+    p.add_argument("--segments", type=int, default=24, help="segments of the filament (default 24)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the tracking noise (default 0)")
+    p.add_argument("--out", default="steer.nc", help="NetCDF of the run (default steer.nc)")
+    p.add_argument("--metrics", default="steer.json", help="JSON of the path-following metrics (default steer.json)")
     p.add_argument("--plot", default=None, help="figure of the path, the trajectory and the commanded field")
     p.add_argument("--animate", default=None, help="animation (.mp4 or .gif) with the rotating field arrow")
-    p.add_argument("--quiet", action="store_true")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_steer)
 
 

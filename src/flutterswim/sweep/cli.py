@@ -27,7 +27,8 @@ def register(subparsers) -> None:
                    help="replace an existing flutterswim store at --out (nothing else is ever replaced)")
     p.add_argument("--retry-failed", action="store_true",
                    help="resuming: compute again the points recorded as failed (by default they are kept)")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar (failures are still listed)")
+    p.add_argument("--no-progress", "--quiet", action="store_true", dest="no_progress",
+                   help="no progress bar (failures are still listed)")
     st = PointSettings()
     for name, typ, help_ in (
             ("n-cycles", int, f"cycles averaged ({st.n_cycles})"), ("t-cap", float, f"time cap [tau] ({st.t_cap:g})"),
@@ -35,7 +36,8 @@ def register(subparsers) -> None:
                                 f"within {SWEEP_ADVANCE_ERROR:g} at the paper's point; {N_SEGMENTS} for the "
                                 "accuracy of simulate)"),
             ("rtol", float, f"({st.rtol:g})"), ("atol", float, f"({st.atol:g})")):
-        p.add_argument(f"--{name}", type=typ, default=None, help=help_)
+        alias = {"n-cycles": ["--cycles"], "n-segments": ["--segments"]}.get(name, [])  # (as the other commands)
+        p.add_argument(f"--{name}", *alias, type=typ, default=None, help=help_)
     p.add_argument("--plot", default=None, help="also save the sweep figure here (1-d sweeps)")
     p.set_defaults(func=_cmd_sweep)
 
@@ -85,6 +87,12 @@ def _cmd_plot(args) -> int:
     from pathlib import Path
 
     ds = open_sweep(args.store)  # a store that is not a sweep's is named first, not the figure's name
+    axes = [d for d in ds["done"].dims if d != "branch"]
+    if len(axes) != 1:  # (before the figure's path is checked; plot_sweep's words are the API's)
+        from .._validate import ParameterError
+
+        raise ParameterError(f"store={args.store!r} is a sweep over {len(axes)} axes ({', '.join(axes)}); plot-sweep "
+                             "draws 1-d sweeps (read a grid with xarray.open_zarr, or sweep one axis)")
     out = check_output_file(args.out or Path(args.store).with_suffix(".png"), (".png", ".pdf", ".svg"),
                             what="--out")  # (two stores in one folder: two figures)
     plot_sweep(ds, out, branch=args.branch)

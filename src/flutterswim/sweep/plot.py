@@ -140,7 +140,9 @@ def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str
         branches = [(None, ds)]
     dims = [d for d in branches[0][1][advance].dims]
     if len(dims) != 1:
-        raise ParameterError(f"plot_sweep needs a 1-d sweep; {advance} has dims {dims}")
+        raise ParameterError(
+            f"the sweep has {len(dims)} axes ({', '.join(dims)}); its figure draws one axis: select a row, e.g. "
+            f"plot_sweep(ds.isel({dims[0]}=0)), or read the store with xarray.open_zarr for a map")
     x = x or dims[0]
     xv = np.asarray(ds[x].values, float)
     fig, axs = plt.subplots(2, 1, figsize=(5.5, 5.2), sharex=True, constrained_layout=True)
