@@ -24,9 +24,11 @@ def test_a_trapped_filament_is_described_as_no_stroke():
     d = describe(run)
     assert not d.limit_cycle and math.isnan(d.limit_cycle_time_s)
     assert "stroke stopped" in d.note
+    assert "no net swimming" in d.note and d.leading_end == "none" and math.isnan(d.swim_direction_deg)
 
 
 def test_a_swimming_filament_is_still_a_limit_cycle():
     run = fs.simulate(fs.PAPER, 16.0, n_segments=24)
     d = describe(run)
     assert d.limit_cycle and "stroke stopped" not in d.note
+    assert d.leading_end == "s=l" and abs(d.direction_to_field_deg) < 1.0 and d.towards_field

@@ -97,6 +97,9 @@ def test_wobble_in_place_is_measured_across_the_body():
     assert ends[0] == pytest.approx(1e3 * 0.1 * 0.4 * rng, rel=2e-3)
     assert ends[1] == pytest.approx(1e3 * 0.1 * 1.0 * rng, rel=2e-3)
     assert "no net swimming" in d.note and "decays" not in d.note
+    # no direction, no leading end (a review: a trapped run read swim_direction -64.7 deg, s=l leading)
+    assert math.isnan(d.swim_direction_deg) and math.isnan(d.direction_to_field_deg)
+    assert d.leading_end == "none" and d.towards_field is False
 
 
 def test_decaying_wobble_says_there_is_no_stroke():

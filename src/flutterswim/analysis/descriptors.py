@@ -381,7 +381,10 @@ def stroke_area(a1: np.ndarray, a2: np.ndarray) -> float:
 @dataclass(frozen=True)
 class Descriptors:
     """Swimming descriptors over the last ``n_cycles_used`` cycles (``*_std``: cycle-to-cycle
-    standard deviation). Lengths in mm and in body lengths (bl); angles in degrees."""
+    standard deviation). Lengths in mm and in body lengths (bl); angles in degrees. A record
+    without net swimming (see ``note``) has no swimming direction (NaN), no end that leads
+    (``leading_end`` "none"; its ends' lateral excursions are still given, named as s = l
+    leading) and ``towards_field`` False."""
 
     n_cycles_used: int
     n_cycles_detected: int
@@ -688,7 +691,7 @@ def describe(
         shared = _template_p2p_se(tr, i_e, harmonics, fit) if fin.size > 1 else math.nan
         # (one cycle: its spread is unknown, and so is the error)
         se_end[e_name] = math.hypot(spread, shared) if fin.size > 1 else math.nan
-    lead, trail = ("start", "end") if ahead > 0 else ("end", "start")
+    lead, trail = ("end", "start") if still else ("start", "end") if ahead > 0 else ("end", "start")
     settled = bool(cyc.limit_cycle)
     note = "" if settled else (
         "no limit cycle: the stroke is still changing from cycle to cycle (onset or transient), so the "
@@ -809,12 +812,13 @@ def describe(
         tip_lateral_p2p_mm=p2p_mean * mm,
         tip_lateral_p2p_std_mm=_std(p2p[np.isfinite(p2p)]) * mm,
         tip_lateral_p2p_bl=p2p_mean / L,
-        swim_direction_deg=math.degrees(swim),
-        swim_direction_std_deg=dir_spread,
+        # (no net swimming: no swimming direction, and no end leads; the note says so)
+        swim_direction_deg=math.nan if still else math.degrees(swim),
+        swim_direction_std_deg=math.nan if still else dir_spread,
         field_direction_deg=math.degrees(fa),
-        direction_to_field_deg=math.degrees(rel),
-        towards_field=bool(math.cos(rel) > 0),
-        leading_end="s=0" if ahead > 0 else "s=l",
+        direction_to_field_deg=math.nan if still else math.degrees(rel),
+        towards_field=bool(not still and math.cos(rel) > 0),
+        leading_end="none" if still else ("s=0" if ahead > 0 else "s=l"),
         nonreciprocity=nrec_mean,
         nonreciprocity_std=_std(nrec),
         reciprocal=bool(abs(nrec_mean) < reciprocal_threshold),
