@@ -130,3 +130,17 @@ def test_the_command_line_reports_every_solution(tmp_path, monkeypatch, capsys):
         lines = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
         assert len(lines) == 1 and "--starts" in lines[0], lines
     assert not (tmp_path / "g.json").exists()
+
+
+@pytest.mark.parametrize("b", [0.15, -0.2])
+def test_deflation_finds_the_other_solution_from_the_same_start(b):
+    """One start, the guess itself, from which the plain fit reached the first solution: the
+    search deflated against that solution reaches the other."""
+    m, y = _data(b)
+    truth = m.roots(y)
+    r = fit(y, 0.01 * y, model=TwoRoots(), starts=1)
+    assert r.settings["starts"]["n"] == 1 and r.settings["starts"]["distinct_solutions"] == 2
+    got = [np.array([r.B, r.tau, r.kappa_E])] + [np.array([o["B_N_m2"], o["tau_s"], o["kappa_E_per_m"]])
+                                                  for o in r.settings["other_solutions"]]
+    for t in truth:
+        assert min(np.max(np.abs(g / t - 1)) for g in got) < 1e-6

@@ -392,33 +392,33 @@ def _distinct(a: "FitResult", b) -> bool:
     return bool(np.max(np.abs(np.log(p / q))) > SAME_SOLUTION_REL)
 
 
-def _deflated(model, x0, mean, sem, known) -> np.ndarray:
-    """From ``x0``, a zero of the weighted residual r(x) away from the ``known`` solutions
-    (identifiable coordinates): least squares of the deflated residual
-    r(x) prod_k (1 / |x - x_k|^2 + 1) (deflation: Farrell, Birkisson & Funke, SIAM J. Sci.
-    Comput. 2015), which a known solution no longer attracts; returns where it ended."""
+def _deflated(model, base, guess, x0, mean, sem, known) -> np.ndarray:
+    """From ``x0``, a zero of the weighted residual r(x) within the paper's box (factors
+    [0.5, 1.5] of ``guess``) away from the ``known`` solutions (identifiable coordinates):
+    bounded least squares of the deflated residual r(x) prod_k (1 / |x - x_k|^2 + 1)
+    (deflation: Farrell, Birkisson & Funke, SIAM J. Sci. Comput. 2015), which a known solution
+    no longer attracts; returns where it ended. (Unbounded, the search left the box for
+    factors of 3 where the deflated residual has other minima.)"""
     from scipy.optimize import least_squares
 
     penalty = Penalty()
+    y0 = np.log(np.asarray(guess, float))
+    lo, hi = np.full(3, math.log(BOX[0])), np.full(3, math.log(BOX[1]))
 
-    def factor(x):
-        m, g = 1.0, np.zeros(3)
-        for xk in known:
-            d2 = float(np.sum((x - xk) ** 2))
-            mk = 1.0 / d2 + 1.0
-            m *= mk
-            g += -2.0 * (x - xk) / (d2 * d2 * mk)
-        return m, m * g
+    def x_of(z):
+        return to_identifiable(base, *np.exp(y0 + z))
 
-    def fun(x):
-        return _weighted(model, x, mean, sem, penalty)[0] * factor(x)[0]
+    def fun(z):
+        x = x_of(z)
+        factor = math.prod(1.0 / float(np.sum((x - xk) ** 2)) + 1.0 for xk in known)
+        return _weighted(model, x, mean, sem, penalty)[0] * factor
 
-    def jac(x):
-        y = model(x)
-        m, gm = factor(x)
-        return m * model_jacobian(model, x, y) / sem[:, None] + np.outer((y - mean) / sem, gm)
-
-    return least_squares(fun, x0, jac=jac, method="trf", xtol=1e-12, ftol=1e-14, gtol=1e-14, max_nfev=60).x
+    z0 = np.log(np.asarray(to_physical(base, x0)) / np.asarray(guess, float)).clip(lo, hi)
+    # in steps d from the start (d = 0 exactly): trf's first trust region is |x0|, which at the
+    # guess, z0 ~ 1e-16 from round-off, stopped the search where it began
+    res = least_squares(lambda d: fun(z0 + d), np.zeros(3), bounds=(lo - z0, hi - z0), method="trf",
+                        diff_step=1e-6, xtol=1e-12, ftol=1e-14, gtol=1e-14, max_nfev=80)
+    return x_of(z0 + res.x)
 
 
 def _search_starts(res: "FitResult", n: int, seed: int, guess, base, model, fit_from) -> "FitResult":
@@ -441,7 +441,7 @@ def _search_starts(res: "FitResult", n: int, seed: int, guess, base, model, fit_
         else np.asarray(guess, float)[None]
     for start in tqdm(starts, desc="fit starts", unit="start", disable=None, leave=False):
         try:
-            x = _deflated(model, to_identifiable(base, *start), res.measured, sem, known)
+            x = _deflated(model, base, guess, to_identifiable(base, *start), res.measured, sem, known)
             r = fit_from(to_physical(base, x))
         except (NotSwimming, Unresolved):  # no stroke at the start, or none resolved there
             skipped += 1
