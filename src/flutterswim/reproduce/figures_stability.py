@@ -230,7 +230,7 @@ def build_fig6b(ctx: Context) -> Outcome:
         ax.axvline(x0, color="0.4", ls=":", lw=1)
         ax.text(x0, 0.02, " operating point", transform=ax.get_xaxis_transform(), fontsize=7, color="0.3")
     fig.suptitle("Fig. 6b: leading eigenvalue against chi and against eta_perp", fontsize=9)
-    fig.tight_layout(rect=(0, 0, 1, 0.95))
+    # (the panels' constrained layout places the title)
     save_figure(fig, ctx.path("fig6b.png"))
     _close(fig)
     chi_cr, _ = critical_chi(g.eta_perp)
@@ -311,7 +311,7 @@ def build_fig6cd(ctx: Context) -> Outcome:
     write_netcdf(ctx.path("fig6cd.nc"), ds)
     fig = plot_modes(modes)
     fig.suptitle("Fig. 6c-d: first and second eigenmodes at the operating point", fontsize=9)
-    fig.tight_layout(rect=(0, 0, 1, 0.95))
+    # (the panels' constrained layout places the title)
     save_figure(fig, ctx.path("fig6cd.png"))
     _close(fig)
     bc = []
