@@ -258,7 +258,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = ap.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     p = sub.add_parser("simulate", help="simulate a preset to a settled stroke (or to --t-end) and save NetCDF")
-    p.add_argument("--preset", default="paper")
+    p.add_argument("--preset", default="paper", help="parameter preset (default: paper)")
     p.add_argument("--kappa-E-ratio", type=float, default=None, help="scale the preset's kappa_E")
     p.add_argument("--cycles", type=int, default=None,
                    help=f"settled cycles to simulate (default {defaults.N_CYCLES}; not with --t-end)")
@@ -283,25 +283,25 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--period", type=float, default=None, metavar="SECONDS",
                    help="approximate stroke period, refined from the data (default: estimated; give it for a "
                         "record that swims in part only)")
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--json", action="store_true", help="print the descriptors as JSON (null: not defined)")
     p.set_defaults(func=_describe)
 
     p = sub.add_parser("plot", help="figures of a saved run")
     p.add_argument("run")
     p.add_argument("--kind", choices=PLOTS, default="ghosts")
-    p.add_argument("--out", default=None, help="figure file (.png, .pdf, .svg, .jpg)")
+    p.add_argument("--out", default=None, help="figure file (.png, .pdf, .svg, .jpg; default <run>_<kind>.png beside the run)")
     p.set_defaults(func=_plot)
 
     p = sub.add_parser("animate", help="MP4 or GIF of a saved run")
     p.add_argument("run")
     p.add_argument("out", help="video file (.mp4 or .gif)")
-    p.add_argument("--fps", type=float, default=25.0)
+    p.add_argument("--fps", type=float, default=25.0, help="video frames per second [1/s] (default 25)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_animate)
 
     p = sub.add_parser("stability", help="stability map, neutral curve, bifurcation plots and eigenmodes")
     p.add_argument("--out", default="stability", help="output folder (made in an existing one; default stability)")
-    p.add_argument("--step", type=float, default=0.1, help="map grid step in eta_perp and chi")
+    p.add_argument("--step", type=float, default=0.1, help="map grid step in eta_perp and chi (default 0.1, the paper's)")
     p.add_argument("--float32", action="store_true", help="store the map in single precision (half the size)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_stability)

@@ -45,7 +45,7 @@ def register(subparsers) -> None:
                         "(24 alone puts the paper's advance 1.8 %% above the continuum and moves B, tau, kappa_E "
                         "by 4-6 %%)")
     p.add_argument("--backend", default=None,
-                   help="compute the finite-difference orbits in parallel: processes, dask-local, dask (default: here)")
+                   help="compute the finite-difference orbits in parallel: processes, dask-local, dask (default: in this process)")
     p.add_argument("--workers", type=int, default=None, help="worker processes for --backend")
     p.add_argument("--out", default="fit.json")
     p.add_argument("--plot", default=None, help="figure of the data (Fig. 3e), the fit and its profiles")

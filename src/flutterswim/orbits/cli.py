@@ -12,8 +12,8 @@ def register(subparsers) -> None:
         description="Continue the stroke as a periodic orbit from the Hopf point of the straight "
                     "state to the far end of the range, and save it as NetCDF.")
     p.add_argument("range", help="parameter range like kappa_E_ratio=0.6:2 (also chi, eta_perp, kappa_E, tau, ...)")
-    p.add_argument("--preset", default="paper")
-    p.add_argument("--out", default="branch.nc")
+    p.add_argument("--preset", default="paper", help="parameter preset (default: paper)")
+    p.add_argument("--out", default="branch.nc", help="NetCDF of the branch (default branch.nc)")
     p.add_argument("--points", type=int, default=100, help="orbits along the branch (at least; default 100)")
     p.add_argument("--segments", type=int, default=None, help="segments N (default: the sweeps' resolution, 24)")
     p.add_argument("--steps", type=int, default=None, help="Radau steps per period, unchecked (default: 32, doubled along the branch where "
@@ -21,7 +21,7 @@ def register(subparsers) -> None:
     p.add_argument("--look-beyond", type=float, default=None,
                    help="follow the branch this fraction of the range past its end, for a fold that turns it "
                         "back into the range (default 0.2; 0: stop at the end)")
-    p.add_argument("--plot", default=None, help="also draw the branch to this PNG")
+    p.add_argument("--plot", default=None, help="also draw the branch to this figure (.png, .pdf, .svg)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_branch)
 
