@@ -27,3 +27,21 @@ def test_a_missing_package_is_named_before_any_work(tmp_path, monkeypatch, capsy
     err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
     assert len(err) == 1 and repr(missing) in err[0] and f"flutterswim[{extra}]" in err[0], err
     assert not any(tmp_path.iterdir())  # nothing written
+
+
+def test_only_what_the_command_needs_is_asked_for(monkeypatch):
+    """A folder of PNG frames needs no tifffile, a reproduce without videos no imageio; steer
+    --animate needs the video packages (a review)."""
+    import argparse
+
+    from flutterswim.cli import _check_optional
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a: None if name in ("tifffile", "imageio", "imageio_ffmpeg") else real(name, *a))
+    _check_optional(argparse.Namespace(command="track"))
+    _check_optional(argparse.Namespace(command="track-batch"))
+    _check_optional(argparse.Namespace(command="reproduce"))
+    _check_optional(argparse.Namespace(command="steer", animate=None))
+    with pytest.raises(ModuleNotFoundError, match="imageio"):
+        _check_optional(argparse.Namespace(command="steer", animate="a.gif"))

@@ -100,3 +100,11 @@ def test_sizes_and_physical_parameters_are_named():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert leading_eigenvalue(1e4, 71.5).polished and leading_eigenvalue(70.0, 1e6).polished
+
+
+def test_chi_max_just_below_the_onset_is_nan():
+    """A review: chi_max between the bisection's bracket and the onset raised 'did not converge'."""
+    c, _ = critical_chi(71.5)
+    for f in (0.9999, 0.9995, 0.99):
+        assert np.isnan(critical_chi(71.5, chi_max=c * f)[0])
+    assert critical_chi(71.5, chi_max=c * 1.0001)[0] == pytest.approx(c, rel=1e-12)

@@ -354,8 +354,8 @@ _EXTRA_OF = {"xarray": "io", "h5netcdf": "io", "h5py": "io", "zarr": "io", "matp
 #: wasted that time: a review met it with branch, simulate, track, stability and steer)
 _NEEDS = {"simulate": ("xarray", "h5netcdf"), "branch": ("xarray", "h5netcdf"), "steer": ("xarray", "h5netcdf"),
           "stability": ("xarray", "h5netcdf", "matplotlib"), "sweep": ("zarr", "xarray"),
-          "track": ("skimage", "tifffile", "xarray", "h5netcdf"), "track-batch": ("skimage", "tifffile"),
-          "reproduce": ("jinja2", "matplotlib", "xarray", "h5netcdf", "imageio", "imageio_ffmpeg")}
+          "track": ("skimage", "xarray", "h5netcdf"), "track-batch": ("skimage",),
+          "reproduce": ("jinja2", "matplotlib", "xarray", "h5netcdf")}
 
 
 def _check_optional(args: argparse.Namespace) -> None:
@@ -366,6 +366,8 @@ def _check_optional(args: argparse.Namespace) -> None:
     need = list(_NEEDS.get(args.command, ()))
     if getattr(args, "plot", None) or getattr(args, "kymograph", None):
         need.append("matplotlib")
+    if getattr(args, "animate", None):  # (steer --animate: a video of the run)
+        need += ["matplotlib", "imageio"]
     if getattr(args, "scheduler", None) or getattr(args, "backend", None) in ("dask", "dask-local"):
         need.append("distributed")
     for name in need:

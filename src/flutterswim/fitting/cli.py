@@ -128,11 +128,14 @@ def _cmd_fit(args) -> int:
               f"kappa_E = {o['kappa_E_per_m'] * 1e-3:.4g} 1/mm (chi2 {o['chi2']:.3g}, the fit's {res.cost:.3g}); "
               "the three descriptors do not tell them apart (shapes, the onset or several voltages do)",
               file=sys.stderr)
-    if args.starts:
-        st = res.settings.get("starts", {})
+    st = res.settings.get("starts") or {}
+    if args.starts and "skipped" in st:
+        print(f"flutterswim fit: the {args.starts} starts were not searched: {st['skipped']}", file=sys.stderr)
+    elif args.starts:
+        others = max(0, int(st.get("distinct_solutions", 1)) - 1)
         print(f"flutterswim fit: {args.starts} starts over the paper's box: {st.get('converged', 0)} converged, "
-              f"{st.get('no_stroke_at_start', 0)} without a stroke at the start; {st.get('distinct_solutions', 0)} "
-              "distinct solution(s) fit as well", file=sys.stderr)
+              f"{st.get('no_stroke_at_start', 0)} without a stroke at the start; {others} other parameter set(s) "
+              "fit as well", file=sys.stderr)
     if res.weakly_determined:
         print(f"flutterswim fit: note: {res.weakly_determined}", file=sys.stderr)
     if res.at_bound:

@@ -410,7 +410,7 @@ def _deflated(model, base, guess, x0, mean, sem, known) -> np.ndarray:
 
     def fun(z):
         x = x_of(z)
-        factor = math.prod(1.0 / float(np.sum((x - xk) ** 2)) + 1.0 for xk in known)
+        factor = math.prod(1.0 / max(float(np.sum((x - xk) ** 2)), 1e-300) + 1.0 for xk in known)
         return _weighted(model, x, mean, sem, penalty)[0] * factor
 
     z0 = np.log(np.asarray(to_physical(base, x0)) / np.asarray(guess, float)).clip(lo, hi)
@@ -431,7 +431,8 @@ def _search_starts(res: "FitResult", n: int, seed: int, guess, base, model, fit_
     from tqdm.auto import tqdm
 
     if not (res.converged and res.cost_kind == "sem"):
-        return res
+        return replace(res, settings={**res.settings, "starts": {
+            "n": n, "seed": seed, "skipped": "the fit did not converge: no solution to search away from"}})
     sem = np.asarray(res.sem, float)
     known = [to_identifiable(base, res.B, res.tau, res.kappa_E)] + [
         to_identifiable(base, o["B_N_m2"], o["tau_s"], o["kappa_E_per_m"])

@@ -82,7 +82,9 @@ def _seed(eta: float, chi_max: float, tol: float) -> tuple[float, float]:
             cg, bg = c0 + t * (c1 - c0), w0.imag + t * (w1.imag - w0.imag)
             lam = np.empty(4, dtype=np.complex128)
             c, b, it = _kernels._hopf_newton(cg, bg, eta, lam, False, tol, 50)
-            if it < 0 or not 0 < c <= chi_max:
+            if it >= 0 and c > chi_max:  # (bracketed below chi_max, the onset just beyond it)
+                return np.nan, np.nan
+            if it < 0 or not c > 0:
                 raise RuntimeError(f"the Hopf point at eta_perp={eta:.6g} was bracketed at chi in [{c0:.6g}, "
                                    f"{c1:.6g}] but its Newton solve did not converge (eta_perp is validated for "
                                    "0.1-5000)")
