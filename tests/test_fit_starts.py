@@ -160,3 +160,19 @@ def test_a_start_on_a_known_solution_and_a_failed_fit():
     failed = replace(r, converged=False)
     out = fit_module._search_starts(failed, 3, 0, PAPER_GUESS, BASE, m, lambda s: r)
     assert out.settings["starts"]["n"] == 3 and "did not converge" in out.settings["starts"]["skipped"]
+
+
+@pytest.mark.slow  # about 5 minutes: two fits and a deflated search on the orbit model
+def test_the_orbit_models_second_solution_is_found():
+    """The model's own descriptors at (1.5, 0.7, 1.5) x the guess: the fit finds the other exact
+    solution (B, tau, kappa_E 18, 14, 13 % low); two starts find the truth as well."""
+    from flutterswim.fitting.model import DescriptorModel
+
+    truth = np.array(PAPER_GUESS) * np.array([1.5, 0.7, 1.5])
+    y = DescriptorModel(fs.PAPER)(to_identifiable(fs.PAPER, *truth))
+    r = fit(y, 0.01 * y, starts=2)
+    sets = [np.array([r.B, r.tau, r.kappa_E])] + [np.array([o["B_N_m2"], o["tau_s"], o["kappa_E_per_m"]])
+                                                   for o in r.settings.get("other_solutions", [])]
+    assert len(sets) >= 2
+    assert min(np.max(np.abs(s / truth - 1)) for s in sets) < 5e-3  # (the refit's finer model: 0.2 %)
+    assert max(np.max(np.abs(s / truth - 1)) for s in sets) > 0.1
