@@ -525,6 +525,36 @@ def _dropped_frames_hint(tr) -> str:
     return periodic[periodic.index("if the camera dropped frames"):] if "if the camera dropped frames" in periodic else ""
 
 
+#: most changes of the field's strength in a record for which describe picks the last stretch of
+#: one strength (more: a strength that varies throughout, described as it is)
+MAX_FIELD_STEPS = 10
+
+
+def _last_field_stretch(tr: Track) -> tuple[float, float, str] | None:
+    """(t0, t1, note): the record's last stretch of one field strength, without the field
+    switched off, when the strength steps within the record (a simulation's schedule); else
+    None. Cycles across a step of the strength, or after the field is switched off, are no
+    strokes of one field: a field off from 10 s of a 30 s run was described over the cycles the
+    switch cut (period 4 % short, advance 20 % low, and 'simulate longer')."""
+    f = tr.field_strength
+    if f is None:
+        return None
+    steps = np.nonzero(f[1:] != f[:-1])[0] + 1
+    if steps.size == 0 or steps.size > MAX_FIELD_STEPS:
+        return None
+    bounds = np.r_[0, steps, f.size]
+    parts = [(a, b) for a, b in zip(bounds[:-1], bounds[1:]) if f[a] != 0 and b - a >= 2]
+    if not parts:
+        return None
+    a, b = parts[-1]
+    t0, t1 = float(tr.t[a]), float(tr.t[b - 1])
+    why = [f"the field's strength steps {steps.size} time(s) in the record"]
+    if b < f.size and np.all(f[b:] == 0):
+        why = [f"the field is switched off at t = {float(tr.t[b]):.4g} s"]
+    return t0, t1, (f"{why[0]}: described over t = {t0:.4g}-{t1:.4g} s, the last stretch of one field strength "
+                    f"({float(f[a]):.4g} x kappa_E)")
+
+
 def describe(
     obj: Any,
     *,
@@ -561,6 +591,11 @@ def describe(
             "the groups alone fix the stroke in l and tau)")
     if isinstance(n_last, bool) or not isinstance(n_last, (int, np.integer)) or n_last < 1:
         raise ParameterError(f"n_last={n_last!r} must be an integer >= 1")
+    field_note = ""
+    if cycles is None:
+        stretch = _last_field_stretch(tr)
+        if stretch is not None:
+            tr, field_note = tr.window(*stretch[:2]), stretch[2]
     cyc = detect_cycles(tr, tip=tip, **cycle_kwargs) if cycles is None else cycles
     K = cyc.n_cycles
     if K < 1:
@@ -782,6 +817,8 @@ def describe(
     from ..steering.turning import turning_summary
 
     turn = turning_summary(tr.t, tr.x.mean(axis=1), tr.y.mean(axis=1), tr.field_angle, float(np.mean(per)))
+    if field_note:
+        note = field_note + ("; " + note if note else "")
     return Descriptors(
         turning_radius_mm=turn["turning_radius"] * mm,
         turning_circle_fit_rms_mm=turn["circle_fit_rms"] * mm,

@@ -90,6 +90,9 @@ class Track:
     length: float | None = None
     units: str = "m"
     meta: dict = field(default_factory=dict)
+    #: the field's strength (a multiplier of kappa_E) per frame, where the source knew it (a
+    #: simulation); None otherwise
+    field_strength: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         t = _arr("t", self.t, 1)
@@ -139,6 +142,12 @@ class Track:
             raise ParameterError(f"field_angle has shape {fa.shape}; a finite scalar or shape ({T},) is required")
         fa.setflags(write=False)
         object.__setattr__(self, "field_angle", fa)
+        if self.field_strength is not None:
+            fs_ = np.array(self.field_strength, dtype=float)
+            if fs_.shape != (T,) or not np.all(np.isfinite(fs_)):
+                raise ParameterError(f"field_strength has shape {fs_.shape}; finite values of shape ({T},) are required")
+            fs_.setflags(write=False)
+            object.__setattr__(self, "field_strength", fs_)
         if self.length is None:
             L = float(np.sum(_seg_lengths(x[0], y[0])))
         else:
@@ -180,6 +189,7 @@ class Track:
             length=length,
             units="m",
             meta=meta,
+            field_strength=getattr(result, "field_strength", None),
         )
 
     # ------------------------------------------------------------------ basics
@@ -210,6 +220,7 @@ class Track:
             theta=None if self.theta is None else self.theta[sl],
             kappa=None if self.kappa is None else self.kappa[sl],
             field_angle=self.field_angle[sl], length=self.length, units=self.units, meta=self.meta,
+            field_strength=None if self.field_strength is None else self.field_strength[sl],
         )
 
     def window(self, t0: float, t1: float) -> "Track":
