@@ -245,3 +245,14 @@ def test_ctrl_c_while_a_compiled_module_initialises_is_one_line_and_130(monkeypa
     except ImportError as exc:
         assert flutterswim_entry.interrupted(exc)
     assert not flutterswim_entry.interrupted(ImportError("no module"))
+
+
+def test_the_field_angle_is_spelt_alike_in_every_command():
+    """simulate had --field-angle, track --field-angle-deg (a review): both take both."""
+    from flutterswim.cli import build_parser
+
+    ap = build_parser()
+    for opt in ("--field-angle", "--field-angle-deg"):
+        assert ap.parse_args(["track", "x.tif", "--px-per-mm", "70", opt, "30"]).field_angle_deg == 30.0
+        assert ap.parse_args(["track-batch", "d", opt, "30"]).field_angle_deg == 30.0
+        assert ap.parse_args(["simulate", "--t-end", "3", opt, "30"]).field_angle == 30.0

@@ -161,7 +161,7 @@ def from_csv(path: str | Path) -> Field:
 def add_field_options(p) -> None:
     """Field options of ``flutterswim simulate``."""
     g = p.add_argument_group("field schedule (angles in degrees, times in s)")
-    g.add_argument("--field-angle", type=float, default=None,
+    g.add_argument("--field-angle", "--field-angle-deg", type=float, default=None, dest="field_angle",
                    help="constant field direction [deg]; the filament starts along it (tilted 0.01 deg)")
     g.add_argument("--field-rotate", type=float, default=None, help="seconds per turn of a rotating field (negative: clockwise)")
     g.add_argument("--field-start", type=float, default=None,

@@ -28,7 +28,7 @@ def register(subparsers) -> None:
     p.add_argument("--points", type=int, default=49, help="arc-length samples along the body (default 49)")
     p.add_argument("--start-end", choices=("left", "right", "top", "bottom"), default="left",
                    help="side of the s = 0 end in the first tracked frame (default left)")
-    p.add_argument("--field-angle-deg", type=float, default=0.0,
+    p.add_argument("--field-angle-deg", "--field-angle", type=float, default=0.0, dest="field_angle_deg",
                    help="field direction in the image [deg] from +x towards +y (rows down); default 0")
     p.add_argument("--dark-line", action="store_true",
                    help="the filament is darker than its background (bright field); default: brighter (fluorescence)")
@@ -57,7 +57,7 @@ def register(subparsers) -> None:
                    help=f"descriptors over the last N cycles (default {N_CYCLES_MOVIE})")
     q.add_argument("--dark-line", action="store_true",
                    help="the filaments are darker than their background (unless a sidecar says dark_line)")
-    q.add_argument("--field-angle-deg", type=float, default=None,
+    q.add_argument("--field-angle-deg", "--field-angle", type=float, default=None, dest="field_angle_deg",
                    help="field direction in the image [deg] from +x towards +y (rows down), unless a sidecar says "
                         "field_angle_deg; default 0")
     q.add_argument("--start-end", choices=("left", "right", "top", "bottom"), default=None,
