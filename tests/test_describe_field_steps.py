@@ -44,3 +44,13 @@ def test_a_constant_field_is_described_as_before(steady):
     tr = as_track(run)
     assert tr.field_strength is not None and np.all(tr.field_strength == 1.0)
     assert tr.slice(3, 10).field_strength.shape == (7,)
+
+
+def test_a_step_too_close_to_the_end_is_named():
+    """A review: a step 0.1 s before the end raised 'signal of duration 0.09748 s ... holds fewer
+    than two periods', without a word of the step."""
+    from flutterswim._validate import ParameterError
+
+    run = fs.simulate(fs.PAPER, 14.0, n_segments=16, field=Field(strength=Piecewise((0.0, 13.9), (1.0, 1.3))))
+    with pytest.raises(ParameterError, match=r"steps 1 time\(s\).*t = 13\.9.*too short to describe.*simulate longer"):
+        describe(run)

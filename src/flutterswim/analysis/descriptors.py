@@ -596,7 +596,15 @@ def describe(
         stretch = _last_field_stretch(tr)
         if stretch is not None:
             tr, field_note = tr.window(*stretch[:2]), stretch[2]
-    cyc = detect_cycles(tr, tip=tip, **cycle_kwargs) if cycles is None else cycles
+    try:
+        cyc = detect_cycles(tr, tip=tip, **cycle_kwargs) if cycles is None else cycles
+    except ParameterError as exc:
+        if not field_note:
+            raise
+        # (the stretch after a late step is short: say so, not only that the signal is)
+        raise ParameterError(f"{field_note.split(': described')[0]}, and its last stretch of one strength, t = "
+                             f"{tr.t[0]:.4g}-{tr.t[-1]:.4g} s, is too short to describe ({exc}); simulate longer "
+                             "after the step") from None
     K = cyc.n_cycles
     if K < 1:
         raise ParameterError(

@@ -135,7 +135,8 @@ def _cmd_fit(args) -> int:
         others = max(0, int(st.get("distinct_solutions", 1)) - 1)
         print(f"flutterswim fit: {args.starts} starts over the paper's box: {st.get('converged', 0)} converged, "
               f"{st.get('no_stroke_at_start', 0)} without a stroke at the start; {others} other parameter set(s) "
-              "fit as well", file=sys.stderr)
+              "fit as well" + ("" if others else " (which does not show that the fit is unique: the search finds "
+                               "a second solution in some cases only)"), file=sys.stderr)
     if res.weakly_determined:
         print(f"flutterswim fit: note: {res.weakly_determined}", file=sys.stderr)
     if res.at_bound:
