@@ -25,3 +25,14 @@ def test_a_constant_field_angle_rotates_the_whole_run(tmp_path):
     # and it swims along the field: the centroid moved mostly in +y
     d = np.array([rb.x[-1].mean() - rb.x[0].mean(), rb.y[-1].mean() - rb.y[0].mean()])
     assert d[1] > 0.1 * scale and abs(d[0]) < 0.1 * d[1]
+
+
+def test_the_api_starts_along_the_field_too():
+    """The default start is the paper's tilt from the field's direction at t_start, in the API
+    as on the command line: the run in a field at 90 degrees is the default run rotated."""
+    from flutterswim.field import Field
+
+    a = fs.simulate(fs.PAPER, 10.0, n_segments=16)
+    b = fs.simulate(fs.PAPER, 10.0, n_segments=16, field=Field(direction=math.pi / 2))
+    np.testing.assert_allclose(b.x[-1], -a.y[-1], atol=2e-3 * fs.PAPER.l)
+    np.testing.assert_allclose(b.y[-1], a.x[-1], atol=2e-3 * fs.PAPER.l)

@@ -124,15 +124,9 @@ def _simulate(args: argparse.Namespace) -> int:
     if field is not None and args.t_end is None:
         raise ParameterError("a field schedule (--field-*) needs --t-end: the settle engine runs in a steady field")
     if args.t_end is not None:
-        import math
-
-        from .initial import InitialState
         from .simulate import simulate
 
-        # the paper's start, straight and tilted 0.01 degree, from the field's direction at t = 0
-        # (across a field at 90 degrees it started along e1 and was trapped bent at once)
-        start = InitialState.straight(0.01 + (0.0 if field is None else math.degrees(field.direction(0.0))))
-        run = simulate(params, args.t_end, field=field, initial=start, **opts)
+        run = simulate(params, args.t_end, field=field, **opts)
     else:
         from .limit_cycle import run_to_limit_cycle
 

@@ -51,7 +51,8 @@ def simulate(
     Times (``t_end``, ``frame_dt``, field schedules) are in seconds for physical
     :class:`Parameters` and in units of tau for :class:`Groups`. ``field`` is a
     :class:`Field` or a constant direction in radians (default: along e1, full strength).
-    ``initial`` defaults to the paper's straight filament tilted by 0.01 degree.
+    ``initial`` defaults to the paper's straight filament tilted by 0.01 degree from the field's
+    direction at ``t_start``.
     Output: ``n_frames`` equally spaced frames (default 50 per time unit tau) or one
     every ``frame_dt``. ``forces=True`` adds the internal force components A, V and the
     bending moment M. ``check(t, y)`` may stop the run by returning a reason.
@@ -75,7 +76,9 @@ def simulate(
     elif not isinstance(field, Field):
         # a number is a direction in radians: Constant, so that it is checked (and warned about) once, here
         field = Field(direction=field if callable(field) else Constant(_angle("field", finite("field", field, strict=True))))
-    initial = InitialState.straight() if initial is None else initial
+    # (from the field's direction at the start: across a field at 90 degrees the filament was
+    # trapped in a bent equilibrium at once)
+    initial = InitialState.straight(0.01 + math.degrees(field.direction(t_start))) if initial is None else initial
     if not isinstance(initial, InitialState):
         raise ParameterError(f"initial={initial!r} must be a flutterswim.InitialState")
 
