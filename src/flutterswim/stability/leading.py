@@ -17,7 +17,7 @@ from .._validate import finite, positive, positive_int, within
 from .newton import follow_root, newton_root
 from .spectral import spectrum
 
-__all__ = ["LeadingEigenvalue", "leading_eigenvalue", "FREE_FREE_K1"]
+__all__ = ["LeadingEigenvalue", "leading_eigenvalue", "FREE_FREE_K1", "same_root", "ROOT_RTOL"]
 
 #: Below this |chi| the leading roots are continued from +-SMALL_CHI (accumulation at -1).
 SMALL_CHI = 0.05
@@ -28,6 +28,15 @@ SMALL_CHI = 0.05
 MAX_CHI = 1e5
 MAX_ETA_PERP = 1e7
 MAX_DEGREE = 512
+
+#: two eigenvalues within this relative distance are one root (the checks of followed roots)
+ROOT_RTOL = 1e-6
+
+
+def same_root(a: complex, b: complex) -> bool:
+    """``a`` and ``b`` (finite) are the same root: |a - b| <= ROOT_RTOL max(1, |b|)."""
+    return bool(np.isfinite(a) and np.isfinite(b) and abs(a - b) <= ROOT_RTOL * max(1.0, abs(b)))
+
 
 #: First positive root of cos k cosh k = 1 (free-free beam).
 FREE_FREE_K1 = 4.730040744862704

@@ -13,7 +13,7 @@ import numpy as np
 
 from .._validate import ParameterError, finite, positive, positive_int
 from .characteristic import quartic_roots
-from .leading import leading_eigenvalue
+from .leading import leading_eigenvalue, same_root
 from .newton import follow_root
 
 __all__ = ["Eigenmode", "eigenmodes", "mode_shape", "Bifurcation", "bifurcation", "animate_mode"]
@@ -128,10 +128,6 @@ def bifurcation(*, parameter: str, values, fixed: float, max_step: float = 0.1) 
     return Bifurcation(parameter, v, om, fixed)
 
 
-def _same(a: complex, b: complex) -> bool:
-    return bool(np.isfinite(a) and np.isfinite(b) and abs(a - b) <= 1e-6 * max(1.0, abs(b)))
-
-
 def _follow_checked(path: np.ndarray, idx: np.ndarray, leading, follow) -> np.ndarray:
     """The leading eigenvalue at path[idx] (idx increasing): ``follow(w0, path[k:])`` (the
     root through w0 along the path) from ``leading(path[0])``, checked against ``leading`` at
@@ -149,7 +145,7 @@ def _follow_checked(path: np.ndarray, idx: np.ndarray, leading, follow) -> np.nd
             jump = not (abs(om[q] - om[q - 1]) <= CHECK_JUMP * max(1.0, abs(om[q - 1])))
             if (q - q0) % CHECK_STRIDE == 0 or q == m - 1 or jump:
                 ref = leading(path[idx[q]])
-                if not _same(om[q], ref):
+                if not same_root(om[q], ref):
                     wrong = q
                     break
                 good = q

@@ -20,7 +20,7 @@ import numpy as np
 
 from .._validate import ParameterError, positive
 from . import _kernels
-from .leading import leading_eigenvalue
+from .leading import leading_eigenvalue, same_root
 from .stability_map import _grid
 
 __all__ = ["NeutralCurve", "neutral_curve", "critical_chi"]
@@ -133,8 +133,7 @@ def _is_onset(c: float, b: float, eta: float) -> bool:
     """(c, b) is the leading pair's crossing at eta: c > 0 and omega_max(c, eta) = i b."""
     if not (np.isfinite(c) and c > 0):
         return False
-    w = leading_eigenvalue(float(c), float(eta)).omega
-    return abs(w.real) <= 1e-6 * max(1.0, abs(w)) and abs(w.imag - abs(b)) <= 1e-6 * max(1.0, abs(b))
+    return same_root(leading_eigenvalue(float(c), float(eta)).omega, complex(0.0, abs(b)))
 
 
 def _follow(e: np.ndarray, c0: float, b0: float, chi_max: float, tol: float):

@@ -18,7 +18,7 @@ import numpy as np
 from .._validate import ParameterError, finite, positive
 from ..defaults import MAX_MAP_POINTS
 from . import _kernels
-from .leading import FREE_FREE_K1, leading_eigenvalue
+from .leading import FREE_FREE_K1, ROOT_RTOL, leading_eigenvalue
 from .newton import _newton_numpy, follow_root, resolve_backend
 
 __all__ = ["StabilityMap", "stability_map", "load_map"]
@@ -306,7 +306,7 @@ def _check(smap: StabilityMap, stride: int | None) -> StabilityMap:
             d = d if np.isfinite(d) else math.inf
             worst = max(worst, d)
             count += 1
-            if d > 1e-6:
+            if d > ROOT_RTOL:
                 off += 1
                 first = first or (e, c, complex(smap.omega[i, j]), complex(ref))
     if off:
