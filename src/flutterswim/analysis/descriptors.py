@@ -530,8 +530,8 @@ def _dropped_frames_hint(tr) -> str:
 MAX_FIELD_STEPS = 10
 
 
-def _last_field_stretch(tr: Track) -> tuple[float, float, str] | None:
-    """(t0, t1, note): the record's last stretch of one field strength, without the field
+def _last_field_stretch(tr: Track) -> tuple[float, float, str, float] | None:
+    """(t0, t1, cause, strength): the record's last stretch of one field strength, without the field
     switched off, when the strength steps within the record (a simulation's schedule); else
     None. Cycles across a step of the strength, or after the field is switched off, are no
     strokes of one field: a field off from 10 s of a 30 s run was described over the cycles the
@@ -547,12 +547,10 @@ def _last_field_stretch(tr: Track) -> tuple[float, float, str] | None:
     if not parts:
         return None
     a, b = parts[-1]
-    t0, t1 = float(tr.t[a]), float(tr.t[b - 1])
-    why = [f"the field's strength steps {steps.size} time(s) in the record"]
-    if b < f.size and np.all(f[b:] == 0):
-        why = [f"the field is switched off at t = {float(tr.t[b]):.4g} s"]
-    return t0, t1, (f"{why[0]}: described over t = {t0:.4g}-{t1:.4g} s, the last stretch of one field strength "
-                    f"({float(f[a]):.4g} x kappa_E)")
+    off = b < f.size and np.all(f[b:] == 0)
+    cause = (f"the field is switched off at t = {float(tr.t[b]):.4g} s" if off else
+             f"the field's strength steps {steps.size} time(s) in the record")
+    return float(tr.t[a]), float(tr.t[b - 1]), cause, float(f[a])
 
 
 def describe(
@@ -591,20 +589,22 @@ def describe(
             "the groups alone fix the stroke in l and tau)")
     if isinstance(n_last, bool) or not isinstance(n_last, (int, np.integer)) or n_last < 1:
         raise ParameterError(f"n_last={n_last!r} must be an integer >= 1")
+    stretch = _last_field_stretch(tr) if cycles is None else None
     field_note = ""
-    if cycles is None:
-        stretch = _last_field_stretch(tr)
-        if stretch is not None:
-            tr, field_note = tr.window(*stretch[:2]), stretch[2]
+    if stretch is not None:
+        t0, t1, cause, strength = stretch
+        tr = tr.window(t0, t1)
+        field_note = (f"{cause}: described over t = {t0:.4g}-{t1:.4g} s, the last stretch of one field strength "
+                      f"({strength:.4g} x kappa_E)")
     try:
         cyc = detect_cycles(tr, tip=tip, **cycle_kwargs) if cycles is None else cycles
     except ParameterError as exc:
-        if not field_note:
+        if stretch is None:
             raise
         # (the stretch after a late step is short: say so, not only that the signal is)
-        raise ParameterError(f"{field_note.split(': described')[0]}, and its last stretch of one strength, t = "
-                             f"{tr.t[0]:.4g}-{tr.t[-1]:.4g} s, is too short to describe ({exc}); simulate longer "
-                             "after the step") from None
+        raise ParameterError(f"{stretch[2]}, and its last stretch of one strength, t = {stretch[0]:.4g}-"
+                             f"{stretch[1]:.4g} s, is too short to describe ({exc}); simulate longer after the "
+                             "step") from None
     K = cyc.n_cycles
     if K < 1:
         raise ParameterError(
