@@ -26,6 +26,7 @@ def assert_cf_file(path, flags=()):
     with xr.open_dataset(path, engine="h5netcdf") as ds:
         assert ds.attrs.get("title"), f"{path.name}: no title"
         assert str(ds.attrs.get("Conventions", "")).startswith("CF-"), f"{path.name}: no Conventions"
+        assert ds.attrs.get("flutterswim_version") == fs.__version__, f"{path.name}: no flutterswim_version"
         for name, var in {**ds.data_vars, **ds.coords}.items():
             for key in ("units", "long_name"):
                 assert isinstance(var.attrs.get(key), str) and var.attrs[key], f"{path.name}: {name} has no {key}"

@@ -33,3 +33,4 @@ def test_each_parameter_has_one_unit_everywhere(tmp_path):
         assert store.attrs[f"base_{name}"] == getattr(fs.PAPER, name)
         assert store.attrs[f"base_{name}_units"] == attrs[f"parameter_{name}_units"]
     assert store["kappa_E"].attrs["long_name"] == Axis(fs.PAPER, "kappa_E").long_name
+    assert store.attrs["flutterswim_version"] == attrs["flutterswim_version"] == fs.__version__

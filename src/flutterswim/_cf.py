@@ -39,10 +39,14 @@ def cf_attrs(attrs: dict) -> dict:
 
 def cf_dataset(ds):
     """``ds`` with :func:`cf_attrs` applied to every variable, coordinate and the global
-    attributes (in place; returns ``ds``)."""
+    attributes (in place; returns ``ds``). Every file also says which convention and which
+    version of flutterswim wrote it (``Conventions``, ``flutterswim_version``), unless it does."""
+    from . import __version__
     for var in ds.variables.values():
         var.attrs = cf_attrs(var.attrs)
     ds.attrs = cf_attrs(ds.attrs)
+    ds.attrs.setdefault("Conventions", "CF-1.10")
+    ds.attrs.setdefault("flutterswim_version", __version__)
     for name in ds.coords:  # coordinates hold no missing values (CF): no _FillValue written for them
         if ds[name].dtype.kind == "f":
             ds[name].encoding["_FillValue"] = None

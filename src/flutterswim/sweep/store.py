@@ -415,7 +415,7 @@ class SweepStore:
 
         ds.attrs.update({
             "title": "flutterswim parameter sweep", "Conventions": "CF-1.10",
-            "source": f"flutterswim {__version__}", "format": FORMAT,
+            "source": f"flutterswim {__version__}", "flutterswim_version": __version__, "format": FORMAT,
             # (strings only: a nested attribute is no NetCDF attribute, and open_zarr(...).to_netcdf failed)
             "sweep_spec": spec.to_json(),
             "fingerprint": spec.fingerprint, "variables": json.dumps(variables), "n_state": ns,
