@@ -238,6 +238,12 @@ def test_path_min_radius_matches_the_analytic_curvature():
     assert min_radius(circle(1e-3 * L), L) == pytest.approx(1e-3 * L, rel=2e-2)
 
 
+class Calls(list):
+    """The names of the replaced steps called, and the keywords of the last steer call."""
+
+    kw: dict = {}
+
+
 @pytest.fixture()
 def fast_steer(monkeypatch):
     """The steer CLI with the slow parts replaced: identify returns the paper's reduced model
@@ -247,7 +253,7 @@ def fast_steer(monkeypatch):
     red = importlib.import_module("flutterswim.steering.reduced")
     st = importlib.import_module("flutterswim.steering.steer")
 
-    calls = []
+    calls = Calls()
     model = red.ReducedModel(U=1.06e-3, period=0.378, k=3.83, omega_max=0.26, omega_max_bracket=(0.259, 0.262),
                              r_min=1.06e-3 / 0.26, onset_time=12.0)
     run = fs.simulate(P, 0.3, n_segments=8)
@@ -258,6 +264,7 @@ def fast_steer(monkeypatch):
 
     def fake(params, factory, reduced, **kw):
         calls.append("steer")
+        calls.kw = kw
         path = factory(np.zeros(2), 0.0)
         return st.SteerResult(run, path, {"cross_track_rms_bl": 0.05, "cross_track_max_bl": 0.1,
                                           "corner_overshoot_bl": 0.0, "trapped": False,
@@ -299,7 +306,7 @@ def test_steer_cli_rerun_replaces_its_own_metrics(tmp_path, fast_steer):
 
 @pytest.mark.parametrize("option, value", [("--noise-px", "nan"), ("--noise-px", "-1"), ("--noise-px", "inf"),
                                            ("--um-per-px", "0"), ("--um-per-px", "-14"), ("--um-per-px", "nan"),
-                                           ("--segments", "4")])
+                                           ("--px-per-mm", "0"), ("--px-per-mm", "-71"), ("--segments", "4")])
 def test_steer_cli_refuses_bad_camera_settings_before_computing(tmp_path, fast_steer, option, value, capsys):
     from flutterswim.cli import main
 
@@ -308,6 +315,19 @@ def test_steer_cli_refuses_bad_camera_settings_before_computing(tmp_path, fast_s
     err = capsys.readouterr().err
     assert status == 2 and fast_steer == []
     assert option in err and value in err and len(err.strip().splitlines()) == 1
+
+
+def test_steer_cli_takes_the_scale_as_track_does(tmp_path, fast_steer, capsys):
+    """--px-per-mm (track's option) is the camera scale 1000 / --um-per-px; both at once are refused."""
+    from flutterswim.cli import main
+
+    out = ["--out", str(tmp_path / "s.nc"), "--metrics", str(tmp_path / "s.json"), "--quiet"]
+    assert main(["steer", "--path", "circle", "--px-per-mm", "50", *out]) == 0
+    assert fast_steer.kw["um_per_px"] == pytest.approx(20.0)
+    with pytest.raises(SystemExit) as stop:
+        main(["steer", "--path", "circle", "--px-per-mm", "50", "--um-per-px", "20", *out])
+    assert stop.value.code == 2
+    assert "not allowed with" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("rows, words", [("0,0\nnan,1\n5,5\n", "line 2"), ("0,0\ninf,1\n", "line 2"),

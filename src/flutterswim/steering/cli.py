@@ -24,8 +24,11 @@ def register(subparsers) -> None:
     p.add_argument("--open-loop", action="store_true", help="pre-planned field schedule instead of feedback")
     p.add_argument("--noise-px", type=float, default=0.2,
                    help="tracking noise of the observed position, standard deviation [px] (default 0.2)")
-    p.add_argument("--um-per-px", type=float, default=14.0,
-                   help="the observing camera's pixel size [um per px] (default 14)")
+    scale = p.add_mutually_exclusive_group()
+    scale.add_argument("--um-per-px", type=float, default=14.0,
+                       help="the observing camera's pixel size [um per px] (default 14)")
+    scale.add_argument("--px-per-mm", type=float, default=None,
+                       help="the same scale as track takes it [pixels per mm]: 1000 / --um-per-px")
     p.add_argument("--segments", type=int, default=24, help="segments of the filament (default 24)")
     p.add_argument("--seed", type=int, default=0, help="seed of the tracking noise (default 0)")
     p.add_argument("--out", default="steer.nc", help="NetCDF of the run (default steer.nc)")
@@ -114,6 +117,8 @@ def _cmd_steer(args) -> int:
         check_output_file(args.animate, (".mp4", ".gif"), what="--animate")
     non_negative("--noise-px", args.noise_px)
     positive("--um-per-px", args.um_per_px)
+    if args.px_per_mm is not None:
+        args.um_per_px = 1000.0 / positive("--px-per-mm", args.px_per_mm)
     # the reduced model is identified from the paper's stroke as a periodic orbit: at 4 segments
     # Newton shooting does not find it (a failure after ~20 s); 5 and more do
     positive_int("--segments", args.segments, minimum=5)
