@@ -586,7 +586,8 @@ def describe(
         raise ParameterError(
             "the run is dimensionless (simulated with fs.Groups: lengths in body lengths l, times in tau), and "
             "the descriptors are in mm and s; simulate with physical parameters (fs.Parameters, e.g. fs.PAPER; "
-            "the groups alone fix the stroke in l and tau)")
+            "the groups alone fix the stroke in l and tau), or take the stroke in l and tau from the periodic "
+            "orbit: fs.periodic_orbit(groups).descriptors()")
     if isinstance(n_last, bool) or not isinstance(n_last, (int, np.integer)) or n_last < 1:
         raise ParameterError(f"n_last={n_last!r} must be an integer >= 1")
     stretch = _last_field_stretch(tr) if cycles is None else None
