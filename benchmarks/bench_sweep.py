@@ -107,6 +107,10 @@ def main() -> None:
             from flutterswim.sweep import get_backend
             from flutterswim.sweep.run import _Call
 
+            # the pool's workers never import the main script: the trivial point function is
+            # taken from this file imported as a module (its folder is on the path they receive)
+            from bench_sweep import _sleep_point
+
             # executor-level per-point overhead with a trivial point function (no store)
             n = 400
             items = [(k, {"values": {"chi": float(k)}}) for k in range(n)]
