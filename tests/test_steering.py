@@ -561,3 +561,102 @@ def test_the_field_holds_still_on_a_straight_leg(reduced):
     # (0.2 px) costs a fraction of a degree per second
     assert _needless_turning(res.run, res.control_start + 2 * reduced.period) < 1.5
     assert m["cross_track_rms_bl"] < 0.02
+
+
+def test_control_waits_until_the_stroke_is_established():
+    """Near the onset the stroke takes long to establish (0.75 kappa_E: the settle engine's limit
+    cycle at ~28 s, against 6.7 s at the paper's point); a field turned at a fixed 10-12 s found
+    the filament mid-onset and trapped it. ``established_time`` is after the settle time, and
+    from it on the straight run's cycle-averaged speed is the periodic orbit's within 2 %,
+    while at the old fixed 12 s it is not yet half of it."""
+    from flutterswim.orbits import periodic_orbit
+    from flutterswim.steering.reduced import ESTABLISHED_PERIODS, established_time
+
+    near = P.replace(kappa_E=0.75 * P.kappa_E)
+    t_est = established_time(near, n_segments=24)
+    orb = periodic_orbit(near, n_segments=24)
+    run = fs.simulate(near, t_est + 6 * orb.period, n_segments=24, frame_dt=0.02)
+    avg = cycle_average(run.t, run.x.mean(axis=1), run.y.mean(axis=1), run.field_angle, orb.period)
+    after = avg.t >= t_est
+    assert np.allclose(avg.speed[after], orb.speed, rtol=0.02)
+    assert np.interp(12.0, avg.t, avg.speed) < 0.5 * orb.speed
+    paper = established_time(P, n_segments=24)
+    assert ESTABLISHED_PERIODS * orb.period < paper < t_est
+
+
+def test_steer_starts_control_at_the_models_onset(monkeypatch):
+    """steer's default control start is the reduced model's onset_time (it was a fixed 10 s,
+    whatever the model said)."""
+    import importlib
+
+    from flutterswim.steering.reduced import ReducedModel
+
+    sim_mod = importlib.import_module("flutterswim.simulate")
+    seen = []
+
+    class Started(Exception):
+        pass
+
+    def first_run(params, t_end, **kw):
+        seen.append(t_end)
+        raise Started
+
+    monkeypatch.setattr(sim_mod, "simulate", first_run)
+    for onset in (7.5, 29.4):
+        model = ReducedModel(U=1.06e-3, period=0.378, k=3.83, omega_max=0.26, omega_max_bracket=(0.259, 0.262),
+                             r_min=1.06e-3 / 0.26, onset_time=onset)
+        with pytest.raises(Started):
+            steer(P, lambda p, h: circle(4 * L, p, h), model)
+    assert seen == [7.5, 29.4]
+
+
+def test_identify_refuses_a_swimmer_that_follows_no_rotation():
+    """Turned mid-onset (0.75 kappa_E from 12 s) the filament is trapped at every rate: identify
+    says so instead of bracketing a step-out rate it never saw followed (it returned
+    Omega_max = 0.05/T x 1.005 and k = NaN as if measured)."""
+    near = P.replace(kappa_E=0.75 * P.kappa_E)
+    with pytest.raises(RuntimeError, match="does not follow"):
+        identify(near, n_segments=24, onset=12.0)
+
+
+@pytest.mark.slow
+def test_near_onset_the_step_out_is_bracketed_and_a_circle_followed():
+    """0.75 kappa_E: the identified step-out rate is followed just below (0.95 Omega_max) and not
+    just above (1.1 Omega_max), judged from the established stroke; the closed loop follows a
+    circle of 4 body lengths without trapping (it trapped with control at a fixed 10 s)."""
+    near = P.replace(kappa_E=0.75 * P.kappa_E)
+    model = identify(near, n_segments=24)
+    t0 = model.onset_time
+    for frac, ok in ((0.95, True), (1.1, False)):
+        om = frac * model.omega_max
+        run = rotating_run(near, om, onset=t0, period=model.period)
+        assert follows(run, om, model.U, model.period, t0)[0] is ok, frac
+    met = steer(near, lambda p, h: circle(4 * L, p, h), model, seed=1).metrics
+    assert not met["trapped"] and met["cross_track_rms_bl"] < 0.1
+
+
+def test_steer_warns_of_a_corner_whose_waypoint_it_cannot_reach(monkeypatch):
+    """A triangle's 120 degree turns are rounded 1.37 body lengths inside their waypoints (its
+    arrivals were reported all the same); a square's 90 degree ones 0.57: no warning."""
+    import importlib
+    import warnings
+
+    from flutterswim.steering.reduced import ReducedModel
+
+    class Started(Exception):
+        pass
+
+    def no_run(*a, **kw):
+        raise Started
+
+    monkeypatch.setattr(importlib.import_module("flutterswim.simulate"), "simulate", no_run)
+    model = ReducedModel(U=1.06e-3, period=0.378, k=3.83, omega_max=0.26, omega_max_bracket=(0.259, 0.262),
+                         r_min=1.06e-3 / 0.26, onset_time=12.0)
+    tri = np.array([[0.0, 0.0], [6 * L, 0.0], [3 * L, 6 * L * math.sin(math.pi / 3)]])
+    with pytest.warns(UserWarning, match="not arrived"):
+        with pytest.raises(Started):
+            steer(P, lambda p, h: _polyline(tri + np.asarray(p), True, "triangle", 1e-5), model)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(Started):
+            steer(P, lambda p, h: square(10 * L, p, h), model)

@@ -14,7 +14,7 @@ import pytest
 import flutterswim as fs
 from flutterswim.steering.path import _polyline, square
 from flutterswim.steering.reduced import ReducedModel
-from flutterswim.steering.steer import metrics
+from flutterswim.steering.steer import ARRIVAL_BL, metrics
 from flutterswim.steering.turning import _moving_average
 
 L = fs.PAPER.l
@@ -41,7 +41,7 @@ def test_closed_square_corners_are_reached_when_passed_and_reacquired_after_each
     side, cut, D, back = 10 * L, 0.3 * L, 2.0 * L, 0.2 * L
     path = square(side, (0.0, 0.0), 0.0)
     V = np.array([[0, 0], [side / 2, 0], [side / 2, side], [-side / 2, side], [-side / 2, 0]], float)
-    way, arrive, reacq_true = [np.array([-back, 0.0])], [], []
+    way, arrive, reacq_true, misses = [np.array([-back, 0.0])], [], [], []
     lap_len = 4 * side
     for lap in range(2):
         for k in range(1, 5):
@@ -56,6 +56,8 @@ def test_closed_square_corners_are_reached_when_passed_and_reacquired_after_each
             ab = np.linalg.norm(B - A)
             if lap == 0:
                 arrive.append((s_A + sigma_x / D * ab) / RED.U)
+                u = (B - A) / ab  # the closest approach to the waypoint: its distance to the cut
+                misses.append(abs(u[0] * (v - A)[1] - u[1] * (v - A)[0]) / L)
                 reacq_true.append((2 / 3 - sigma_x / D) * ab / RED.U)
             way += [A, B]
     way.append(way[-1] + L * np.array([0.0, 1.0]))  # on along the second edge, 1 L further
@@ -64,6 +66,7 @@ def test_closed_square_corners_are_reached_when_passed_and_reacquired_after_each
     m = metrics(run, path, RED, 0.0, L)
     dt = 0.01
     assert m["waypoint_arrival_s"] == pytest.approx(arrive, abs=2 * dt + RED.period)
+    assert m["waypoint_miss_bl"] == pytest.approx(misses, abs=0.02) and max(misses) < ARRIVAL_BL
     assert m["reacquire_after_corner_s"] == pytest.approx(reacq_true, abs=2 * dt + RED.period)
     # from 0.2 L behind the start to D + 1 L past the first corner on the second lap
     assert m["path_covered_fraction"] == pytest.approx((back + lap_len + side / 2 + D + L) / lap_len, abs=1e-3)
@@ -74,9 +77,10 @@ def test_closed_square_corners_are_reached_when_passed_and_reacquired_after_each
 def test_cross_track_error_is_the_distance_to_the_path_at_a_sharp_corner():
     """Waypoints (0, 0) -> 15 body lengths -> a 150 degree turn onto another 15; the trajectory
     rounds the corner on an arc of 1.2 body lengths (the controller's turn is 1.39: 1.03 body
-    lengths off the path at the bisector, where an arrival needs less than 1), passes the last
-    waypoint and swims on 3 body lengths. The error is the brute-force distance to every path point; the corner is
-    reached at the arc's middle; the whole path is covered, and scored up to its end."""
+    lengths off the path at the bisector), passes the last waypoint and swims on 3 body lengths.
+    The error is the brute-force distance to every path point; the corner's waypoint is missed
+    by 3.4 body lengths, so it is not arrived at; the whole path is covered, and scored up to
+    its end."""
     turn = math.radians(150)
     v = np.array([[0.0, 0.0], [15 * L, 0.0], [15 * L + 15 * L * math.cos(turn), 15 * L * math.sin(turn)]])
     path = _polyline(v, False, "wp150", 1e-5)
@@ -100,8 +104,11 @@ def test_cross_track_error_is_the_distance_to_the_path_at_a_sharp_corner():
     # the largest is at the arc's middle: r (1 / sin(15 deg) - 1) from the vertex, sin(15 deg) of it off each edge
     half = (math.pi - turn) / 2
     assert m["cross_track_max_bl"] == pytest.approx(r * (1 / math.sin(half) - 1) * math.sin(half) / L, rel=1e-3)
-    t_mid = (15 * L - dist + r * turn / 2) / RED.U
-    assert m["waypoint_arrival_s"] == pytest.approx([t_mid], abs=0.02 + RED.period)
+    # the waypoint is passed r (1 / sin(15 deg) - 1) = 3.4 body lengths away: no arrival there
+    # (it was reported at the arc's middle, as for a corner passed close by)
+    miss = r * (1 / math.sin(half) - 1) / L
+    assert m["waypoint_miss_bl"] == pytest.approx([miss], rel=0.02) and miss > ARRIVAL_BL
+    assert math.isnan(m["waypoint_arrival_s"][0])
     assert m["path_covered_fraction"] > 0.99
 
 
@@ -139,3 +146,19 @@ def test_the_default_figure_eight_is_wider_than_the_controllers_tightest_turn():
     r_path = np.min((xp ** 2 + yp ** 2) ** 1.5 / np.abs(xp * ypp - yp * xpp))
     U, omega_max = 1.0582e-3, 0.2578  # identified at the paper's point (0.2578-0.2606 rad/s, N = 24)
     assert r_path >= U / (0.8 * omega_max) / L
+
+
+def test_corner_cut_is_the_fillets_distance_from_the_waypoint():
+    """radius (1 / cos(a / 2) - 1) for a turn by a: a square's corners (90 degrees) 0.414 r, an
+    equilateral triangle's (120) r; the largest over the corners; 0 without corners."""
+    from flutterswim.steering.path import circle
+    from flutterswim.steering.steer import corner_cut
+
+    r = 1.37 * L
+    assert corner_cut(square(10 * L, (0.0, 0.0), 0.0), r) == pytest.approx((math.sqrt(2) - 1) * r, rel=1e-6)
+    tri = np.array([[0.0, 0.0], [6 * L, 0.0], [3 * L, 6 * L * math.sin(math.pi / 3)]])
+    assert corner_cut(_polyline(tri, True, "triangle", 1e-5), r) == pytest.approx(r, rel=1e-6)
+    mixed = np.array([[0.0, 0.0], [8 * L, 0.0], [8 * L, 8 * L], [8 * L + 8 * L * math.cos(math.radians(-30)),
+                                                                 8 * L + 8 * L * math.sin(math.radians(-30))]])
+    assert corner_cut(_polyline(mixed, False, "mixed", 1e-5), r) == pytest.approx(r, rel=1e-6)
+    assert corner_cut(circle(2 * L, (0.0, 0.0), 0.0), r) == 0.0

@@ -20,7 +20,7 @@ from ..params import Parameters
 from .schedules import rotation
 from .turning import cycle_average, describe_turning
 
-__all__ = ["ReducedModel", "identify", "rotating_run", "follows"]
+__all__ = ["ReducedModel", "identify", "established_time", "rotating_run", "follows"]
 
 
 @dataclass(frozen=True)
@@ -52,7 +52,8 @@ FOLLOW_TURNS = 3.0
 
 def rotating_run(params: Parameters, omega: float, *, turns: float = FOLLOW_TURNS, onset: float = 12.0,
                  n_segments: int = 24, period: float | None = None):
-    """Simulate from the paper's onset, then a field turning at ``omega`` [rad/s] for ``turns``."""
+    """Simulate the onset until ``onset`` [s] (12 s: the paper's stroke is established), then a
+    field turning at ``omega`` [rad/s] for ``turns``."""
     from ..simulate import simulate
 
     t_end = onset + turns * 2 * math.pi / abs(omega) + 4 * (period or 0.4)
@@ -72,20 +73,68 @@ def follows(run, omega: float, U: float, period: float, onset: float) -> tuple[b
     return bool(d.following and d.speed_turning > 0.5 * U and np.min(avg.speed[w]) > 0.5 * U), d
 
 
-def identify(params: Parameters, *, n_segments: int = 24, onset: float = 12.0, rel_tol: float = 0.02,
+#: halvings of the slow rotation rate tried where the swimmer does not follow it
+SLOW_HALVINGS = 4
+
+#: periods after the settle engine's limit-cycle time at which the stroke counts as established
+ESTABLISHED_PERIODS = 2.0
+
+
+def established_time(params: Parameters, *, n_segments: int = 24) -> float:
+    """The time [s] from which the stroke, started from the straight state along the field (the
+    start of :func:`flutterswim.simulate`), is established: the settle engine's limit-cycle
+    time (every later cycle within 1 % of the periodic orbit) and ``ESTABLISHED_PERIODS``
+    periods. The paper's point: 6.7 s + 0.76 s; it grows towards the onset (0.75 kappa_E:
+    28.5 s), where a field turned at a fixed time trapped the filament mid-onset."""
+    from ..settle import settle
+
+    st = settle(params, n_cycles=3, n_segments=n_segments)
+    if not st.reached:
+        raise RuntimeError(f"no established stroke to steer: the run from the straight state ended as "
+                           f"{st.outcome} ({st.reason})")
+    return float(st.time_to_limit_cycle + ESTABLISHED_PERIODS * st.orbit.period)
+
+
+def identify(params: Parameters, *, n_segments: int = 24, onset: float | None = None, rel_tol: float = 0.02,
              orbit=None) -> ReducedModel:
     """U and the period from the periodic orbit (``orbit``: one already found for these
     ``params`` and ``n_segments``); k from the heading lag at a slow rotation; Omega_max by
-    bisection on the rotation rate to ``rel_tol``."""
+    bisection on the rotation rate to ``rel_tol``. The field starts turning at ``onset`` [s],
+    by default once the stroke is established (:func:`established_time`); the model records it
+    as ``onset_time``, where :func:`~flutterswim.steering.steer.steer` starts control.
+
+    Raises RuntimeError if the swimmer does not follow even the slow rotation (no step-out
+    rate to bracket). Where the heading leads the field instead of lagging (strong fields),
+    the unicycle's relaxation rate is undefined: k is NaN, with a warning."""
+    import warnings
+
     from ..orbits import periodic_orbit
 
     orb = periodic_orbit(params, n_segments=n_segments) if orbit is None else orbit
     U, T = orb.speed, orb.period
+    onset = established_time(params, n_segments=n_segments) if onset is None else float(onset)
     slow = 0.05 / T  # rad/s: about a hundredth of a turn per stroke
-    ok, d = follows(rotating_run(params, slow, turns=0.3, onset=onset, n_segments=n_segments, period=T), slow, U, T, onset)
-    k = slow / math.sin(abs(d.heading_lag)) if ok and d.heading_lag != 0 else math.nan
-    lo, hi = slow, None
-    w = slow
+    hi = None
+    for _ in range(SLOW_HALVINGS + 1):
+        ok, d = follows(rotating_run(params, slow, turns=0.3, onset=onset, n_segments=n_segments, period=T),
+                        slow, U, T, onset)
+        if ok:
+            break
+        # near the onset even this rate can be above step-out (0.75 kappa_E: Omega_max ~ 0.09 rad/s)
+        hi, slow = slow, slow / 2.0
+    else:
+        raise RuntimeError(f"the swimmer does not follow a field turning at {2 * slow:.3g} rad/s or faster from "
+                           f"t = {onset:.3g} s (speed while turning {d.speed_turning / U:.2f} U): no step-out rate "
+                           "to identify")
+    # lag = heading - field: a heading that lags a field turning at slow > 0 has lag < 0
+    if d.heading_lag < 0:
+        k = slow / math.sin(-d.heading_lag)
+    else:
+        k = math.nan
+        warnings.warn(f"the heading leads the turning field by {math.degrees(d.heading_lag):.2f} degrees at "
+                      f"{slow:.3g} rad/s: the unicycle's relaxation rate k is undefined (NaN); U, the step-out "
+                      "rate and the smallest radius stand", stacklevel=2)
+    lo = w = slow
     while hi is None:  # grow until the swimmer fails to follow
         w *= 2.0
         if not follows(rotating_run(params, w, onset=onset, n_segments=n_segments, period=T), w, U, T, onset)[0]:

@@ -88,7 +88,7 @@ def check_duration(path: RefPath, U: float, period: float, laps: float = 1.0, wh
 
 def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loop: bool = True,
           noise_px: float = 0.2, um_per_px: float = 14.0, fps: float = 50.0, delay_frames: int = 1,
-          n_segments: int = 24, onset: float = 10.0, laps: float = 1.0, seed: int = 0,
+          n_segments: int = 24, onset: float | None = None, laps: float = 1.0, seed: int = 0,
           lookahead_bl: float = 0.0, correction_bl: float = 0.4, rate_fraction: float = 0.8,
           progress: bool = False) -> SteerResult:
     """Swim ``laps`` of the path made by ``path_factory(start_xy, heading)`` [m].
@@ -96,7 +96,9 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     The controller (:class:`.control.Controller`) tracks the path with its corners rounded to
     the tightest turn it commands, so its turns already begin where the swimmer must start
     turning: ``lookahead_bl`` is 0 by default (0.15 body lengths cut the square's corners early,
-    cross-track RMS 0.090 against 0.080 body lengths)."""
+    cross-track RMS 0.090 against 0.080 body lengths). Control starts at ``onset`` [s], by
+    default the reduced model's ``onset_time``, once the stroke is established (a field turned
+    mid-onset can trap the filament: at 0.75 kappa_E a fixed 10 s did, on a gentle circle)."""
     from ..result import concatenate
     from ..simulate import simulate
 
@@ -113,6 +115,7 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     if not isinstance(delay_frames, (int, np.integer)) or delay_frames < 0:
         raise ParameterError(f"delay_frames={delay_frames!r} must be an integer >= 0")
     seed = positive_int("seed", seed, minimum=0)  # numpy's generator takes seeds >= 0
+    onset = positive("onset", reduced.onset_time if onset is None else onset)
     dt = 1.0 / fps
     rng = np.random.default_rng(seed)
     sigma = noise_px * um_per_px * 1e-6
@@ -130,6 +133,11 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
                       f"tightest turn the controller makes, U/({rate_fraction:g} Omega_max) = {r_turn / params.l:.2f} "
                       f"(the swimmer's own U/Omega_max = {reduced.r_min / params.l:.2f}): it cannot be followed "
                       "there (scale the path up)", stacklevel=2)
+    cut = corner_cut(probe, r_turn)
+    if cut > ARRIVAL_BL * params.l:
+        warnings.warn(f"a corner of the path is passed {cut / params.l:.2f} body lengths inside its waypoint by the "
+                      f"controller's tightest turn ({r_turn / params.l:.2f} body lengths): its waypoint is not arrived "
+                      f"at (within {ARRIVAL_BL:g}); turn by less at a waypoint, or scale the path up", stacklevel=2)
     # onset along the initial field direction (0), then control
     first = simulate(params, onset, n_segments=n_segments, frame_dt=dt)
     cx, cy = _centroid(first)
@@ -180,11 +188,24 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     met["period_s"] = reduced.period  # (the stroke the figure averages over; it assumed 0.38 s)
     met["path_feasible"] = bool(r_path >= 0.95 * r_turn)
     met["controller_min_radius_bl"] = r_turn / params.l
+    met["corner_cut_max_bl"] = cut / params.l
     met["trapped"] = bool(math.isfinite(trapped_at)) or met["trapped"]
     met["trapped_at_s"] = trapped_at  # when the run was stopped for it (NaN: not stopped)
     met.update(closed_loop=closed_loop, noise_px=noise_px, um_per_px=um_per_px, fps=fps, delay_frames=delay_frames,
                path=path.name, lookahead_bl=lookahead_bl, correction_bl=correction_bl)
     return SteerResult(run, path, met, closed_loop, onset)
+
+
+def corner_cut(path: RefPath, radius: float) -> float:
+    """The largest distance from a corner's waypoint to an arc of ``radius`` tangent to both its
+    edges: radius (1 / cos(a / 2) - 1) for a turn by a (0.41 radius at 90 degrees, 1 radius at
+    120); 0 for a path without corners."""
+    pts, worst = path.points, 0.0
+    for c in path.corners:
+        d0, d1 = pts[c] - pts[c - 1], pts[(c + 1) % len(pts)] - pts[c]
+        a = abs(math.atan2(d0[0] * d1[1] - d0[1] * d1[0], d0 @ d1))
+        worst = max(worst, radius * (1.0 / max(math.cos(a / 2), 1e-12) - 1.0))
+    return worst
 
 
 def deque_of(n: int, value: float):
@@ -204,8 +225,8 @@ def _stalled(parts, reduced: ReducedModel) -> bool:
 
 
 def _open_loop_plan(path: RefPath, reduced: ReducedModel, t0: float, rate_fraction: float, fps: float):
-    """Field direction planned for the path at speed U, with the unicycle lag compensated and
-    the same turn-rate limit (``rate_fraction`` Omega_max, commands at ``fps``): the heading the
+    """Field direction planned for the path at speed U (no lag compensation: at the rates
+    commanded the lag is a few degrees) with the same turn-rate limit (``rate_fraction`` Omega_max, commands at ``fps``): the heading the
     swimmer should have at arc length U (t - t0)."""
     ang = np.unwrap(np.arctan2(np.gradient(path.points[:, 1]), np.gradient(path.points[:, 0])))
     state = {"cmd": 0.0}
@@ -317,12 +338,20 @@ def _progress(path: RefPath, q: np.ndarray, back: float, ahead: float, slack: fl
     return out
 
 
+#: a waypoint is arrived at when the swimmer passes within this many body lengths of it (the
+#: controller rounds a 90 degree corner 0.41 r_turn = 0.57 body lengths inside it, a 120 degree
+#: turn r_turn = 1.37 body lengths inside)
+ARRIVAL_BL = 1.0
+
+
 def metrics(run, path: RefPath, reduced: ReducedModel, t0: float, body_length: float) -> dict:
     """Cross-track error of the true cycle-averaged centroid after control starts (RMS, max;
     mm and body lengths), corner overshoot (largest outward excursion near a corner), time to
     reacquire (|error| < 0.1 body length until 1.5 body lengths before the next corner) after each
-    corner (NaN: not reacquired), waypoint arrivals (at each corner; an open path's end in
-    ``end_arrival_s``, NaN if not reached), trapped. An open path is scored up to where its end
+    corner (NaN: not reacquired), waypoint arrivals (at each corner, NaN where the swimmer passed
+    it more than ``ARRIVAL_BL`` body lengths away; an open path's end in ``end_arrival_s``, NaN if
+    not reached) and each corner's closest approach (``waypoint_miss_bl``, over the progress
+    nearer that corner than its neighbours), trapped. An open path is scored up to where its end
     is reached (the run goes on past it).
 
     The cross-track error is the distance to the path (its nearest point anywhere: a corner is
@@ -360,8 +389,9 @@ def metrics(run, path: RefPath, reduced: ReducedModel, t0: float, body_length: f
     order = np.argsort(s_c, kind="stable")
     passes = s_c[order]
     nxt = np.r_[passes[1:], passes[0] + Ls if path.closed and passes.size else math.inf]
-    over, reacq, arrivals = {}, {}, {}
-    for c, sc, s_next in zip(order, passes, nxt):
+    over, reacq, arrivals, miss = {}, {}, {}, {}
+    prv = np.r_[passes[-1] - Ls if path.closed and passes.size else -math.inf, passes[:-1]]
+    for c, sc, s_next, s_prev in zip(order, passes, nxt, prv):
         # outward: to the right of a left turn (e < 0), to the left of a right turn
         v = path.corners[c]
         d0, d1 = path.points[v] - path.points[v - 1], path.points[v + 1] - path.points[v]
@@ -384,9 +414,13 @@ def metrics(run, path: RefPath, reduced: ReducedModel, t0: float, body_length: f
                 reacq[c] = float(ts[after[bad[-1] + 1]] - ts[after[0]])
             else:
                 reacq[c] = math.nan
-        # arrival: the averaged position passes the corner, within 1 body length of the path
+        # arrival: the averaged position passes the corner, within 1 body length of the path,
+        # having come within ARRIVAL_BL body lengths of the waypoint itself near the pass (a
+        # corner cut by more, or a pass the progress jumped to, is no arrival)
+        near = (rel > (s_prev - sc) / 2) & (rel < (s_next - sc) / 2)  # nearer this corner than the others
+        miss[c] = float(np.hypot(*(q[near] - path.points[v]).T).min()) if near.any() else math.nan
         hit = np.nonzero((prog >= sc) & (np.abs(e) < bl))[0]
-        arrivals[c] = float(ts[hit[0]]) if hit.size else math.nan
+        arrivals[c] = float(ts[hit[0]]) if hit.size and miss[c] < ARRIVAL_BL * bl else math.nan
     speed = np.hypot(np.gradient(ax, ts), np.gradient(ay, ts)) if ts.size > 1 else np.zeros(ts.size)
     covered = float(prog.max() - prog[0]) if prog.size else 0.0
     return {
@@ -396,6 +430,7 @@ def metrics(run, path: RefPath, reduced: ReducedModel, t0: float, body_length: f
         "corner_overshoot_mm": float(max(over.values()) * 1e3) if over else 0.0,
         "reacquire_after_corner_s": [reacq[c] for c in range(len(path.corners)) if c in reacq],
         "waypoint_arrival_s": [arrivals[c] for c in range(len(path.corners))],
+        "waypoint_miss_bl": [miss[c] / bl for c in range(len(path.corners))],
         "path_covered_fraction": covered / Ls,
         "mean_speed_mm_s": float(np.mean(speed) * 1e3),
         "end_arrival_s": end_arrival,
