@@ -415,3 +415,22 @@ def test_every_reason_the_centreline_fit_gives_is_listed_in_the_failure_list():
     assert reworded <= reasons
     for r in reasons - reworded:
         assert f"- {r.split(' (')[0]}:" in track_module.__doc__, r
+
+
+def test_a_sidecar_of_options_only_leaves_voltage_and_sample_to_the_name(tmp_path):
+    """A sidecar holding only tracking options (the field's direction) stopped the name from
+    giving the voltage and sample: the trial failed with "needs the keys voltage_V and sample".
+    Each key the sidecar lacks now comes from the name; a key it has wins."""
+    from flutterswim.tracking.batch import find_trials
+
+    folder = tmp_path / "t"
+    folder.mkdir()
+    for name in ("85V_sample1.tif", "72p5V_sample2.tif", "90V_sample3.tif"):
+        (folder / name).write_bytes(b"")
+    (folder / "85V_sample1.json").write_text(json.dumps({"field_angle_deg": 225}))
+    (folder / "72p5V_sample2.json").write_text(json.dumps({"sample": "B"}))
+    trials = {t.path.name: t for t in find_trials(folder)}
+    one, two, three = trials["85V_sample1.tif"], trials["72p5V_sample2.tif"], trials["90V_sample3.tif"]
+    assert (one.voltage_V, one.sample, one.problem) == (85.0, "1", ""), one
+    assert one.options["field_angle_deg"] == 225
+    assert (two.voltage_V, two.sample) == (72.5, "B") and (three.voltage_V, three.sample) == (90.0, "3")

@@ -7,7 +7,7 @@ A trial is a TIFF stack or a movie in the folder, or a subfolder of frames. Its 
 sample come from a sidecar JSON (``<trial>.json`` next to it, or ``trial.json`` inside a
 frame folder; keys ``voltage_V``, ``sample`` and optionally ``px_per_mm``, ``fps``, ``roi``,
 ``field_angle_deg``, ``start_end``, ``dark_line``, ``times``: a file of the frames' times, as
-``track --times``, its path relative to the sidecar's folder) or else from the file name by a regular expression with
+``track --times``, its path relative to the sidecar's folder) or else (each key the sidecar lacks) from the file name by a regular expression with
 the named groups ``voltage`` and ``sample`` (default :data:`DEFAULT_PATTERN`, e.g.
 ``85V_sample3_trial2.tif``; a ``p`` may stand for the decimal point, ``72p5V``).
 
@@ -143,21 +143,26 @@ def find_trials(folder: str | os.PathLike, pattern: str = DEFAULT_PATTERN) -> li
             continue
         side = _sidecar(p)
         where = f"trial {str(p)!r}"
+        m = rx.search(p.stem if p.is_file() else p.name)
         if side is not None:
             meta, cand = side
             v = meta.get("voltage_V", meta.get("voltage"))
             smp = meta.get("sample")
             opts = _sidecar_options(meta, cand)
             where = f"sidecar={str(cand)!r}"
+            if (v is None or smp is None) and m is not None:
+                # a sidecar of options only (px_per_mm, field_angle_deg ...): the name gives the rest
+                v = m.group("voltage").replace("p", ".").replace("P", ".") if v is None else v
+                smp = m.group("sample") if smp is None else smp
             if v is None or smp is None:
-                out.append(Trial(p, math.nan, str(smp), opts, f"{where} needs the keys voltage_V and sample"))
+                out.append(Trial(p, math.nan, str(smp), opts, f"{where} needs the keys voltage_V and sample (or a "
+                                 f"name that the pattern {pattern!r} matches)"))
                 continue
             if isinstance(v, bool) or not isinstance(smp, (str, int)) or isinstance(smp, bool) or not str(smp).strip():
                 out.append(Trial(p, math.nan, str(smp), opts, f"{where}: voltage_V must be a number and sample a "
                                  f"name (text or a whole number); got voltage_V={v!r}, sample={smp!r}"))
                 continue
         else:
-            m = rx.search(p.stem if p.is_file() else p.name)
             if m is None:
                 out.append(Trial(p, math.nan, "", {}, f"no sidecar JSON and the name does not match the pattern "
                                  f"{pattern!r}; add {p.stem}.json with voltage_V and sample, or give pattern"))
