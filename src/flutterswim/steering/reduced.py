@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._validate import positive
 from ..params import Parameters
 from .schedules import rotation
 from .turning import cycle_average, describe_turning
@@ -112,7 +113,7 @@ def identify(params: Parameters, *, n_segments: int = 24, onset: float | None = 
 
     orb = periodic_orbit(params, n_segments=n_segments) if orbit is None else orbit
     U, T = orb.speed, orb.period
-    onset = established_time(params, n_segments=n_segments) if onset is None else float(onset)
+    onset = established_time(params, n_segments=n_segments) if onset is None else positive("onset", onset)
     slow = 0.05 / T  # rad/s: about a hundredth of a turn per stroke
     hi = None
     for _ in range(SLOW_HALVINGS + 1):
