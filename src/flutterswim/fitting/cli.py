@@ -105,7 +105,9 @@ def _cmd_fit(args) -> int:
 
     res = replace(res, settings={**res.settings, "voltage_V": float(v)})  # (kappa_E is this voltage's)
     res.save(out)
-    if res.settings.get("out_of_reach"):  # no values to speak of: the one line why (the JSON has the rest)
+    if res.settings.get("out_of_reach") or not res.converged:
+        # no values to speak of: the one line why (the JSON has the rest; a failed fit's values
+        # printed as a result's read as one)
         return _verdict(res)
     n = int(summary.n[np.isclose(summary.voltage_V, v)][0])
     if not args.paper_cost and n < FEW_TRIALS:
@@ -137,7 +139,9 @@ def _cmd_fit(args) -> int:
               f"{st.get('no_stroke_at_start', 0)} without a stroke at the start; {others} other parameter set(s) "
               "fit as well" + ("" if others else " (which does not show that the fit is unique: the search finds "
                                "a second solution in some cases only)"), file=sys.stderr)
-    if res.weakly_determined:
+    if res.at_fold:
+        print(f"flutterswim fit: note: {res.fold_note}", file=sys.stderr)
+    elif res.weakly_determined:
         print(f"flutterswim fit: note: {res.weakly_determined}", file=sys.stderr)
     if res.at_bound:
         print(f"flutterswim fit: note: {', '.join(res.at_bound)} ended on the bound of the paper's box (factor 0.5 or "
@@ -199,6 +203,8 @@ def _joint(args, base, trials, summary, out) -> int:
         print("flutterswim fit: note: the SEMs at " + ", ".join(f"{v:g} V ({n} trials)" for v, n in few)
               + " come from fewer than 5 trials, so the reported 1-sigma is itself uncertain (the p-value allows "
               "for it: Student-t residuals)", file=sys.stderr)
+    if not res.converged:
+        return _verdict(res)
     s, st = res.sigma_rel, res.settings
     print(f"{out}: B = {res.B * 1e6:.4g} N mm^2 (+-{100 * s[0]:.2g}%), tau = {res.tau:.4g} s (+-{100 * s[1]:.2g}%), "
           f"kappa_E = {res.kappa_E * 1e-3:.4g} 1/mm (+-{100 * s[2]:.2g}%) at {v_ref:g} V "
