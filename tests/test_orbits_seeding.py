@@ -93,3 +93,18 @@ def test_a_run_still_on_its_way_to_the_stroke_is_capped_not_irregular():
     assert s.outcome == "limit_cycle", s.reason
     s = settle(fs.Groups(G.eta_par, G.eta_perp, 220.0), n_segments=24, t_max=100.0)
     assert s.outcome == "not_periodic" and "maxima" in s.reason, s.reason
+
+
+@pytest.mark.parametrize("ratio", [1.0, 1.3])
+def test_the_orbit_from_scratch_is_the_stroke_simulate_reaches(ratio):
+    """At N = 12 two stable strokes coexist: the onset from a 1 degree tilt reaches one whose
+    end is turned back (period 4-10 % shorter, trailing excursion a third), the onset from
+    simulate's 0.01 degree the other. periodic_orbit seeded from 1 degree and settle, the sweeps
+    and simulate from 0.01, so two APIs gave two strokes at one point without a word (a
+    review). Both now start from the 0.01 degree tilt: the same orbit."""
+    g = G.replace(chi=ratio * G.chi)
+    orb = periodic_orbit(g, n_segments=12)
+    st = settle(g, n_segments=12)
+    assert st.reached and st.orbit.stable and orb.stable
+    assert orb.period == pytest.approx(st.orbit.period, rel=1e-6)
+    assert orb.lateral_trailing == pytest.approx(st.orbit.lateral_trailing, rel=1e-4)

@@ -41,8 +41,8 @@ MAX_STEPS = 512
 #: (tilt of the straight start [degree], simulated time [tau], a fresh start (else going on
 #: from the previous attempt's end)); each stops early once the end angle's swing is steady
 SEED_TIME = 80.0
-SEED_PLAN = ((1.0, SEED_TIME, True), (1.0, 2 * SEED_TIME, False),
-             (0.01, 2 * SEED_TIME, True), (0.01, 4 * SEED_TIME, False))
+SEED_PLAN = ((0.01, 2 * SEED_TIME, True), (0.01, 4 * SEED_TIME, False),
+             (1.0, SEED_TIME, True), (1.0, 2 * SEED_TIME, False))
 DEFAULT_SEGMENTS = 48
 #: Growth rate / frequency of the straight state below which a stroke is seeded from the Hopf
 #: point (continuation) rather than from a simulation of the onset.
@@ -514,8 +514,10 @@ def _from_simulation(params, system: ShapeSystem, steps: int, tol: float, max_ne
     closes on an unstable orbit (the run still in its transient), the simulation goes on from
     where it stopped for twice as long (past an unstable orbit without stopping at a steady
     stretch: it lingers near that orbit); then it starts again from the straight state tilted
-    0.01 degree instead of 1 (a larger tilt speeds the onset up but can trap it: in a bent
-    equilibrium, or, where eta_perp < eta_par, an oscillating hooked end that is no stroke).
+    1 degree instead of 0.01. The 0.01 degree of simulate, settle and the sweeps comes first, so
+    that where two strokes coexist this is the one they reach (at N = 12 the onset from 1 degree
+    reaches another, with its end turned back; a larger tilt can also trap the onset in a bent
+    equilibrium, or, where eta_perp < eta_par, in an oscillating hooked end that is no stroke).
     The last attempt's orbit is returned even if unstable (its ``stable`` says so)."""
     start, settle_check, last = None, True, None
     for tilt, t_len, fresh in SEED_PLAN:
