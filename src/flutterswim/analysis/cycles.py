@@ -387,7 +387,8 @@ def detect_cycles(
     is the end-to-end direction averaged over one period around each frame (``axis="local"``,
     follows a turning swimmer) or over the whole track (``axis="global"``).
     Each cycle is fitted by a Fourier series in its phase at the frames it has (at most 6
-    harmonics, (frames - 1) / 4). A cycle is *converged* when its period, amplitude (root mean
+    harmonics, (frames - 1) / 4 of the cycle with fewest frames, the same for all, except cycles
+    with missing frames, which fit fewer). A cycle is *converged* when its period, amplitude (root mean
     square of the fitted lateral waveform) and shape (tangent angle minus its mean along s, at
     ``n_shape`` phases, projected on the ``n_shape_modes`` leading principal modes, 0 for no
     projection; its change less the part a shift and a uniform stretch of the cycle's phase
@@ -489,11 +490,19 @@ def detect_cycles(
     # residual sums of squares and degrees of freedom of each cycle's fits: the measurement
     # noise, what no periodic waveform explains (lateral; per shape mode)
     rss_u, rss_m, dof = np.zeros(K), np.zeros((K, modes.shape[1])), np.zeros(K)
+    # one harmonic count for the cycles, that of the one with fewest frames (of those with at
+    # least 3/4 of the median: a cycle with missing frames fits fewer on its own): at 12.8
+    # frames per stroke cycles of 12 and 13 frames fitted 2 and 3 harmonics, and the third
+    # harmonic's power, in some cycles only, read as a change from cycle to cycle ("no limit
+    # cycle" on a settled stroke)
+    n_fr = f1 - f0
+    H_all = fourier_harmonics(int(n_fr[n_fr >= 0.75 * np.median(n_fr)].min()), 6) if K else 6
     for k in range(K):
         sl = slice(f0[k], f1[k])
         ph = (t[sl] - starts[k]) / periods[k]
         # the lateral signal and the shape modes in one solve, with the same design
-        cc, H, C, A = fourier_fit(ph, np.column_stack([d[sl], modes[sl]]), 6, cov=True, constant=True, design=True)
+        cc, H, C, A = fourier_fit(ph, np.column_stack([d[sl], modes[sl]]), H_all, cov=True, constant=True,
+                                  design=True)
         c, cm = cc[:, 0], cc[:, 1:]
         ch = c[1:]
         rss_u[k] = float(np.sum((d[sl] - A @ c) ** 2))

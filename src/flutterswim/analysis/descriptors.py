@@ -553,6 +553,11 @@ def _last_field_stretch(tr: Track) -> tuple[float, float, str, float] | None:
     return float(tr.t[a]), float(tr.t[b - 1]), cause, float(f[a])
 
 
+#: describe says a swimmer stepped out when, while the field turns, it moves at less than this
+#: fraction of its speed before the turn (the step-out of the steering model: half the speed)
+STEPPED_OUT = 0.5
+
+
 def describe(
     obj: Any,
     *,
@@ -826,6 +831,12 @@ def describe(
     from ..steering.turning import turning_summary
 
     turn = turning_summary(tr.t, tr.x.mean(axis=1), tr.y.mean(axis=1), tr.field_angle, float(np.mean(per)))
+    if turn["turning_speed"] < STEPPED_OUT * turn["speed_before_turning"]:
+        note = (note + "; " if note else "") + (
+            f"stepped out: while the field turns ({math.degrees(turn['field_turn_rate']):.3g} deg/s) the swimmer "
+            f"moves at {turn['turning_speed'] / turn['speed_before_turning']:.2g} of its speed before the turn: the "
+            "field turns faster than the stroke can steer it, and the turning figures describe a filament turning "
+            "nearly in place")
     if field_note:
         note = field_note + ("; " + note if note else "")
     return Descriptors(

@@ -121,11 +121,12 @@ def describe_turning(avg: Averaged, t0: float | None = None, t1: float | None = 
 
 def turning_summary(t: np.ndarray, x: np.ndarray, y: np.ndarray, field: np.ndarray, period: float) -> dict:
     """For describe: turning radius, heading lag and turn rates, speed while turning over the
-    part of the run where the field turns (from 4 periods after it starts turning); NaN if the
-    field does not turn by at least 5 degrees."""
+    part of the run where the field turns (from 4 periods after it starts turning), and the
+    speed over the 3 periods before it starts; NaN if the field does not turn by at least 5
+    degrees."""
     nan = {"turning_radius": math.nan, "heading_lag": math.nan, "heading_lag_std": math.nan,
            "field_turn_rate": math.nan, "heading_turn_rate": math.nan, "turning_speed": math.nan,
-           "circle_fit_rms": math.nan}
+           "circle_fit_rms": math.nan, "speed_before_turning": math.nan}
     f = np.unwrap(field)
     if f.size < 10 or np.ptp(f) < math.radians(5.0) or not period > 0:
         return nan
@@ -139,6 +140,11 @@ def turning_summary(t: np.ndarray, x: np.ndarray, y: np.ndarray, field: np.ndarr
         d = describe_turning(avg, t_start, t_stop)
     except ParameterError:
         return nan
+    # the averaged speed over the 3 periods before the field starts turning (NaN if the record
+    # holds fewer): a swimmer that has stepped out swims far slower while the field turns
+    t_move = t_start - 4 * period
+    before = (avg.t >= t_move - 3 * period) & (avg.t <= t_move)
+    speed_before = float(np.mean(avg.speed[before])) if np.count_nonzero(before) >= 3 else math.nan
     return {"turning_radius": d.turning_radius, "heading_lag": d.heading_lag, "heading_lag_std": d.heading_lag_std,
             "field_turn_rate": d.field_turn_rate, "heading_turn_rate": d.heading_turn_rate,
-            "turning_speed": d.speed_turning, "circle_fit_rms": d.circle_fit_rms}
+            "turning_speed": d.speed_turning, "circle_fit_rms": d.circle_fit_rms, "speed_before_turning": speed_before}
