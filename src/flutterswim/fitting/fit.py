@@ -104,7 +104,7 @@ class FitResult:
         solution: three descriptors of one voltage fitted with three parameters, converged at no
         bound, with a misfit (chi2 > FOLD_CHI2) and a Jacobian close to singular (condition
         number > FOLD_CONDITION). The gradient J^T r vanishes with r != 0 only where J is
-        singular: no parameter set reproduces the data, which lie beyond the fold; its 1-sigma
+        singular: no parameter set near it reproduces the data, which lie beyond the fold; its 1-sigma
         from the curvature is meaningless (a review: 4e5-6e7 %), and the value is biased towards
         the fold (B +10 % over 300 noise draws, 38 % of them at a fold)."""
         return bool(self.converged and self.cost_kind == "sem" and np.asarray(self.measured).size == 3
@@ -116,11 +116,11 @@ class FitResult:
         """What :attr:`at_fold` means for the user ("" when it does not hold)."""
         if not self.at_fold:
             return ""
-        return (f"no parameter set reproduces these data: the fit stopped on a fold of the model (chi2 = "
+        return (f"no parameter set near the fit reproduces these data: it stopped where the model folds (chi2 = "
                 f"{self.cost:.3g} with three descriptors and three parameters; condition number "
-                f"{self.card.condition_number:.3g}), beyond which the descriptors have no solution; the 1-sigma "
-                "from the curvature is meaningless there and the values lean towards the fold: the profiles "
-                "(--profiles, profiles=True) give the range of parameters consistent with the data")
+                f"{self.card.condition_number:.3g}), and the data lie beyond the fold; the 1-sigma from the "
+                "curvature is meaningless there and the values lean towards the fold: the profiles (--profiles, "
+                "profiles=True) give the range of parameters consistent with the data")
 
     def _descriptor_names(self) -> list[str]:
         """Names of the measured descriptors, per voltage for a joint fit ("period@85V")."""
