@@ -83,6 +83,7 @@ def test_a_value_decades_beyond_the_model_asks_about_units():
     """Lateral excursions in um taken for mm were refused without a word on units."""
     from flutterswim.fitting.reach import units_hint
 
-    assert "1000 times" in units_hint(1141.0, 1.24) and "units" in units_hint(1141.0, 1.24)
-    assert "10 times" in units_hint(11.4, 1.24)
-    assert units_hint(1.5, 1.24) == "" and units_hint(4.0, 1.24) == ""
+    assert "1000 times" in units_hint(1141.0, 1.14, 1.24) and "units" in units_hint(1141.0, 1.14, 1.24)
+    assert "1000 times" in units_hint(300.0, 1.14, 1.24)  # (a small stroke in um: 0.3 mm)
+    assert "10 times" in units_hint(11.4, 1.14, 1.24)
+    assert units_hint(1.5, 1.14, 1.24) == "" and units_hint(2.0, 1.14, 1.24) == ""

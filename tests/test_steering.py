@@ -673,3 +673,29 @@ def test_min_radius_is_not_fooled_by_the_paths_own_point_spacing():
         assert min_radius(circle(3 * L), scale * L) == pytest.approx(3 * L, rel=0.01), scale
         r = scale * L
         assert min_radius(fillet(square(8 * L, (0.0, 0.0), 0.0), r), r) == pytest.approx(r, rel=0.01), scale
+
+
+def test_identify_refuses_a_stroke_that_swims_against_the_field(monkeypatch):
+    """At 2.5 kappa_E the stroke swims against the field (180 degrees): its heading read as
+    leading a slow rotation by 178 degrees, k came back NaN with 'the step-out rate stands', and
+    the step-out bracket was not reproducible. identify refuses it before any rotating run."""
+    import importlib
+
+    red = importlib.import_module("flutterswim.steering.reduced")
+    monkeypatch.setattr(red, "rotating_run", lambda *a, **k: pytest.fail("a rotating run was simulated"))
+    monkeypatch.setattr(red, "established_time", lambda *a, **k: pytest.fail("the onset was simulated"))
+    with pytest.raises(RuntimeError, match="against the field"):
+        identify(P.replace(kappa_E=2.5 * P.kappa_E), n_segments=24)
+
+
+def test_min_radius_finds_a_hairpin_beside_a_long_chord():
+    """A path with one long straight chord and a finely sampled hairpin of 0.5 body lengths: a
+    step floor from the largest spacing (the chord's) hid the hairpin (inf)."""
+    from flutterswim.steering.path import RefPath, min_radius
+
+    a = np.linspace(-math.pi / 2, math.pi / 2, 400)
+    hairpin = np.stack([20 * L + 0.5 * L * np.cos(a), 0.5 * L + 0.5 * L * np.sin(a)], axis=1)
+    pts = np.vstack([[[0.0, 0.0]], hairpin, [[0.0, L]]])
+    s = np.r_[0.0, np.cumsum(np.hypot(*np.diff(pts, axis=0).T))]
+    p = RefPath(pts, s, np.array([], int), False, "hairpin")
+    assert min_radius(p, 1.37 * L) == pytest.approx(0.5 * L, rel=0.01)

@@ -162,3 +162,39 @@ def test_corner_cut_is_the_fillets_distance_from_the_waypoint():
                                                                  8 * L + 8 * L * math.sin(math.radians(-30))]])
     assert corner_cut(_polyline(mixed, False, "mixed", 1e-5), r) == pytest.approx(r, rel=1e-6)
     assert corner_cut(circle(2 * L, (0.0, 0.0), 0.0), r) == 0.0
+
+
+def test_a_u_turns_cut_is_that_of_the_rounded_path():
+    """Near a U-turn the rounded path's arc is shortened to fit its edges: the cut is half the
+    10 body length edge apart, 5 body lengths, not r (1 / cos(a / 2) - 1) (1.4e12 at 180 degrees)."""
+    from flutterswim.steering.path import fillet
+    from flutterswim.steering.steer import corner_cut
+
+    r = 1.37 * L
+    for turn in (170.0, 179.0, 180.0):
+        a = math.radians(180.0 - turn)
+        v = np.array([[0.0, 0.0], [10 * L, 0.0], [10 * L - 10 * L * math.cos(a), 10 * L * math.sin(a)]])
+        path = _polyline(v, False, "u-turn", 1e-5)
+        cut = corner_cut(path, r)
+        brute = np.hypot(*(fillet(path, r).points - v[1]).T).min()
+        assert cut == pytest.approx(brute, rel=1e-9) and cut < 5.01 * L
+
+
+def test_a_corner_cut_on_the_first_lap_is_no_arrival_on_a_later_one():
+    """Two laps of a square: the first cuts corner 0 by 1.5 body lengths, the second passes
+    within 0.2. Arrival and closest approach are both of the first pass (the miss was the
+    second lap's, 0.2, beside the first lap's arrival time)."""
+    side = 10 * L
+    path = square(side, (0.0, 0.0), 0.0)
+    V = np.array([[side / 2, 0], [side / 2, side], [-side / 2, side], [-side / 2, 0]], float)
+    way = [np.array([0.0, 0.0])]
+    for inset in (1.5 * L, 0.2 * L):
+        for k, v in enumerate(V):
+            c = inset * math.sqrt(2) if k == 0 else 0.3 * L * math.sqrt(2)
+            d0 = (v - way[-1]) / np.linalg.norm(v - way[-1])
+            d1 = (V[(k + 1) % 4] - v) / np.linalg.norm(V[(k + 1) % 4] - v)
+            way += [v - c * d0, v + c * d1]
+        way.append(np.array([0.0, 0.0]))
+    run, _ = _run(np.array(way))
+    m = metrics(run, path, RED, 0.0, L)
+    assert m["waypoint_miss_bl"][0] > 1.0 and math.isnan(m["waypoint_arrival_s"][0])

@@ -116,11 +116,13 @@ class FitResult:
         """What :attr:`at_fold` means for the user ("" when it does not hold)."""
         if not self.at_fold:
             return ""
+        within = ", within the standard errors" if self.cost < 1.0 else ""
         return (f"no parameter set near the fit reproduces these data: it stopped where the model folds (chi2 = "
-                f"{self.cost:.3g} with three descriptors and three parameters; condition number "
+                f"{self.cost:.3g}{within}, with three descriptors and three parameters; condition number "
                 f"{self.card.condition_number:.3g}), and the data lie beyond the fold; the 1-sigma from the "
                 "curvature is meaningless there and the values lean towards the fold: the profiles (--profiles, "
-                "profiles=True) give the range of parameters consistent with the data")
+                "profiles=True) give the range of parameters consistent with the data, and starts over the box "
+                "(--starts) may find an exact solution elsewhere")
 
     def _descriptor_names(self) -> list[str]:
         """Names of the measured descriptors, per voltage for a joint fit ("period@85V")."""
@@ -551,6 +553,8 @@ def _refine_if_sensitive(res: "FitResult", model, run, base) -> tuple["FitResult
     except np.linalg.LinAlgError:
         return res, model
     shift = np.abs(np.asarray(to_physical(base, x + dx)) / np.array([res.B, res.tau, res.kappa_E]) - 1.0)
+    if not np.max(shift) <= 1.0:  # (a near-singular Jacobian: the linear estimate means nothing)
+        return replace(res, settings={**res.settings, "resolution_shift_rel": None}), model
     if not np.max(shift) > REFINE_PARAMETER_TOL:
         return replace(res, settings={**res.settings, "resolution_shift_rel": float(np.max(shift))}), model
     finer_res = run(finer, (res.B, res.tau, res.kappa_E))  # (from the first fit: from the guess it fell elsewhere)

@@ -87,25 +87,22 @@ class Reach:
         for k in (1, 2):  # the period is never out of reach; advance and lateral only from above
             if mean[k] - Z_MARGIN * sem[k] > self.hi[k] * (1.0 + MAX_REFINEMENT_CHANGE):
                 out.append(f"{_NAMES[k]} {mean[k]:.4g} +- {sem[k]:.2g} {_UNITS[k]} measured, the model's "
-                           f"{self.lo[k]:.4g} to {self.hi[k]:.4g} {_UNITS[k]}" + units_hint(mean[k], self.hi[k]))
+                           f"{self.lo[k]:.4g} to {self.hi[k]:.4g} {_UNITS[k]}"
+                           + units_hint(mean[k], self.lo[k], self.hi[k]))
         if not out:
             return None
         return ("; ".join(out) + f" over the {self.n_strokes} strokes the fit computed ({self.failed} trial points "
                 "had none); more segments would not change this")
 
 
-def units_hint(measured: float, reach: float) -> str:
-    """A hint when ``measured`` is about 10, 100 or 1000 times ``reach`` (within a factor 2): a
-    column in um or cm taken for mm (a review: lateral in um was refused without a word on
-    units)."""
-    import math
-
-    if not (measured > 0 and reach > 0):
-        return ""
-    decades = math.log10(measured / reach)
-    k = round(decades)
-    if k >= 1 and abs(decades - k) < math.log10(2.0):
-        return f" ({10 ** k:g} times the model's: is the column in other units than mm?)"
+def units_hint(measured: float, lo: float, hi: float) -> str:
+    """A hint when ``measured`` divided by 10, 100 or 1000 falls within the model's range
+    [lo, hi] of the strokes the fit computed, widened by a factor 4 either way (other strokes
+    reach further): a column in um or cm taken for mm (a review: lateral in um was refused
+    without a word on units)."""
+    for k in (3, 2, 1):
+        if lo / 4.0 <= measured / 10.0 ** k <= 4.0 * hi:
+            return f" ({10 ** k:g} times the model's: is the column in other units than mm?)"
     return ""
 
 

@@ -41,8 +41,8 @@ MAX_STEPS = 512
 #: (tilt of the straight start [degree], simulated time [tau], a fresh start (else going on
 #: from the previous attempt's end)); each stops early once the end angle's swing is steady
 SEED_TIME = 80.0
-SEED_PLAN = ((0.01, 2 * SEED_TIME, True), (0.01, 4 * SEED_TIME, False),
-             (1.0, SEED_TIME, True), (1.0, 2 * SEED_TIME, False))
+SEED_PLAN = ((0.01, SEED_TIME, True), (1.0, SEED_TIME, True), (1.0, 2 * SEED_TIME, False),
+             (0.01, 4 * SEED_TIME, True))
 DEFAULT_SEGMENTS = 48
 #: Growth rate / frequency of the straight state below which a stroke is seeded from the Hopf
 #: point (continuation) rather than from a simulation of the onset.
@@ -513,10 +513,11 @@ def _from_simulation(params, system: ShapeSystem, steps: int, tol: float, max_ne
     """Newton from a simulated onset, in up to SEED_PLAN's attempts. Where Newton fails, or
     closes on an unstable orbit (the run still in its transient), the simulation goes on from
     where it stopped for twice as long (past an unstable orbit without stopping at a steady
-    stretch: it lingers near that orbit); then it starts again from the straight state tilted
-    1 degree instead of 0.01. The 0.01 degree of simulate, settle and the sweeps comes first, so
-    that where two strokes coexist this is the one they reach (at N = 12 the onset from 1 degree
-    reaches another, with its end turned back; a larger tilt can also trap the onset in a bent
+    stretch: it lingers near that orbit). The first onset starts from simulate's, settle's and
+    the sweeps' 0.01 degree tilt, so that where two strokes coexist this is the one they reach
+    (at N = 12 the onset from 1 degree reaches another, with its end turned back); then 1
+    degree (a faster onset: where there is no stroke, the irregular motion is named sooner),
+    continued; last 0.01 degree for 320 tau (a larger tilt can trap the onset in a bent
     equilibrium, or, where eta_perp < eta_par, in an oscillating hooked end that is no stroke).
     The last attempt's orbit is returned even if unstable (its ``stable`` says so)."""
     start, settle_check, last = None, True, None

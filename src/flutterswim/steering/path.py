@@ -276,14 +276,14 @@ def fillet(path: RefPath, radius: float, step: float = 1e-5) -> RefPath:
 def min_radius(path: RefPath, scale: float) -> float:
     """Smallest radius of curvature of ``path`` [m]: circumradius of consecutive points resampled
     every ``scale`` / 20 along it (``scale``: the radius of interest, e.g. the swimmer's
-    smallest turning radius; at least 5 of the path's own point spacings), or every 1/20 of
+    smallest turning radius; at least 5 of the path's median point spacing), or every 1/20 of
     the path if it is shorter (a circle 1000 times
     smaller than the swimmer's turn read as straight); inf for a straight path."""
     step = min(positive("scale", scale), float(path.s[-1])) / 20.0
     # no finer than 5 of the path's own point spacings: points interpolated on its chords, a few
     # apart, read kinks (a circle of 3 body lengths sampled every 17 um at a scale of 15 um
     # read 2.36; a 0.08 body length fillet 0.07): the relative error is (spacing / 2 step)^2
-    step = max(step, 5.0 * float(np.max(np.diff(path.s))))
+    step = max(step, 5.0 * float(np.median(np.diff(path.s))))  # (median: a long chord elsewhere hid a hairpin)
     q = np.arange(0.0, path.s[-1], step)
     if q.size < 3:
         return math.inf

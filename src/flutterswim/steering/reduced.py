@@ -113,6 +113,11 @@ def identify(params: Parameters, *, n_segments: int = 24, onset: float | None = 
 
     orb = periodic_orbit(params, n_segments=n_segments) if orbit is None else orbit
     U, T = orb.speed, orb.period
+    along = math.cos(orb.swim_direction - getattr(orb, "phi", 0.0))
+    if along < 0:  # (2.5 kappa_E: its heading read as leading the field by 178 degrees)
+        raise RuntimeError(f"the stroke swims against the field (at {math.degrees(orb.swim_direction):.1f} degrees "
+                           "to it): the steering model is of a swimmer along the field, which turning the field "
+                           "steers; this one it would steer the wrong way")
     onset = established_time(params, n_segments=n_segments) if onset is None else positive("onset", onset)
     slow = 0.05 / T  # rad/s: about a hundredth of a turn per stroke
     hi = None

@@ -197,15 +197,14 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
 
 
 def corner_cut(path: RefPath, radius: float) -> float:
-    """The largest distance from a corner's waypoint to an arc of ``radius`` tangent to both its
-    edges: radius (1 / cos(a / 2) - 1) for a turn by a (0.41 radius at 90 degrees, 1 radius at
-    120); 0 for a path without corners."""
-    pts, worst = path.points, 0.0
-    for c in path.corners:
-        d0, d1 = pts[c] - pts[c - 1], pts[(c + 1) % len(pts)] - pts[c]
-        a = abs(math.atan2(d0[0] * d1[1] - d0[1] * d1[0], d0 @ d1))
-        worst = max(worst, radius * (1.0 / max(math.cos(a / 2), 1e-12) - 1.0))
-    return worst
+    """The largest distance from a corner's waypoint to the path rounded at ``radius`` (what
+    the controller tracks, :func:`~flutterswim.steering.path.fillet`): radius (1 / cos(a / 2)
+    - 1) for a turn by a where the edges leave room (0.41 radius at 90 degrees, 1 radius at
+    120), less where a near U-turn's arc is shortened to fit; 0 for a path without corners."""
+    if path.corners.size == 0:
+        return 0.0
+    rounded = fillet(path, radius).points
+    return float(max(np.hypot(*(rounded - path.points[c]).T).min() for c in path.corners))
 
 
 def deque_of(n: int, value: float):
@@ -417,7 +416,8 @@ def metrics(run, path: RefPath, reduced: ReducedModel, t0: float, body_length: f
         # arrival: the averaged position passes the corner, within 1 body length of the path,
         # having come within ARRIVAL_BL body lengths of the waypoint itself near the pass (a
         # corner cut by more, or a pass the progress jumped to, is no arrival)
-        near = (rel > (s_prev - sc) / 2) & (rel < (s_next - sc) / 2)  # nearer this corner than the others
+        # nearer this corner than the others, on its first pass (the one the arrival times)
+        near = (prog - sc > (s_prev - sc) / 2) & (prog - sc < (s_next - sc) / 2)
         miss[c] = float(np.hypot(*(q[near] - path.points[v]).T).min()) if near.any() else math.nan
         hit = np.nonzero((prog >= sc) & (np.abs(e) < bl))[0]
         arrivals[c] = float(ts[hit[0]]) if hit.size and miss[c] < ARRIVAL_BL * bl else math.nan
