@@ -84,6 +84,7 @@ def test_a_value_decades_beyond_the_model_asks_about_units():
     from flutterswim.fitting.reach import units_hint
 
     assert "1000 times" in units_hint(1141.0, 1.14, 1.24) and "units" in units_hint(1141.0, 1.14, 1.24)
-    assert "1000 times" in units_hint(300.0, 1.14, 1.24)  # (a small stroke in um: 0.3 mm)
     assert "10 times" in units_hint(11.4, 1.14, 1.24)
-    assert units_hint(1.5, 1.14, 1.24) == "" and units_hint(2.0, 1.14, 1.24) == ""
+    # beyond the model by other factors: no hint (1.2, 2.4, 3.2 and 40 times its largest)
+    for value in (1.5, 3.0, 4.0, 50.0):
+        assert units_hint(value, 1.14, 1.24) == "" and units_hint(value, 0.001, 1.24) == "", value

@@ -96,13 +96,19 @@ class Reach:
 
 
 def units_hint(measured: float, lo: float, hi: float) -> str:
-    """A hint when ``measured`` divided by 10, 100 or 1000 falls within the model's range
-    [lo, hi] of the strokes the fit computed, widened by a factor 4 either way (other strokes
-    reach further): a column in um or cm taken for mm (a review: lateral in um was refused
-    without a word on units)."""
-    for k in (3, 2, 1):
-        if lo / 4.0 <= measured / 10.0 ** k <= 4.0 * hi:
-            return f" ({10 ** k:g} times the model's: is the column in other units than mm?)"
+    """A hint when ``measured`` is about 10, 100 or 1000 times the model's largest ``hi`` (within
+    a factor 2) and ``measured`` / 10^k lies within [lo / 2, 2 hi]: a column in um or cm taken
+    for mm (a review: lateral in um was refused without a word on units). A value beyond the
+    model's reach by some other factor gets none (a wider test named a units mix-up for nearly
+    every refused value)."""
+    import math
+
+    if not (measured > 0 and hi > 0):
+        return ""
+    decades = math.log10(measured / hi)
+    k = round(decades)
+    if 1 <= k <= 3 and abs(decades - k) < math.log10(2.0) and lo / 2.0 <= measured / 10.0 ** k <= 2.0 * hi:
+        return f" ({10 ** k:g} times the model's: is the column in other units than mm?)"
     return ""
 
 

@@ -115,7 +115,8 @@ def identify(params: Parameters, *, n_segments: int = 24, onset: float | None = 
     U, T = orb.speed, orb.period
     along = math.cos(orb.swim_direction - getattr(orb, "phi", 0.0))
     if along < 0:  # (2.5 kappa_E: its heading read as leading the field by 178 degrees)
-        raise RuntimeError(f"the stroke swims against the field (at {math.degrees(orb.swim_direction):.1f} degrees "
+        off = math.degrees(math.remainder(orb.swim_direction - getattr(orb, "phi", 0.0), 2 * math.pi))
+        raise RuntimeError(f"the stroke swims against the field (at {off:.1f} degrees "
                            "to it): the steering model is of a swimmer along the field, which turning the field "
                            "steers; this one it would steer the wrong way")
     onset = established_time(params, n_segments=n_segments) if onset is None else positive("onset", onset)

@@ -200,11 +200,19 @@ def corner_cut(path: RefPath, radius: float) -> float:
     """The largest distance from a corner's waypoint to the path rounded at ``radius`` (what
     the controller tracks, :func:`~flutterswim.steering.path.fillet`): radius (1 / cos(a / 2)
     - 1) for a turn by a where the edges leave room (0.41 radius at 90 degrees, 1 radius at
-    120), less where a near U-turn's arc is shortened to fit; 0 for a path without corners."""
-    if path.corners.size == 0:
-        return 0.0
-    rounded = fillet(path, radius).points
-    return float(max(np.hypot(*(rounded - path.points[c]).T).min() for c in path.corners))
+    120); where a near U-turn's arc is shortened to fit, at most half the shorter edge (an
+    upper bound); 0 for a path without corners."""
+    pts, worst = path.points, 0.0
+    ends = [0, *path.corners.tolist(), len(pts) - 1]
+    for m, c in enumerate(path.corners):
+        d0, d1 = pts[c] - pts[c - 1], pts[(c + 1) % len(pts)] - pts[c]
+        a = abs(math.atan2(d0[0] * d1[1] - d0[1] * d1[0], d0 @ d1))
+        # where the edges leave no room for the arc it is shortened: the rounded path leaves the
+        # edge no further than half the shorter edge from the corner
+        room = 0.5 * min(path.s[c] - path.s[ends[m]], path.s[ends[m + 2]] - path.s[c])
+        full = radius * (1.0 / max(math.cos(a / 2), 1e-12) - 1.0)
+        worst = max(worst, min(full, room) if room > 0 else full)
+    return worst
 
 
 def deque_of(n: int, value: float):
