@@ -228,6 +228,26 @@ def waypoints_csv(path: str | Path, scale: float, start=(0.0, 0.0)) -> RefPath:
     return _polyline(v, False, f"waypoints({p.name})", 1e-5)
 
 
+def corner_arcs(path: RefPath, radius: float) -> list[tuple[int, np.ndarray, np.ndarray, float, float]]:
+    """Per corner of ``path``, the arc :func:`fillet` rounds it with: (index, unit edge in, unit
+    edge out, signed turn [rad], distance from the vertex to each tangent point). The arc of
+    each corner must fit on its edges: at most half of each neighbouring edge (the whole of a
+    closed path's edge through its start, which is no corner); where it does not, the tangent
+    distance shrinks, and with it the radius (the path is then tighter than ``radius`` there)."""
+    pts = path.points
+    ends = [0, *path.corners, len(pts) - 1]
+    arcs = []
+    for m, c in enumerate(path.corners):
+        a, b = pts[max(c - 1, 0)], pts[min(c + 1, len(pts) - 1)]
+        d0 = (pts[c] - a) / np.linalg.norm(pts[c] - a)
+        d1 = (b - pts[c]) / np.linalg.norm(b - pts[c])
+        turn = math.atan2(d0[0] * d1[1] - d0[1] * d1[0], d0 @ d1)
+        room_in = (path.s[c] - path.s[ends[m]]) * (1.0 if m == 0 and path.closed else 0.5)
+        room_out = (path.s[ends[m + 2]] - path.s[c]) * (1.0 if m == len(path.corners) - 1 and path.closed else 0.5)
+        arcs.append((int(c), d0, d1, turn, min(radius * math.tan(abs(turn) / 2), room_in, room_out)))
+    return arcs
+
+
 def fillet(path: RefPath, radius: float, step: float = 1e-5) -> RefPath:
     """The path with each corner replaced by a circular arc of ``radius`` tangent to both
     edges (what a swimmer with that smallest turning radius can follow); corners are kept
@@ -237,18 +257,7 @@ def fillet(path: RefPath, radius: float, step: float = 1e-5) -> RefPath:
     pts = path.points
     out = [pts[0]]
     k_prev = 0
-    # the arc of each corner must fit on its edges: at most half of each neighbouring edge (the
-    # whole of a closed path's edge through its start, which is no corner); where it does not,
-    # the radius shrinks (and the path is then tighter than ``radius`` there)
-    ends = [0, *path.corners, len(pts) - 1]
-    for m, c in enumerate(path.corners):
-        a, b = pts[max(c - 1, 0)], pts[min(c + 1, len(pts) - 1)]
-        d0 = (pts[c] - a) / np.linalg.norm(pts[c] - a)
-        d1 = (b - pts[c]) / np.linalg.norm(b - pts[c])
-        turn = math.atan2(d0[0] * d1[1] - d0[1] * d1[0], d0 @ d1)
-        room_in = (path.s[c] - path.s[ends[m]]) * (1.0 if m == 0 and path.closed else 0.5)
-        room_out = (path.s[ends[m + 2]] - path.s[c]) * (1.0 if m == len(path.corners) - 1 and path.closed else 0.5)
-        dist = min(radius * math.tan(abs(turn) / 2), room_in, room_out)
+    for c, d0, d1, turn, dist in corner_arcs(path, radius):
         radius_c = dist / math.tan(abs(turn) / 2)
         p_in = pts[c] - dist * d0
         # straight part up to the arc

@@ -16,7 +16,7 @@ from .._validate import ParameterError, positive, positive_int, within
 from ..field import Constant, Field
 from ..params import Parameters
 from .control import Controller, wrap
-from .path import RefPath, fillet, min_radius
+from .path import RefPath, corner_arcs, fillet, min_radius
 from .reduced import ReducedModel
 
 __all__ = ["SteerResult", "steer", "metrics"]
@@ -198,21 +198,11 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
 
 def corner_cut(path: RefPath, radius: float) -> float:
     """The largest distance from a corner's waypoint to the path rounded at ``radius`` (what
-    the controller tracks, :func:`~flutterswim.steering.path.fillet`): radius (1 / cos(a / 2)
-    - 1) for a turn by a where the edges leave room (0.41 radius at 90 degrees, 1 radius at
-    120); where a near U-turn's arc is shortened to fit, at most half the shorter edge (an
-    upper bound); 0 for a path without corners."""
-    pts, worst = path.points, 0.0
-    ends = [0, *path.corners.tolist(), len(pts) - 1]
-    for m, c in enumerate(path.corners):
-        d0, d1 = pts[c] - pts[c - 1], pts[(c + 1) % len(pts)] - pts[c]
-        a = abs(math.atan2(d0[0] * d1[1] - d0[1] * d1[0], d0 @ d1))
-        # where the edges leave no room for the arc it is shortened: the rounded path leaves the
-        # edge no further than half the shorter edge from the corner
-        room = 0.5 * min(path.s[c] - path.s[ends[m]], path.s[ends[m + 2]] - path.s[c])
-        full = radius * (1.0 / max(math.cos(a / 2), 1e-12) - 1.0)
-        worst = max(worst, min(full, room) if room > 0 else full)
-    return worst
+    the controller tracks, :func:`~flutterswim.steering.path.fillet`, with its arcs from
+    :func:`~flutterswim.steering.path.corner_arcs`): for a turn by a whose arc touches the
+    edges a distance d from the vertex, d tan(a / 4) (0.41 radius at 90 degrees, 1 radius at
+    120; near a U-turn the arc is shortened to fit its edges); 0 for a path without corners."""
+    return max((dist * math.tan(abs(turn) / 4) for *_, turn, dist in corner_arcs(path, radius)), default=0.0)
 
 
 def deque_of(n: int, value: float):

@@ -133,7 +133,8 @@ def turning_summary(t: np.ndarray, x: np.ndarray, y: np.ndarray, field: np.ndarr
     moving = np.abs(np.gradient(f, t)) > 1e-9
     if not moving.any():
         return nan
-    t_start = t[np.argmax(moving)] + 4 * period
+    t_move = float(t[np.argmax(moving)])
+    t_start = t_move + 4 * period
     t_stop = t[len(moving) - 1 - np.argmax(moving[::-1])] - period
     try:
         avg = cycle_average(t, x, y, field, period)
@@ -142,7 +143,6 @@ def turning_summary(t: np.ndarray, x: np.ndarray, y: np.ndarray, field: np.ndarr
         return nan
     # the averaged speed over the 3 periods before the field starts turning (NaN if the record
     # holds fewer): a swimmer that has stepped out swims far slower while the field turns
-    t_move = t_start - 4 * period
     before = (avg.t >= t_move - 3 * period) & (avg.t <= t_move)
     speed_before = float(np.mean(avg.speed[before])) if np.count_nonzero(before) >= 3 else math.nan
     return {"turning_radius": d.turning_radius, "heading_lag": d.heading_lag, "heading_lag_std": d.heading_lag_std,
