@@ -32,6 +32,49 @@ def test_fold_back_into_the_range_is_followed_and_reported(branch):
     assert len(_at(branch, 1.95)) == 2  # two stable strokes at 1.95
 
 
+def test_the_folds_are_named_where_the_branch_turns_back(branch):
+    """Two independent readings of a fold of cycles: a real multiplier through +1, and the
+    parameter turning back along the arclength. Each crossing is named a fold, within the
+    orbits' spacing of a turning point of the parameter, and the file says so."""
+    v = branch.values
+    turns = [v[i] for i in range(1, v.size - 1) if (v[i] - v[i - 1]) * (v[i + 1] - v[i]) < 0]
+    changes = branch.stability_changes()
+    assert len(changes) == len(turns) == 2, (changes, turns)
+    spacing = np.max(np.abs(np.diff(v)))
+    for (at, kind), turn in zip(changes, turns):
+        assert kind == "fold" and abs(at - turn) < spacing, (at, kind, turn)
+    assert branch.to_dataset().attrs["multiplier_crossings"].count("(fold)") == 2
+
+
+def test_crossings_are_classified_by_the_multiplier_that_leaves(monkeypatch):
+    """A real multiplier through -1 is a period doubling, a complex pair a torus, a real one
+    through +1 with the parameter going on a branch point (orbits made up: only their
+    multipliers matter)."""
+    from types import SimpleNamespace
+
+    from flutterswim.orbits.continuation import Branch
+
+    def orbit(mu):
+        mu = np.r_[1.0, mu, 0.1, 0.01j].astype(complex)
+        others = np.abs(mu[1:])
+        return SimpleNamespace(multipliers=mu, max_multiplier=float(others.max()))
+
+    for leaving, kind in ((-1.05, "period doubling"), (1.05 * np.exp(0.3j), "torus"), (1.05, "branch point")):
+        inside = -0.95 if kind == "period doubling" else 0.95
+        mus = [inside, inside, leaving, leaving]
+        if kind == "torus":
+            mus = [0.95 * np.exp(0.3j), 0.95 * np.exp(0.3j), leaving, leaving]
+        orbits = []
+        for m in mus:
+            o = orbit(m)
+            if kind == "torus":  # (the pair: both multipliers)
+                o = orbit(np.array([m, np.conj(m)]))
+            orbits.append(o)
+        br = Branch(None, np.array([1.0, 1.1, 1.2, 1.3]), orbits, 0.5, 1.0, -1.0, 1.0, 12, 32, 0.0, "")
+        (at, got), = br.stability_changes()
+        assert got == kind and 1.1 < at < 1.2, (kind, got, at)
+
+
 def test_the_second_stroke_is_an_attractor_of_the_time_stepper(branch):
     """Independent check: the stroke after the folds, perturbed by 2 % and simulated for 8
     periods, returns to itself, not to the stroke reached first (their periods differ)."""

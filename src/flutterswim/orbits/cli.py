@@ -130,7 +130,8 @@ def _cmd_branch(args) -> int:
         print(f"flutterswim branch: note: no Hopf point in {name}={lo:g}:{hi:g}; the branch starts at the "
               f"nearest one, {name}={hp.value:.6g}, outside the range", file=sys.stderr)
     print(f"{out}: {len(br.values)} orbits from the Hopf point {name}={br.hopf_value:.6g} to {short_of(br.values[-1], to)} "
-          f"({ds.attrs['bifurcation']}, l1={br.lyapunov_coefficient:.3g}) in {br.wall_time:.1f} s; {br.message}")
+          f"({ds.attrs['bifurcation']}, l1={br.lyapunov_coefficient:.3g}) in {br.wall_time:.1f} s; {br.message}"
+          + ("" if ds.attrs["multiplier_crossings"] == "none" else f"; stability changes at {ds.attrs['multiplier_crossings']}"))
     if args.plot:
         from .plot import plot_branch
 

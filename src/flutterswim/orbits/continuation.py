@@ -91,7 +91,7 @@ class Branch:
         ds = orbits_dataset(self.orbits, si=si, orbit_long_name="orbit number along the branch, from the Hopf point")
         ds = ds.assign_coords({name: (("orbit",), self.values, {"units": self.axis.units,
                                                                  "long_name": self.axis.long_name})})
-        crossings = self.multiplier_crossings()
+        crossings = self.stability_changes()
         from .. import __version__
         from .._cf import cf_dataset
 
@@ -120,7 +120,11 @@ class Branch:
                 "Hopf point from the normal form, for "
                 "the RMS amplitude (the amplitude variable's definition)"),
             "bifurcation": "supercritical" if self.lyapunov_coefficient < 0 else "subcritical",
-            "multiplier_crossings": "; ".join(f"{name}={v:.6g}" for v in crossings) if crossings else "none",
+            "multiplier_crossings": "; ".join(f"{name}={v:.6g} ({kind})" for v, kind in crossings) if crossings else "none",
+            "multiplier_crossings_comment": (
+                "where the largest non-trivial Floquet multiplier crosses the unit circle (interpolated) and how: fold "
+                "(real, +1, the branch turns back), branch point (real, +1, another branch meets this one), period "
+                "doubling (real, -1), torus (a complex pair)"),
             "n_segments": self.n_segments,
             "steps_per_period_max": self.steps,
             "steps_per_period_max_units": "1",
@@ -141,12 +145,23 @@ class Branch:
     def multiplier_crossings(self) -> list[float]:
         """Parameter values (linearly interpolated) where the largest non-trivial multiplier
         crosses the unit circle along the branch."""
+        return [v for v, _ in self.stability_changes()]
+
+    def stability_changes(self) -> list[tuple[float, str]]:
+        """Where the largest non-trivial multiplier crosses the unit circle (parameter value,
+        linearly interpolated) and how, from the multiplier outside the circle on the unstable
+        side (:func:`crossing_kind`): "fold" (real, through +1, where the branch turns back in
+        the parameter), "branch point" (real, through +1, the branch going on: another branch
+        of strokes meets it there, as one that breaks a symmetry), "period doubling" (real,
+        through -1) or "torus" (a complex pair: Neimark-Sacker, a second frequency)."""
         m = np.array([o.max_multiplier for o in self.orbits]) - 1.0
+        v = np.asarray(self.values, float)
         out = []
         for i in range(len(m) - 1):
             if m[i] * m[i + 1] < 0:
                 f = m[i] / (m[i] - m[i + 1])
-                out.append(float(self.values[i] + f * (self.values[i + 1] - self.values[i])))
+                at = float(v[i] + f * (v[i + 1] - v[i]))
+                out.append((at, crossing_kind(self.orbits[i if m[i] > 0 else i + 1], v, i)))
         return out
 
     def save(self, path) -> None:
@@ -371,6 +386,29 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     _warn_inaccurate(parameter, values, orbits)
     return Branch(axis, np.array(values), orbits, hopf.value, hopf.omega, nf.lyapunov_coefficient,
                   nf.amplitude2_slope_rms, n_segments, max(o.steps for o in orbits), time.perf_counter() - t_start, message)
+
+
+#: a non-trivial multiplier counts as real when its imaginary part is below this fraction of
+#: its modulus (a real monodromy matrix's real eigenvalues come out with none; a complex pair
+#: leaving the circle near +1 turns slowly, at a torus crossing of the paper's model 1e-2 rad or more)
+REAL_MULTIPLIER = 1e-6
+
+
+def crossing_kind(orbit, values: np.ndarray, i: int) -> str:
+    """How the stability changes between orbits i and i + 1 of a branch at ``values``, from
+    ``orbit`` (the one of the two with a non-trivial multiplier outside the unit circle): its
+    largest non-trivial multiplier real and positive, "fold" if the parameter turns back
+    within two orbits of the crossing (its steps change sign), else "branch point"; real and
+    negative, "period doubling"; complex, "torus"."""
+    mu = np.asarray(orbit.multipliers)
+    mu = np.delete(mu, int(np.argmin(np.abs(mu - 1.0))))  # the trivial one (the orbit's own phase)
+    lead = mu[int(np.argmax(np.abs(mu)))]
+    if abs(lead.imag) > REAL_MULTIPLIER * abs(lead):
+        return "torus"
+    if lead.real < 0:
+        return "period doubling"
+    d = np.diff(values[max(i - 2, 0):i + 4])
+    return "fold" if np.any(d[:-1] * d[1:] < 0) else "branch point"
 
 
 def _step_range(orbits) -> str:
