@@ -221,10 +221,59 @@ def test_rows_against_our_own_numbers_are_not_agreements_with_the_paper(built):
     assert all(c.from_paper and c.ok for c in built.records["table1"].outcome.comparisons if c.paper_value)
     if built.records["fig3e"].status == "ok":  # a fit recovering the truth of its synthetic data
         assert not any(c.from_paper for c in built.records["fig3e"].outcome.comparisons)
-    paper = [c for c in rows if c.from_paper and c.ok is not None]
+    paper = [c for c in rows if c.from_paper and c.ok is not None and not c.is_input]
     n_agree = sum(c.ok for c in paper)
     assert 0 < len(paper) < len([c for c in rows if c.ok is not None])
-    assert f"Comparisons with the paper: {n_agree} agree, {len(paper) - n_agree} disagree." in built.report.read_text()
+    html = built.report.read_text()
+    assert f"Comparisons with the paper: {n_agree} agree, {len(paper) - n_agree} disagree." in html
+    # Table 1's inputs compared with themselves are counted apart (7 of the "22 agree" were),
+    # and each disagreement is named in the headline
+    inputs = [c for c in built.records["table1"].outcome.comparisons if c.paper_value]
+    assert inputs and all(c.is_input for c in inputs)
+    assert f"Table 1's {len(inputs)} inputs, as printed ({sum(c.ok for c in inputs)} transcribed" in html
+    import html as html_lib
+
+    for c in paper:
+        assert (html_lib.escape(c.quantity) in html.split("<h2")[0]) == (not c.ok), c.quantity
+
+
+def test_every_model_figure_names_its_place_in_the_latex_source():
+    """The targets keep the issue's numbering (Fig. 4b ...); the LaTeX source numbers its figures
+    in source order, fig:exp_stat as Fig. 4, so its fig:model is Fig. 5 (a review took "Fig. 4b"
+    for the experimental equilibrium shapes). Each figure target names its label, and the number
+    given is the label's place among the source's figure environments."""
+    import re
+    from pathlib import Path
+
+    from flutterswim.reproduce.catalog import TARGETS
+
+    paper = Path(__file__).resolve().parents[2] / "shared" / "paper" / "000_030aa27e52f153d6.txt"
+    if not paper.is_file():
+        pytest.skip("the paper's LaTeX source is not beside the repository")
+    text = paper.read_text()
+    order = []  # figure labels in source order: the \label right after each figure's caption
+    for env in re.findall(r"\\begin\{figure\*?\}(.*?)\\end\{figure\*?\}", text, re.S):
+        labels = re.findall(r"\\label\{(fig:[^}:]*)\}", env)
+        order.append(labels[-1])
+    for t in TARGETS:
+        if not t.name.startswith("fig"):
+            continue
+        label, number = re.match(r"\\ref\{([^}]*)\}.*Fig\. (\d+)", t.source).groups()
+        assert order.index(label) + 1 == int(number), (t.name, label, number, order)
+        assert t.title.startswith("Fig. ")
+
+
+def test_video_s5_resolves_the_stroke():
+    """Video S5 at 6x and 15 fps showed a frame every 0.4 s of a 0.377 s stroke: a slow, false
+    undulation (stroboscopic aliasing). Every mode now shows a frame per quarter stroke or less."""
+    from flutterswim.orbits import periodic_orbit
+    from flutterswim.reproduce.figures_steering import video_s5_params
+    from flutterswim.reproduce.targets import Settings
+
+    period = periodic_orbit(fs.PAPER, n_segments=12).period
+    for mode in ("quick", "full"):
+        prm = video_s5_params(Settings(mode))
+        assert prm["speed"] / prm["fps"] <= period / 4, (mode, prm, period)
 
 
 def test_steering_circle_radius_is_U_over_Omega(built):

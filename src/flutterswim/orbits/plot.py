@@ -108,8 +108,12 @@ def plot_branch(ds, path=None, *, x_range: tuple[float, float] | None = None):
           Line2D([], [], color="k", lw=1.8, ls="--", label="trailing end")]
     ax3.legend(handles=h3, fontsize=8, loc="lower right")
     l1 = ds.attrs.get("lyapunov_coefficient")
+    n = ds.attrs.get("n_segments")
+    # (l1's size depends on the eigenvector's normalisation, over the 2N + 1 components: ~1/N;
+    # its sign decides the bifurcation, so the sign and N are given with it)
     axes[0].set_title(f"Stroke branch: {ds.attrs.get('bifurcation', '')} Hopf bifurcation"
-                      + (f" (l1 = {l1:.3g})" if l1 is not None else ""), fontsize=10)
+                      + (f" (l1 = {l1:.3g} {'<' if l1 < 0 else '>'} 0" + (f", N = {n})" if n is not None else ")")
+                         if l1 is not None else ""), fontsize=10)
     if path is not None:
         from pathlib import Path
 

@@ -3,6 +3,7 @@ and Fig. 6 (stability map, bifurcation plots, first and second eigenmodes)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -48,7 +49,8 @@ def build_table1(ctx: Context) -> Outcome:
     from .datasets import table1_dataset
 
     p = PAPER
-    rows = [compare(label, paper, f(p), unit=unit, rtol=1e-6) for label, paper, unit, f in TABLE1_ROWS]
+    rows = [dataclasses.replace(compare(label, paper, f(p), unit=unit, rtol=1e-6), is_input=True)
+            for label, paper, unit, f in TABLE1_ROWS]
     derived = []
     for name, pr in readings(p).items():
         g = pr.groups

@@ -60,13 +60,16 @@ def write_report(out: Path, records: dict, mode: str, *, name: str = "report.htm
             if p.is_file():
                 imgs.append({"name": f, "data": base64.b64encode(p.read_bytes()).decode("ascii")})
         comps = list(rec.outcome.comparisons)
-        paper = [c for c in comps if c.from_paper and c.ok is not None]
+        paper = [c for c in comps if c.from_paper and c.ok is not None and not c.is_input]
+        inputs = [c for c in comps if c.is_input and c.ok is not None]
         ours = [c for c in comps if not c.from_paper and c.ok is not None]
         title = rec.outcome.values.get("title", t.title) if isinstance(rec.outcome.values, dict) else t.title
         rows.append({"name": t.name, "title": title, "caption": t.caption, "status": rec.status, "mode": rec.mode,
                      "reran": rec.reran, "wall_time": rec.wall_time, "error": rec.error, "images": imgs,
                      "videos": [v for v in t.videos if (out / v).is_file()], "rows": comps,
                      "notes": list(rec.outcome.notes), "files": sorted(rec.outputs.items()),
+                     "source": t.source, "disagree": [c.quantity for c in paper if not c.ok],
+                     "n_inputs": len(inputs), "n_inputs_ok": sum(c.ok for c in inputs),
                      "n_rows": len(paper), "n_agree": sum(c.ok for c in paper),
                      "n_checks": len(ours), "n_checks_ok": sum(c.ok for c in ours)})
     env = jinja2.Environment(loader=jinja2.PackageLoader("flutterswim.reproduce", "templates"),
@@ -77,6 +80,8 @@ def write_report(out: Path, records: dict, mode: str, *, name: str = "report.htm
         n_ok=sum(r["status"] == "ok" for r in rows), n_skipped=sum(r["status"] == "skipped" for r in rows),
         n_failed=sum(r["status"] == "failed" for r in rows), n_reran=sum(r["reran"] for r in rows),
         n_agree=sum(r["n_agree"] for r in rows), n_disagree=sum(r["n_rows"] - r["n_agree"] for r in rows),
+        disagree=[(r["title"], q) for r in rows for q in r["disagree"]],
+        n_inputs=sum(r["n_inputs"] for r in rows), n_inputs_ok=sum(r["n_inputs_ok"] for r in rows),
         n_checks=sum(r["n_checks"] for r in rows), n_checks_ok=sum(r["n_checks_ok"] for r in rows),
         environment=environment())
     path = out / name

@@ -66,6 +66,9 @@ class Comparison:
     paper_value: float | None = None
     our_value: float | None = None
     from_paper: bool = True
+    #: an input of ours as printed in the paper (Table 1's): a transcription check, counted apart
+    #: from the results that agree with the paper
+    is_input: bool = False
 
 
 def compare(quantity: str, paper_value: float | None, our_value: float, *, unit: str = "",
@@ -120,7 +123,8 @@ class Context:
 
 @dataclass(frozen=True)
 class Target:
-    """name: short id (file stem); title: the paper's figure name; caption: the paper's words;
+    """name: short id (file stem); title: the paper's figure name (the numbering of the issue that
+    specified reproduce); caption: the paper's words; source: its label in the LaTeX source;
     figures / data / videos: output file names (relative to the output folder);
     params: JSON-able inputs of the build; deps: targets whose outputs this one reads."""
 
@@ -133,6 +137,8 @@ class Target:
     data: tuple[str, ...] = ()
     videos: tuple[str, ...] = ()
     deps: tuple[str, ...] = ()
+    #: where it stands in the paper's LaTeX source (label, and its number there when it differs)
+    source: str = ""
 
     @property
     def summary_file(self) -> str:
