@@ -274,7 +274,9 @@ def build_fig4b(ctx: Context) -> Outcome:
         compare("period at kappa_E,fit", None, at1["period"], unit="s", paper_text="fitted (c_2)"),
     ]
     if np.any(red):
-        rows.append(compare("self-intersecting strokes from kappa_E / kappa_E,fit", None, float(x[red].min()),
+        i = int(np.argmax(red))  # the first self-intersecting orbit; the onset lies after the one before
+        before = f" (the orbit before, at {x[i - 1]:.4g}, does not)" if i > 0 else ""
+        rows.append(compare(f"self-intersecting strokes from kappa_E / kappa_E,fit{before}", None, float(x[i]),
                             paper_text="red parts of the curves"))
     notes = (f"{br.values.size} periodic orbits, N = {prm['n_segments']}; {br.message}. The paper's ~0.65 is the full-width "
              "reading of b (see 'Two readings of b'); the preset (semi-axis) gives the onset above.",)
