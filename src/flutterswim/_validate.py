@@ -39,6 +39,12 @@ def positive(name: str, value: Any, *, strict: bool = False) -> float:
 #: Largest relative or absolute tolerance of the time integrator accepted: beyond it the error
 #: control no longer controls anything (the state is O(1): angles in rad, positions in units of l).
 MAX_TOLERANCE = 0.1
+#: rtol and atol may not both be below this: the error asked for, atol + rtol |y| on an O(1)
+#: state, would be below what round-off leaves (~1e-16 per step, summed over the steps), and the
+#: step size collapses (a review: rtol 1e-13, atol 1e-15 ran 24 s, 1.9 million steps, and failed
+#: at t = 32 tau; 1e-12 completes). Either alone may be smaller (rtol 1e-14 with atol 1e-7: an
+#: absolute error norm)
+MIN_TOLERANCE = 1e-12
 
 
 def tolerance(name: str, value: Any, *, strict: bool = False) -> float:

@@ -124,9 +124,13 @@ def _simulate(args: argparse.Namespace) -> int:
     if field is not None and args.t_end is None:
         raise ParameterError("a field schedule (--field-*) needs --t-end: the settle engine runs in a steady field")
     if args.t_end is not None:
-        from .simulate import simulate
+        import warnings
 
-        run = simulate(params, args.t_end, field=field, **opts)
+        from .simulate import RunFailedWarning, simulate
+
+        with warnings.catch_warnings():  # (a failure is said below, on one line)
+            warnings.simplefilter("ignore", RunFailedWarning)
+            run = simulate(params, args.t_end, field=field, **opts)
     else:
         from .limit_cycle import run_to_limit_cycle
 

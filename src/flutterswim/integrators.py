@@ -345,7 +345,8 @@ def _integrate_rosw(fun, jac, t_span, y0, t_eval, tab, rtol, atol, max_step, fir
             break
         h *= min(5.0, max(0.2, 0.9 * max(err, 1e-10) ** (-1.0 / 3.0)))
     keep = n_out
-    stats = SolverStats(tab.name, tab.order, n_steps, n_rej, n_rhs, n_jac, n_lu,
+    # (the Python-stepped ROS34PW2 is the wave-1 stepper, not the compiled method of the same tableau)
+    stats = SolverStats(f"{tab.name}-wave1", tab.order, n_steps, n_rej, n_rhs, n_jac, n_lu,
                         time.perf_counter() - wall0)
     return Solution(np.asarray(t_eval[:keep]), out[:keep], status, message, t, y, stats)
 

@@ -219,7 +219,9 @@ def settle(params: Parameters | Groups, *, initial=None, n_cycles: int = default
     from .initial import InitialState
     from .orbits.linear import leading_mode
     from .result import concatenate
-    from .simulate import simulate
+    import warnings
+
+    from .simulate import RunFailedWarning, simulate
 
     si = isinstance(params, Parameters)
     tau = params.tau if si else 1.0
@@ -243,8 +245,10 @@ def settle(params: Parameters | Groups, *, initial=None, n_cycles: int = default
     next_len = chunk
     while outcome is None:
         t1 = min(t0 + next_len, t_max)
-        part = simulate(params, t1, t_start=t0, initial=state, n_segments=n_segments, rtol=rtol, atol=atol,
-                        frame_dt=tau / frames_per_tau)
+        with warnings.catch_warnings():  # (a failure is this run's outcome, with its reason)
+            warnings.simplefilter("ignore", RunFailedWarning)
+            part = simulate(params, t1, t_start=t0, initial=state, n_segments=n_segments, rtol=rtol, atol=atol,
+                            frame_dt=tau / frames_per_tau)
         parts.append(part)
         if bar is not None:
             bar.update(round((t1 - t0) / tau, 3))

@@ -13,7 +13,7 @@ from typing import Callable
 import numpy as np
 
 from . import defaults
-from ._validate import ParameterError, angle as _angle, finite, positive, positive_int, tolerance
+from ._validate import MIN_TOLERANCE, ParameterError, angle as _angle, finite, positive, positive_int, tolerance
 from ._validate import n_segments as segments_checked
 from .field import Constant, Field
 from .filament import Filament, centreline
@@ -26,6 +26,11 @@ __all__ = ["simulate", "DEFAULT_SEGMENTS"]
 
 DEFAULT_SEGMENTS = defaults.N_SEGMENTS
 
+
+
+class RunFailedWarning(RuntimeWarning):
+    """:func:`simulate` ended on a solver failure and returns the frames up to it (callers that
+    report the failure themselves, as ``settle`` and the command line, silence it)."""
 
 def simulate(
     params: Parameters | Groups,
@@ -67,6 +72,10 @@ def simulate(
         raise ParameterError(f"t_end={t_end!r} must be greater than t_start={t_start!r}")
     n_segments = segments_checked(n_segments)
     rtol, atol = tolerance("rtol", rtol, strict=True), tolerance("atol", atol, strict=True)
+    if max(rtol, atol) < MIN_TOLERANCE:
+        raise ParameterError(f"rtol={rtol!r} and atol={atol!r} are both below {MIN_TOLERANCE:g}: round-off in the state "
+                             "exceeds the error asked for, and the step size would collapse; at least one of them "
+                             f">= {MIN_TOLERANCE:g} is required")
     frame_dt = None if frame_dt is None else positive("frame_dt", frame_dt, strict=True)
     max_step = None if max_step is None else positive("max_step", max_step, strict=True)
     if method not in METHODS:
@@ -84,6 +93,9 @@ def simulate(
 
     # --- dimensionless problem ------------------------------------------------
     t0, t1 = t_start / tau, t_end / tau
+    if t1 - t0 <= 1e-12 * max(1.0, abs(t1)):  # (the steppers stop within this of the end: no step was taken)
+        raise ParameterError(f"t_end={t_end!r} is within round-off of t_start={t_start!r}: the run must span more than "
+                             f"1e-12 of max(1, |t_end|) in units of tau ({tau:.6g} s here)")
     fld = field.scaled(tau)
     fil = Filament(n_segments, groups.eta_par, groups.eta_perp, groups.chi)
     y0 = initial.state(n_segments)
@@ -127,7 +139,7 @@ def simulate(
     finally:
         if bar is not None:
             bar.close()
-    return _package(sol, fil, fld, groups, params, tau, forces, {
+    res = _package(sol, fil, fld, groups, params, tau, forces, {
         "n_segments": n_segments, "method": method, "rtol": rtol, "atol": atol,
         # what ran: a field turning between breakpoints is stepped in Python by another method (ndf:
         # scipy's bdf; the settings said "ndf" where the stats named the method that ran)
@@ -135,6 +147,13 @@ def simulate(
         "field": field.describe(), "initial": initial.describe(), "t_start": t_start,
         "t_end": t_end, "stop_on_self_intersection": stop_on_self_intersection,
     })
+    if res.status == "failed":  # (the frames up to the failure are returned: say so, not only in .status)
+        import warnings
+
+        warnings.warn(f"the run failed: {res.message}; the result holds the frames up to t = {res.t_final:.6g} "
+                      f"{'s' if isinstance(params, Parameters) else 'tau'} (result.status 'failed')", RunFailedWarning,
+                      stacklevel=2)
+    return res
 
 
 def frame_count(t_span: float, n_frames: int | None = None, dt: float | None = None) -> float:

@@ -806,6 +806,9 @@ def describe(
             f"(n_last, --last): {'; '.join(why)}")
     if cyc.growth_note:
         note = (note + "; " if note else "") + cyc.growth_note
+    if tr.meta.get("run_failed"):
+        note = (note + "; " if note else "") + (f"the simulation failed ({tr.meta['run_failed']}): described over "
+                                               "the frames before the failure")
     if not np.any(np.isfinite(p2p)):
         per_stroke = float(np.mean(per)) / float(np.median(np.diff(tr.t)))
         note = (note + "; " if note else "") + (

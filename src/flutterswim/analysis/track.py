@@ -175,6 +175,8 @@ class Track:
         meta = {}
         if params is not None:
             meta["params"] = params
+        if getattr(result, "status", None) == "failed":  # (a simulation that stopped on a solver failure)
+            meta["run_failed"] = str(getattr(result, "message", "the run failed"))
         if getattr(result, "units", "SI") == "dimensionless":
             # lengths in body lengths l, times in tau (a run of fs.Groups): no metres to give
             meta["dimensionless"] = True

@@ -100,7 +100,7 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     default the reduced model's ``onset_time``, once the stroke is established (a field turned
     mid-onset can trap the filament: at 0.75 kappa_E a fixed 10 s did, on a gentle circle)."""
     from ..result import concatenate
-    from ..simulate import simulate
+    from ..simulate import RunFailedWarning, simulate
 
     if not isinstance(params, Parameters):
         raise ParameterError(f"params={params!r} must be flutterswim.Parameters")
@@ -166,8 +166,10 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     for k in range(n):
         cmd = pending.popleft()
         # (Constant: the commanded angle is unwrapped, more than a turn is no unit mix-up)
-        part = simulate(params, t + dt, t_start=t, initial=state, field=Field(direction=Constant(cmd)),
-                        n_segments=n_segments, n_frames=2)
+        with warnings.catch_warnings():  # (a failure is raised below)
+            warnings.simplefilter("ignore", RunFailedWarning)
+            part = simulate(params, t + dt, t_start=t, initial=state, field=Field(direction=Constant(cmd)),
+                            n_segments=n_segments, n_frames=2)
         if not part.ok:
             raise RuntimeError(f"the simulation failed at t={t:.4g} s: {part.message}")
         parts.append(part)
