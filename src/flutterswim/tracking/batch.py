@@ -9,7 +9,9 @@ frame folder; keys ``voltage_V``, ``sample`` and optionally ``px_per_mm``, ``fps
 ``field_angle_deg``, ``start_end``, ``dark_line``, ``times``: a file of the frames' times, as
 ``track --times``, its path relative to the sidecar's folder) or else (each key the sidecar lacks) from the file name by a regular expression with
 the named groups ``voltage`` and ``sample`` (default :data:`DEFAULT_PATTERN`, e.g.
-``85V_sample3_trial2.tif``; a ``p`` may stand for the decimal point, ``72p5V``).
+``85V_sample3_trial2.tif``; a ``p`` or a comma may stand for the decimal point, ``72p5V``, ``72,5V``;
+a minus sign before the voltage is not read as one: such a name is refused, give the voltage in
+a sidecar).
 
 Columns (the last, tracked_by, signs the file as ours): advance_mm is the advance per cycle along the field (its magnitude); lateral_mm is
 the lateral peak-to-peak of the trailing end (the fitting's default), leading_lateral_mm that
@@ -41,7 +43,11 @@ from .io import FRAME_SUFFIXES, MOVIE_SUFFIXES, STACK_SUFFIXES, parse_roi
 
 __all__ = ["DEFAULT_PATTERN", "CSV_COLUMNS", "Trial", "failures_path", "find_trials", "track_batch"]
 
-DEFAULT_PATTERN = r"(?P<voltage>\d+(?:[.p]\d+)?)\s*V.*?sample[-_ ]?(?P<sample>[A-Za-z0-9]+)"
+# the voltage a whole number (not the end of one: "85,5V" read 5 V), its decimal mark a point, a
+# comma or a p; the sample the token right after "sample" and a separator, or its digits or
+# capitals ("samples_A" read as sample "s")
+DEFAULT_PATTERN = (r"(?<![\d.,])(?P<voltage>\d+(?:[.,p]\d+)?)\s*V.*?"
+                   r"sample(?:[-_ ]|(?=(?-i:[0-9A-Z])))(?P<sample>[A-Za-z0-9]+)")
 CSV_COLUMNS = ("voltage_V", "sample", "period_s", "advance_mm", "lateral_mm", "leading_lateral_mm",
                "lateral_se_mm", "leading_lateral_se_mm", "period_std_s", "advance_std_mm", "n_cycles", "body_length_mm", "body_length_spread",
                "n_frames", "n_failed_frames", "trial", "tracked_by")
@@ -124,6 +130,17 @@ def _sidecar_times(value: Any, cand: Path):
     return read_times(p if p.is_absolute() else cand.parent / p)
 
 
+def _voltage(m: re.Match) -> str:
+    """The voltage the name gives, as text for float(); not a number when a minus sign stands
+    right before it at the start of the name or of a field ("-85V", "trial_-85V": a sign, which
+    the pattern does not read; "run-85V" is a separator), so that the trial is refused by name."""
+    v = m.group("voltage").replace("p", ".").replace("P", ".").replace(",", ".")
+    start, name = m.start("voltage"), m.string
+    if start > 0 and name[start - 1] == "-" and (start == 1 or name[start - 2] in "_ "):
+        return f"-{v} (a sign the file name cannot give: write voltage_V in a sidecar)"
+    return v
+
+
 def find_trials(folder: str | os.PathLike, pattern: str = DEFAULT_PATTERN) -> list[Trial]:
     """Trials of ``folder`` (sorted by name) with their voltage and sample; the sidecars'
     options are checked here (a bad one is a ParameterError naming its file). A trial without
@@ -152,7 +169,7 @@ def find_trials(folder: str | os.PathLike, pattern: str = DEFAULT_PATTERN) -> li
             where = f"sidecar={str(cand)!r}"
             if (v is None or smp is None) and m is not None:
                 # a sidecar of options only (px_per_mm, field_angle_deg ...): the name gives the rest
-                v = m.group("voltage").replace("p", ".").replace("P", ".") if v is None else v
+                v = _voltage(m) if v is None else v
                 smp = m.group("sample") if smp is None else smp
             if v is None or smp is None:
                 out.append(Trial(p, math.nan, str(smp), opts, f"{where} needs the keys voltage_V and sample (or a "
@@ -167,7 +184,7 @@ def find_trials(folder: str | os.PathLike, pattern: str = DEFAULT_PATTERN) -> li
                 out.append(Trial(p, math.nan, "", {}, f"no sidecar JSON and the name does not match the pattern "
                                  f"{pattern!r}; add {p.stem}.json with voltage_V and sample, or give pattern"))
                 continue
-            v, smp, opts = m.group("voltage").replace("p", ".").replace("P", "."), m.group("sample"), {}
+            v, smp, opts = _voltage(m), m.group("sample"), {}
         try:
             v = float(v)
         except (TypeError, ValueError):

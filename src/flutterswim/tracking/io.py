@@ -7,6 +7,7 @@ ROI: (x0, y0, x1, y1) in pixels of the full frame, columns x0 <= x < x1, rows y0
 from __future__ import annotations
 
 import logging
+import math
 import os
 import re
 import warnings
@@ -30,13 +31,17 @@ def _gray(a: np.ndarray) -> np.ndarray:
     a = np.asarray(a)
     if a.ndim == 3 and a.shape[-1] in (3, 4):
         a = a[..., :3].astype(np.float32) @ np.array([0.299, 0.587, 0.114], np.float32)
+    elif a.ndim == 3 and a.shape[-1] == 2:  # grey and alpha: the alpha dropped, as a colour image's
+        a = a[..., 0]
     if a.ndim != 2:
         raise ParameterError(f"a frame has shape {a.shape}; a grey-level (H, W) or colour (H, W, 3) image is required")
     return a.astype(np.float32, copy=False)
 
 
 def _natural_key(p: Path) -> list:
-    return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", p.name)]
+    """Sort key of a frame's file name: its numbers by value, decimals included (frame_2 before
+    frame_10; t0.02s before t0.1s, which digit by digit sorted after it), the rest by text."""
+    return [float(t) if k % 2 else t.lower() for k, t in enumerate(re.split(r"(\d+(?:\.\d+)?)", p.name))]
 
 
 @dataclass
@@ -53,6 +58,7 @@ class Frames:
     roi: tuple[int, int, int, int] | None = None
     note: str = ""  # how the file was read, when it could be read another way
     sequential: bool = False  # a movie: indexing decodes every frame into memory once
+    names: tuple[str, ...] = ()  # a folder's frame files, in the order read
 
     def __len__(self) -> int:
         return self.n_frames
@@ -143,6 +149,7 @@ def _tiff_stack(p: Path) -> Frames:
         try:
             with tifffile.TiffFile(p) as tf:
                 axes, shape = tf.series[0].axes, tuple(tf.series[0].shape)
+                fps = _tiff_frame_rate(tf)
             try:
                 arr = tifffile.memmap(p, mode="r")  # uncompressed: frames read on demand
             except (ValueError, tifffile.TiffFileError, OSError):
@@ -171,7 +178,21 @@ def _tiff_stack(p: Path) -> Frames:
             "pass one Z plane or channel")
     fr = _from_array(arr, str(p))
     fr.note = note
+    fr.fps = fps
     return fr
+
+
+def _tiff_frame_rate(tf) -> float | None:
+    """The frame rate an ImageJ stack records (its ``finterval`` [s], or ``fps``), else None."""
+    meta = tf.imagej_metadata or {}
+    for key, to_fps in (("finterval", lambda v: 1.0 / v), ("fps", lambda v: v)):
+        try:
+            v = float(meta.get(key, 0) or 0)
+        except (TypeError, ValueError):
+            continue
+        if math.isfinite(v) and v > 0:
+            return float(to_fps(v))
+    return None
 
 
 def _read_image(p: Path) -> np.ndarray:
@@ -223,7 +244,7 @@ def _folder(p: Path) -> Frames:
             raise ParameterError(f"input={str(p)!r}: frame {f.name!r} has shape {got} but the first frame "
                                  f"{files[0].name!r} has {want}; all frames must have one size and channel count")
     return Frames(str(p), len(files), first.shape, None, lambda i: _read_image(files[i]),
-                  lambda: (_read_image(f) for f in files))
+                  lambda: (_read_image(f) for f in files), names=tuple(f.name for f in files))
 
 
 def _ffmpeg_said(exc: BaseException) -> str:
@@ -245,6 +266,10 @@ def _movie(p: Path) -> Frames:
         meta = gen.__next__()
         gen.close()
         W, H = meta["size"]
+        # a stream of more than 8 bits per sample (gray16le, yuv420p10le, rgb48 ...) is read at 16:
+        # at 8 a lossless 16-bit movie of a line 52 counts over its background came out as 0s and 1s
+        deep = bool(re.search(r"(?:gray|yuv\w*p|gbrp|rgb|bgr)(?:9|1[0-6]|48|64)", str(meta.get("pix_fmt", ""))))
+        fmt, bpp, dtype = ("gray16le", 2, np.uint16) if deep else ("gray", 1, np.uint8)
         fps = float(meta.get("fps") or 0) or None
         n, _ = imageio_ffmpeg.count_frames_and_secs(str(p))
     except (MemoryError, PermissionError):
@@ -253,11 +278,11 @@ def _movie(p: Path) -> Frames:
         raise ParameterError(f"input={str(p)!r} cannot be read as a movie ({_ffmpeg_said(exc)})") from None
 
     def it() -> Iterator[np.ndarray]:
-        g = imageio_ffmpeg.read_frames(str(p), pix_fmt="gray", bpp=1)
+        g = imageio_ffmpeg.read_frames(str(p), pix_fmt=fmt, bpp=bpp)
         try:
             g.__next__()
             for buf in g:
-                yield np.frombuffer(buf, np.uint8).reshape(H, W)
+                yield np.frombuffer(buf, dtype).reshape(H, W)
         except (MemoryError, GeneratorExit):
             raise
         except Exception as exc:  # damaged after its header
@@ -285,11 +310,19 @@ def open_frames(source: Any, roi: Any = None) -> Frames:
         fr.fps = getattr(source, "fps", None)
     elif isinstance(source, np.ndarray):
         fr = _from_array(source, "array")
+    elif isinstance(source, (list, tuple)) and source and all(isinstance(a, np.ndarray) for a in source):
+        shapes = {a.shape for a in source}
+        if len(shapes) != 1:
+            raise ParameterError(f"input: a list of {len(source)} frames of shapes {sorted(shapes)[:3]}; frames of one "
+                                 "shape are required")
+        fr = _from_array(np.stack(source), "list of frames")
     else:
         try:
             p = Path(os.fspath(source))
         except TypeError:
-            raise ParameterError(f"input={source!r} is not a path or an array of frames") from None
+            # (not its repr: an array's contents ran to thousands of characters)
+            raise ParameterError(f"input of type {type(source).__name__} is not a path, an array of frames (T, H, W) or "
+                                 "a list of frames (H, W)") from None
         if not p.exists():
             raise ParameterError(f"input={str(p)!r} does not exist")
         if p.is_dir():
@@ -311,26 +344,62 @@ def open_frames(source: Any, roi: Any = None) -> Frames:
 
 
 # column names of a timestamps file, and the factor to seconds
-_TIME_COLUMNS = {"t": 1.0, "time": 1.0, "t_s": 1.0, "time_s": 1.0, "timestamp": 1.0, "timestamp_s": 1.0,
-                 "t_ms": 1e-3, "time_ms": 1e-3, "timestamp_ms": 1e-3}
+#: header names of a time column (lower case, unit removed) and the units a header may give
+#: (a suffix _s, _ms, _us or a unit in brackets: "Time (ms)", "t [s]")
+_TIME_NAMES = ("t", "time", "timestamp", "time stamp", "elapsed", "elapsed time", "time elapsed", "relative time")
+_TIME_UNITS = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "\u00b5s": 1e-6, "\u03bcs": 1e-6}
+
+
+def _time_header(field: str) -> float | None:
+    """The factor to seconds if ``field`` names a time column, else None."""
+    f = field.strip().strip('"').strip("'").strip().lower()
+    m = re.fullmatch(r"(.*?)\s*[\(\[]\s*([^\)\]]*?)\s*[\)\]]", f)
+    unit = None
+    if m:
+        f, unit = m.group(1).strip(), m.group(2)
+    else:
+        m = re.fullmatch(r"(.*?)[ _]([a-z\u00b5\u03bc]+)", f)
+        if m and m.group(2) in _TIME_UNITS and m.group(1).strip() in _TIME_NAMES:
+            f, unit = m.group(1).strip(), m.group(2)
+    f = re.sub(r"[_\s]+", " ", f)
+    if f not in _TIME_NAMES:
+        return None
+    if unit is None:
+        return 1.0
+    return _TIME_UNITS.get(unit)
+
+
+def _delimiter(line: str) -> str:
+    """The rows' field separator: a comma, a semicolon or a tab when the line holds one, else
+    white space (a header's names may hold spaces: "Time (ms)")."""
+    for d in (",", ";", "\t"):
+        if d in line:
+            return re.escape(d)
+    return r"\s+"
 
 
 def read_times(path: str | os.PathLike) -> np.ndarray:
     """The frames' times [s] from a text or CSV file (a camera's timestamps): one row per frame,
-    fields separated by commas, semicolons or white space; blank lines and lines starting with
-    ``#`` are skipped. A first row with a field that is not a number is a header naming the time
-    column (t, time, timestamp, optionally with _s or _ms); without one, the first column holds
-    seconds. Whether the times are one per frame and increasing is checked by
-    :func:`~flutterswim.tracking.track.track`."""
+    fields separated by commas, semicolons, tabs or (when a row holds none of these) white space;
+    blank lines and lines starting with ``#`` are skipped. A first row with a field that is not a
+    number is a header naming the time column (t, time, timestamp, elapsed time, ...; any case),
+    with its unit as a suffix (``time_ms``) or in brackets (``Time (ms)``, ``t [s]``): s, ms or
+    us; a name without a unit is seconds. Without a header the first column holds seconds.
+    Whether the times are one per frame, increasing and consistent with a movie's own frame rate
+    is checked by :func:`~flutterswim.tracking.track.track`."""
     p = Path(path)
     try:
         text = p.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise ParameterError(f"times={str(p)!r} cannot be read ({exc.strerror if isinstance(exc, OSError) else exc})") from None
-    rows = [(n, re.split(r"[,;\s]+", line.strip())) for n, line in enumerate(text.splitlines(), 1)
-            if line.strip() and not line.lstrip().startswith("#")]
-    if not rows:
+    lines = [(n, line.strip()) for n, line in enumerate(text.splitlines(), 1)
+             if line.strip() and not line.lstrip().startswith("#")]
+    if not lines:
         raise ParameterError(f"times={str(p)!r} holds no times")
+    sep = _delimiter(lines[0][1])
+    if sep == r"\s+":  # a unit in brackets stays with its name: "Time [ms]"
+        lines = [(n, re.sub(r"\s+([\(\[])", r"\1", line)) for n, line in lines]
+    rows = [(n, [v.strip() for v in re.split(sep, line)]) for n, line in lines]
 
     def number(v: str) -> float | None:
         try:
@@ -341,12 +410,17 @@ def read_times(path: str | os.PathLike) -> np.ndarray:
     col, factor = 0, 1.0
     n0, first = rows[0]
     if any(number(v) is None for v in first):
-        names = [v.strip().strip('"').lower() for v in first]
-        hit = [k for k, v in enumerate(names) if v in _TIME_COLUMNS]
-        if not hit:
+        found = [(k, _time_header(v)) for k, v in enumerate(first)]
+        named = [(k, f) for k, f in found if f is not None]
+        if not named:
+            bad_unit = [v for v in first if re.sub(r"\s*[\(\[].*", "", v.strip().strip('"').lower()) in _TIME_NAMES]
+            if bad_unit:
+                raise ParameterError(f"times={str(p)!r}: its header (row {n0}) gives the time column {bad_unit[0]!r} in "
+                                     f"a unit not understood; give s, ms or us")
             raise ParameterError(f"times={str(p)!r}: its header (row {n0}) names no time column; name one "
-                                 f"{', '.join(sorted(_TIME_COLUMNS))} or give one time [s] per row without a header")
-        col, factor = hit[0], _TIME_COLUMNS[names[hit[0]]]
+                                 f"{', '.join(_TIME_NAMES)} (a unit as time_ms or Time (ms)), or give one time [s] per "
+                                 "row without a header")
+        col, factor = named[0]
         rows = rows[1:]
     out = []
     for n, fields in rows:

@@ -63,6 +63,10 @@ def to_xarray(tr: Track):
         },
     )
     m = tr.meta
+    if m.get("frame_files") and len(m["frame_files"]) == ok.size:  # a folder's frames, in the order tracked
+        ds["frame_file"] = ("frame", np.asarray(m["frame_files"], dtype=str),
+                            {"units": "1", "long_name": "the frame's file in the input folder (frames ordered by the "
+                                                        "numbers in their names)"})
     ds.attrs.update({
         "Conventions": "CF-1.10",
         "title": TRACK_TITLE,

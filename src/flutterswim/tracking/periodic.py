@@ -362,12 +362,20 @@ def _coef_stderr(d: np.ndarray, m: int, lags: int = 3) -> float:
     return math.sqrt(2.0 * var * f / n)
 
 
+#: most frames in one run (within 2 frames of each other) that the template may flag as outliers
+#: (a speck of dust on the end's path, as bright as the line, joined it in 2 frames: the template
+#: was refused for the whole movie and the advance read 1.8 % long); a run of 3 or more is taken
+#: for a transient of the stroke, which must not be hidden: the template is refused
+MAX_OUTLIER_RUN = 2
+
+
 def periodic_shape_flagging(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, reason: list, period_frames: float,
                             max_fraction: float = 0.05, **kw) -> tuple[np.ndarray, np.ndarray, dict]:
-    """:func:`periodic_shape`, where a few lone frames (none within 2 frames of another) far from an otherwise accepted template
+    """:func:`periodic_shape`, where a few frames (lone, or in short runs) far from an otherwise accepted template
     (more than ``max_frame_ratio`` times the median frame's distance) are flagged instead of
     refusing the template for the whole movie: each such frame (at most ``max_fraction`` of
-    the good frames, at least one) gets ok False and the reason "template outlier: ...", and
+    the good frames, at least one; runs of at most :data:`MAX_OUTLIER_RUN` frames within 2 of each
+    other) gets ok False and the reason "template outlier: ...", and
     the template is fitted again without it. ``ok`` and ``reason`` are updated in place;
     info["outliers"] lists the frames flagged. (A long body whose trailing end curls close to
     itself once a stroke gives such a frame in each: with one allowed per 100 frames the template
@@ -378,8 +386,17 @@ def periodic_shape_flagging(X: np.ndarray, Y: np.ndarray, ok: np.ndarray, reason
     while True:
         Xp, Yp, info = periodic_shape(X, Y, ok, period_frames, **kw)
         k = info.pop("outlier_frame", None)
-        # lone frames only: one next to a flagged one makes a run, a transient of the stroke
-        if info["done"] or k is None or len(flagged) >= n_max or any(abs(k - f) <= 2 for f in flagged):
+        # short runs only (a speck of dust the end passes over spoils 2-3 frames; a longer run is a
+        # transient of the stroke): the flagged frames within 2 of k and of each other, with k
+        if info["done"] or k is None:
+            break
+        run = {k}
+        while True:
+            more = {f for f in flagged if f not in run and any(abs(f - g) <= 2 for g in run)}
+            if not more:
+                break
+            run |= more
+        if len(flagged) >= n_max or len(run) > MAX_OUTLIER_RUN:
             break
         ok[k] = False
         reason[k] = (f"template outlier: {info['frame_residual_max_px']:.2f} px RMS from the periodic stroke that "

@@ -47,6 +47,7 @@ converted to mm by ``px_per_mm``; times = frame index / fps.
 from __future__ import annotations
 
 import math
+import re
 import time
 import warnings
 from typing import Any
@@ -138,7 +139,7 @@ def saturation_level(img: np.ndarray, min_plateau: int = 10) -> float | None:
     else:
         return None
     m = a == top
-    if np.count_nonzero(m) < min_plateau:
+    if np.count_nonzero(m) < min_plateau or m.all():  # (a uniform frame, black or blank, shows no clipping)
         return None
     touch = m & (np.roll(m, 1, 0) | np.roll(m, -1, 0) | np.roll(m, 1, 1) | np.roll(m, -1, 1))
     return top if np.count_nonzero(touch) >= min_plateau else None
@@ -537,6 +538,11 @@ def check_options(**options: Any) -> dict[str, Any]:
     return out
 
 
+#: how far a movie's recorded frame rate may be from the rate of the times given (--times)
+#: before they are refused as in another unit (a camera's nominal rate against its clock: < 1 %)
+_TIMES_FPS_TOLERANCE = 0.1
+
+
 def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any = None,
           n_points: int = 49, start_end: str = "left", field_angle: float = 0.0, sigma: float | None = None,
           min_contrast: float = 4.0, length_tol: float = 0.03, jump_tol: float = 0.25,
@@ -594,6 +600,12 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
             # dropped without a word)
             raise ParameterError(f"fps={fps!r} disagrees with the frames' times (median interval "
                                  f"{1.0 / rate:.6g} s, {rate:.6g} fps); give one of them, or fps matching the times")
+        if fps is None and T > 1 and frames.fps is not None and abs(frames.fps / rate - 1.0) > _TIMES_FPS_TOLERANCE:
+            # (times in ms read as s gave a period 1000 times too long without a word)
+            raise ParameterError(f"times: their median interval {1.0 / rate:.6g} s ({rate:.6g} fps) disagrees with the "
+                                 f"frame rate input={frames.source!r} records ({frames.fps:.6g} fps): are the times in "
+                                 "another unit (ms for s)? Name the unit in the header (time_ms, Time (ms)), or give "
+                                 "fps to confirm the times' rate")
         if fps is None:  # (one frame has no interval: its rate is moot, 1 per second is written)
             fps = rate if T > 1 else 1.0
     elif fps is None:
@@ -770,6 +782,10 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
             X, Y, pinfo = periodic_shape_flagging(X, Y, ok, reason, per_stroke, positions=pos)
         except (np.linalg.LinAlgError, ValueError) as exc:  # a degenerate movie: the frames stay as they are
             pinfo = {"done": False, "reason": f"not done: the template fit failed ({exc})"}
+        if "outlier_frame" in pinfo or re.search(r"\(frame \d+ is [\d.]+ px from the template", pinfo["reason"]):
+            # (a run of frames far from the stroke: dust or debris the body passes over merges with it)
+            pinfo["reason"] += ("; look at the frames around it: dust or debris on the body's path, or another "
+                                "object passing, can merge with the body in a few frames")
         if times is None and pinfo["reason"].startswith("not done: the stroke is not periodic"):
             pinfo["reason"] += ("; if the camera dropped frames, give the frames' times (times, --times): a dropped "
                                 "frame shifts every later one by a frame interval")
@@ -813,6 +829,8 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
                       "noise and moves the ends by several % (encode at CRF <= 18, or lossless)", stacklevel=2)
     meta = {
         "source": frames.source, "px_per_mm": px_per_mm, "fps": fps, "roi": frames.roi,
+        # a folder's frame files in the order tracked (by the numbers in their names)
+        **({"frame_files": list(frames.names)} if frames.names else {}),
         "unchanged_fraction": unchanged,
         "frame_shape": frames.shape, "dark_line": bool(dark_line), "n_frames": T, "psf_sigma_px": sig, "n_failed": T - n_ok,
         "n_clipped": n_clipped,
