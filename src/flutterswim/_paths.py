@@ -23,7 +23,7 @@ from typing import Iterator, Sequence
 
 from ._validate import ParameterError
 
-__all__ = ["MARKER", "SIGNATURE", "is_ours", "figure_metadata", "mark_gif", "check_output_file", "check_output_dir", "atomic_path", "atomic_write_text",
+__all__ = ["MARKER", "SIGNATURE", "FINGERPRINT", "is_ours", "write_netcdf", "row_signature", "figure_metadata", "mark_gif", "check_output_file", "check_output_dir", "atomic_path", "atomic_write_text",
            "check_store_path", "write_marker", "has_marker", "remove_own_store"]
 
 #: File inside every store flutterswim creates; nothing without it is ever deleted.
@@ -48,7 +48,33 @@ def _scan(p: Path, pattern: re.Pattern) -> bool:
     return False
 
 
+#: NetCDF attribute holding the SHA-256 of the file's variables as written (:func:`write_netcdf`)
+FINGERPRINT = "flutterswim_fingerprint"
+
+
+def _h5_fingerprint(h) -> str:
+    """SHA-256 of every dataset of an open HDF5 file (NetCDF-4): its name, type, shape and stored
+    values, in name order. Attributes are left out (a file's title or comments are not its data)."""
+    import hashlib
+
+    import numpy as np
+
+    items: list = []
+    h.visititems(lambda name, obj: items.append((name, obj)) if hasattr(obj, "shape") else None)
+    digest = hashlib.sha256()
+    for name, d in sorted(items, key=lambda it: it[0]):
+        digest.update(f"{name}|{d.dtype.str}|{d.shape}|".encode())
+        if d.dtype.kind == "O":  # variable-length strings
+            digest.update("\x1f".join(str(v) for v in np.ravel(d.asstr()[()])).encode())
+        elif d.size:
+            digest.update(np.ascontiguousarray(d[()]).tobytes())
+    return digest.hexdigest()
+
+
 def _netcdf_ours(p: Path) -> bool:
+    """Signed by flutterswim (its ``source``) and, when it records one, with the variables it was
+    written with (:data:`FINGERPRINT`): a file another tool re-wrote from ours keeps our signature
+    in its copied attributes (xarray carries them), but not our data."""
     with open(p, "rb") as f:
         if f.read(8) != b"\x89HDF\r\n\x1a\n":
             return False
@@ -56,8 +82,28 @@ def _netcdf_ours(p: Path) -> bool:
 
     with h5py.File(p, "r") as h:
         src = h.attrs.get("source", b"")
-    src = src.decode("utf-8", "replace") if isinstance(src, bytes) else str(src)
-    return src.startswith("flutterswim ")
+        src = src.decode("utf-8", "replace") if isinstance(src, bytes) else str(src)
+        if not src.startswith("flutterswim "):
+            return False
+        fp = h.attrs.get(FINGERPRINT)
+        if fp is None:  # (written before fingerprints: the signature alone)
+            return True
+        fp = fp.decode() if isinstance(fp, bytes) else str(fp)
+        return fp == _h5_fingerprint(h)
+
+
+def write_netcdf(ds, path: str | os.PathLike, **kwargs) -> Path:
+    """Write the xarray Dataset ``ds`` to NetCDF-4 (h5netcdf engine) atomically, with the
+    fingerprint of its variables as written (:data:`FINGERPRINT`), so that only this file, not
+    one derived from it, is taken for ours. ``kwargs`` go to ``to_netcdf`` (encoding ...)."""
+    import h5py
+
+    p = Path(os.fspath(path))
+    with atomic_path(p) as tmp:
+        ds.to_netcdf(tmp, engine="h5netcdf", **kwargs)
+        with h5py.File(tmp, "r+") as h:
+            h.attrs[FINGERPRINT] = _h5_fingerprint(h)
+    return p
 
 
 def _json_ours(p: Path) -> bool:
@@ -70,24 +116,35 @@ def _json_ours(p: Path) -> bool:
     return isinstance(tag, str) and _TAG.match(tag.encode()) is not None
 
 
+def row_signature(fields: Sequence[str]) -> str:
+    """The ``tracked_by`` value of a CSV row of ours: the version and a hash of the row's other
+    fields as written (an edited row is not ours)."""
+    import hashlib
+
+    from . import __version__
+
+    return f"flutterswim {__version__} #" + hashlib.sha256("\x1f".join(fields).encode()).hexdigest()[:16]
+
+
 def _csv_ours(p: Path) -> bool:
+    """Exactly the columns of a CSV flutterswim writes (a column added by hand: not ours), every
+    row signed in its last column, ``tracked_by``, and, where the signature holds a hash
+    (:func:`row_signature`), the row as written."""
     import csv
+
+    from .tracking.batch import CSV_COLUMNS, CSV_COLUMNS_BEFORE_SE, FAILED_COLUMNS
 
     with open(p, newline="", encoding="utf-8") as f:
         rows = csv.reader(f)
-        head = next(rows, [])
-        if "tracked_by" not in head:
+        head = tuple(next(rows, []))
+        if head not in (CSV_COLUMNS, CSV_COLUMNS_BEFORE_SE, FAILED_COLUMNS):
             return False
-        k = head.index("tracked_by")
-        header_only = True
         for r in rows:
-            header_only = False
-            if len(r) > k and r[k].startswith("flutterswim "):
-                return True
-    # no signed row: ours only if it is exactly the header of a batch whose trials all failed
-    from .tracking.batch import CSV_COLUMNS, CSV_COLUMNS_BEFORE_SE, FAILED_COLUMNS
-
-    return header_only and tuple(head) in (CSV_COLUMNS, CSV_COLUMNS_BEFORE_SE, FAILED_COLUMNS)
+            if len(r) != len(head) or not r[-1].startswith("flutterswim "):
+                return False
+            if " #" in r[-1] and r[-1].split(" #", 1)[1] != row_signature(r[:-1]).split(" #", 1)[1]:
+                return False  # (the hash, whatever version wrote it)
+    return True  # (a header alone: a batch whose trials all failed)
 
 
 def _png_ours(p: Path) -> bool:

@@ -171,12 +171,10 @@ class SimulationResult:
     def save(self, path: str | Path) -> Path:
         """Write the run to NetCDF (h5netcdf engine), atomically (a temporary file in the same
         folder renamed onto ``path``). Returns the path."""
-        from ._paths import atomic_path, check_output_file
+        from ._paths import check_output_file, write_netcdf
 
         path = check_output_file(path, (".nc", ".nc4", ".h5", ".hdf5"), what="path", kind=RUN_TITLE)
-        with atomic_path(path) as tmp:
-            self.to_xarray().to_netcdf(tmp, engine="h5netcdf")
-        return path
+        return write_netcdf(self.to_xarray(), path)
 
     @classmethod
     def from_xarray(cls, ds) -> "SimulationResult":

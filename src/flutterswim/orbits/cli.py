@@ -120,10 +120,9 @@ def _cmd_branch(args) -> int:
     ds.attrs["n_inaccurate_orbits_comment"] = as_typed(args, ds.attrs["n_inaccurate_orbits_comment"])
     ds.attrs["range_start" if side > 0 else "range_end"] = lo if side > 0 else hi
     ds.attrs["range_start_units" if side > 0 else "range_end_units"] = axis.units
-    from .._paths import atomic_path
+    from .._paths import write_netcdf
 
-    with atomic_path(out) as tmp:
-        ds.to_netcdf(tmp, engine="h5netcdf")
+    write_netcdf(ds, out)
     if not min(lo, hi) <= hp.value <= max(lo, hi):  # (after the run: an error stands alone)
         import sys
 

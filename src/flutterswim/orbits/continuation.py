@@ -166,11 +166,10 @@ class Branch:
 
     def save(self, path) -> None:
         """Write the branch to NetCDF atomically (temporary name, then rename)."""
-        from .._paths import atomic_path, check_output_file
+        from .._paths import check_output_file, write_netcdf
 
         path = check_output_file(path, (".nc",), kind=BRANCH_TITLE)
-        with atomic_path(path) as tmp:
-            self.to_dataset().to_netcdf(tmp, engine="h5netcdf")
+        write_netcdf(self.to_dataset(), path)
 
 
 def _systems(axis: Axis, value: float, n: int) -> ShapeSystem:

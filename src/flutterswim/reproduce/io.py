@@ -49,7 +49,7 @@ def write_netcdf(path: str | os.PathLike, ds, *, encoding: dict | None = None) -
     dataset a ``title``. ``encoding``: as :meth:`xarray.Dataset.to_netcdf`'s (compression)."""
     from .. import __version__
     from .._cf import cf_dataset
-    from .._paths import atomic_path
+    from .._paths import write_netcdf as _write
 
     for name, var in {**ds.data_vars, **ds.coords}.items():
         missing = [a for a in ("units", "long_name") if a not in var.attrs]
@@ -59,10 +59,7 @@ def write_netcdf(path: str | os.PathLike, ds, *, encoding: dict | None = None) -
         raise ValueError("the dataset has no title (global attribute)")
     ds = cf_dataset(ds.copy())
     ds.attrs = {"Conventions": "CF-1.10", "source": f"flutterswim {__version__} reproduce", **ds.attrs}
-    p = Path(path)
-    with atomic_path(p) as tmp:
-        ds.to_netcdf(tmp, engine="h5netcdf", encoding=encoding)
-    return p
+    return _write(ds, Path(path), encoding=encoding)
 
 
 def save_figure(fig, path: str | os.PathLike, *, dpi: float = 130) -> Path:

@@ -82,7 +82,7 @@ class StabilityMap:
         """Write NetCDF (h5netcdf engine), zlib-compressed, atomically (temporary file in the same
         folder, then renamed). ``dtype="float32"`` halves the size (relative rounding 6e-8).
         Returns the path."""
-        from .._paths import atomic_path, check_output_file
+        from .._paths import check_output_file, write_netcdf
 
         if dtype not in ("float64", "float32"):
             raise ParameterError(f"dtype={dtype!r} is not allowed; use 'float64' or 'float32'")
@@ -90,9 +90,7 @@ class StabilityMap:
         enc = {k: {"zlib": True, "complevel": int(complevel), "shuffle": True, "dtype": dtype}
                for k in ("re_omega", "im_omega")}
         enc["iterations"] = {"zlib": True, "complevel": int(complevel), "shuffle": True}
-        with atomic_path(path) as tmp:
-            self.to_dataset().to_netcdf(tmp, engine="h5netcdf", encoding=enc)
-        return path
+        return write_netcdf(self.to_dataset(), path, encoding=enc)
 
 
 def load_map(path) -> StabilityMap:

@@ -150,11 +150,10 @@ def _cmd_steer(args) -> int:
     res = steer(params, factory, reduced, closed_loop=not args.open_loop, noise_px=args.noise_px,
                 um_per_px=args.um_per_px, n_segments=args.segments, seed=args.seed, progress=not args.quiet)
     from .._cf import cf_dataset
-    from .._paths import atomic_path
+    from .._paths import write_netcdf
     from .steer import steer_dataset
 
-    with atomic_path(out) as tmp:  # the run, with its path and control settings
-        cf_dataset(steer_dataset(res, reduced)).to_netcdf(tmp, engine="h5netcdf")
+    write_netcdf(cf_dataset(steer_dataset(res, reduced)), out)  # the run, with its path and control settings
     m = {"generator": f"flutterswim {__version__}", **res.metrics}  # signed: a rerun may replace it
     m["reduced_model"] = {"U_mm_s": reduced.U * 1e3, "period_s": reduced.period, "k_per_s": reduced.k,
                           "omega_max_rad_s": reduced.omega_max, "r_min_mm": reduced.r_min * 1e3}

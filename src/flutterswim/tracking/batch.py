@@ -223,7 +223,7 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
     ``as_typed(reason)`` says them as the caller's user typed them (the command line's
     options: :func:`flutterswim.cli.as_typed`)."""
     from .. import __version__
-    from .._paths import atomic_write_text, check_output_file, is_ours
+    from .._paths import atomic_write_text, check_output_file, is_ours, row_signature
     from ..analysis.descriptors import _ALONG_FIELD_COS, describe
     from .track import NO_FRAME_RATE, check_options, track
 
@@ -289,14 +289,15 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
         w = csv.writer(buf, lineterminator="\n")
         w.writerow(CSV_COLUMNS)
         for r in rows:
-            w.writerow([_fmt(r[c]) for c in CSV_COLUMNS])
+            fields = [_fmt(r[c]) for c in CSV_COLUMNS[:-1]]
+            w.writerow(fields + [row_signature(fields)])
         atomic_write_text(out_p, buf.getvalue())
     if failed:
         check_output_file(failed_p, (".csv",), what="failures file")
         fb = io.StringIO()
         fw = csv.writer(fb, lineterminator="\n")
         fw.writerow(FAILED_COLUMNS)
-        fw.writerows([(a, b, f"flutterswim {__version__}") for a, b in failed])
+        fw.writerows([(a, b, row_signature([a, b])) for a, b in failed])
         atomic_write_text(failed_p, fb.getvalue())
     elif failed_p.is_file() and is_ours(failed_p):
         failed_p.unlink()  # our failures of an earlier run: none of them failed now

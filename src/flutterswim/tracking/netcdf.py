@@ -104,13 +104,10 @@ TRACK_TITLE = "filament tracked from video by flutterswim"
 
 def save_track(tr: Track, path: str | os.PathLike) -> Path:
     """Write :func:`to_xarray` to NetCDF atomically (never over a file not ours)."""
-    from .._paths import atomic_path, check_output_file
+    from .._paths import check_output_file, write_netcdf
 
     p = check_output_file(path, (".nc",), what="out", kind=TRACK_TITLE)
-    ds = to_xarray(tr)
-    with atomic_path(p) as tmp:
-        ds.to_netcdf(tmp, engine="h5netcdf")
-    return p
+    return write_netcdf(to_xarray(tr), p)
 
 
 def load_track(path: str | os.PathLike) -> Track:
