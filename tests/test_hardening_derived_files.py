@@ -78,3 +78,41 @@ def test_a_batch_csv_is_ours_only_as_written(tmp_path):
                                                                                  row_signature(["a.tif", "no stroke"])]) + "\n")
     assert is_ours(tmp_path / "f.csv")
     assert np.all([is_ours(tmp_path / n) for n in ("trials.csv", "f.csv")])
+
+
+def _cli(args, cwd):
+    return subprocess.run([sys.executable, "-m", "flutterswim", *args], capture_output=True, text=True, timeout=600,
+                          cwd=cwd)
+
+
+def test_a_default_output_of_another_input_is_not_replaced(tmp_path):
+    """track's default track.nc and track-batch's trials.csv were replaced by the results of
+    another movie or folder without a word. Without --out, such a file is now refused; the same
+    input replaces it, and --out names another file."""
+    tifffile = pytest.importorskip("tifffile")
+    pytest.importorskip("skimage")
+    from types import SimpleNamespace
+
+    from flutterswim.tracking import render
+
+    r = fs.simulate(fs.PAPER, 10.0, n_segments=12, frame_dt=0.02)
+    for k, name in enumerate(("a", "b")):
+        sl = slice(r.t.size - 40 - k, r.t.size - k)
+        mv = render(SimpleNamespace(t=r.t[sl], x=r.x[sl], y=r.y[sl]), um_per_px=14.0, snr=8.0, seed=k)
+        (tmp_path / name).mkdir()
+        tifffile.imwrite(tmp_path / name / "85V_sample1.tif", mv.frames.astype(np.float32))
+        tifffile.imwrite(tmp_path / f"{name}.tif", mv.frames.astype(np.float32))
+    common = ["--px-per-mm", f"{mv.px_per_mm:.6f}", "--fps", "50", "--quiet"]
+    assert _cli(["track", "a.tif", *common], tmp_path).returncode == 0
+    first = (tmp_path / "track.nc").read_bytes()
+    other = _cli(["track", "b.tif", *common], tmp_path)
+    assert other.returncode == 2 and "holds the results of 'a.tif'" in other.stderr, other.stderr
+    assert (tmp_path / "track.nc").read_bytes() == first
+    assert _cli(["track", "a.tif", *common], tmp_path).returncode == 0  # the same movie again
+    assert _cli(["track", "b.tif", *common, "--out", "b.nc"], tmp_path).returncode == 0
+    assert _cli(["track-batch", "a", *common], tmp_path).returncode in (0, 1)
+    assert (tmp_path / "trials.csv").is_file()
+    table = (tmp_path / "trials.csv").read_bytes()
+    batch = _cli(["track-batch", "b", *common], tmp_path)
+    assert batch.returncode == 2 and "holds the results of 'a'" in batch.stderr, batch.stderr
+    assert (tmp_path / "trials.csv").read_bytes() == table

@@ -4,8 +4,9 @@ and ``flutterswim track-batch FOLDER --px-per-mm X --fps 50 --out trials.csv [--
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
-from .._validate import direction_deg, positive, positive_int
+from .._validate import ParameterError, direction_deg, positive, positive_int
 from ..defaults import N_CYCLES_MOVIE
 from .._json import dumps
 
@@ -23,7 +24,7 @@ def register(subparsers) -> None:
     p.add_argument("--times", default=None,
                    help="text/CSV file of the frames' times, one per frame (a camera's timestamps: dropped or "
                         "uneven frames); a header may name the column t, time or timestamp (_s or _ms)")
-    p.add_argument("--out", default="track.nc", help="NetCDF file (.nc)")
+    p.add_argument("--out", default=None, help="NetCDF file (.nc); default track.nc, never one tracked from another input")
     p.add_argument("--roi", default=None, help="region of interest x0,y0,x1,y1 [pixels]")
     p.add_argument("--points", type=int, default=49, help="arc-length samples along the body (default 49)")
     p.add_argument("--start-end", choices=("left", "right", "top", "bottom"), default="left",
@@ -48,7 +49,7 @@ def register(subparsers) -> None:
     q.add_argument("folder")
     q.add_argument("--px-per-mm", type=float, default=None, help="image scale (unless in the sidecars)")
     q.add_argument("--fps", type=float, default=None, help="frame rate (unless in the sidecars or the movies)")
-    q.add_argument("--out", default="trials.csv", help="CSV file")
+    q.add_argument("--out", default=None, help="CSV file; default trials.csv, never one of another folder's trials")
     q.add_argument("--pattern", default=None,
                    help="regular expression with groups (?P<voltage>) and (?P<sample>), searched in each trial's "
                         "name without its extension (a folder of frames: its name)")
@@ -66,6 +67,37 @@ def register(subparsers) -> None:
     q.set_defaults(func=_cmd_batch)
 
 
+def _made_from(path: Path) -> list[str]:
+    """The inputs a file of ours was made from: a track's input, a batch CSV's trials' folders."""
+    if path.suffix.lower() == ".nc":
+        from .._paths import netcdf_attrs
+
+        src = netcdf_attrs(path).get("input")
+        return [str(src)] if src else []
+    import csv
+
+    with open(path, newline="", encoding="utf-8") as f:
+        return sorted({str(Path(r["trial"]).parent) for r in csv.DictReader(f) if r.get("trial")})
+
+
+def _default_out(out: str | None, default: str, source: str) -> str:
+    """``out`` if given; else ``default``, unless a file of ours there was made from another
+    input (the fixed default name replaced the track of another movie, the CSV of another
+    folder's trials, without a word)."""
+    if out is not None:
+        return out
+    from .._paths import is_ours
+
+    p = Path(default)
+    if p.is_file() and is_ours(p):
+        made = _made_from(p)
+        same = [m for m in made if Path(m).resolve() == Path(source).resolve()]
+        if made and not same:
+            raise ParameterError(f"--out was not given, and the default {default!r} holds the results of "
+                                 f"{made[0]!r}, not of {source!r}; give --out, or move that file away")
+    return default
+
+
 def _cmd_track(args) -> int:
     from .._paths import check_output_file
     from .netcdf import save_track
@@ -75,7 +107,7 @@ def _cmd_track(args) -> int:
     field_angle = direction_deg("--field-angle-deg", args.field_angle_deg)
     from .netcdf import TRACK_TITLE
 
-    out = check_output_file(args.out, (".nc",), what="--out", kind=TRACK_TITLE)
+    out = check_output_file(_default_out(args.out, "track.nc", args.input), (".nc",), what="--out", kind=TRACK_TITLE)
     if args.kymograph:
         check_output_file(args.kymograph, (".png", ".pdf", ".svg"), what="--kymograph")
     times = None
@@ -123,7 +155,8 @@ def _cmd_batch(args) -> int:
         if v is not None:
             positive(name, v)
     field = {} if args.field_angle_deg is None else {"field_angle": direction_deg("--field-angle-deg", args.field_angle_deg)}
-    out, rows, failed = track_batch(args.folder, args.out, px_per_mm=args.px_per_mm, fps=args.fps,
+    out, rows, failed = track_batch(args.folder, _default_out(args.out, "trials.csv", args.folder),
+                                    px_per_mm=args.px_per_mm, fps=args.fps,
                                     pattern=DEFAULT_PATTERN if args.pattern is None else args.pattern, n_last=args.last, plot=args.plot,
                                     progress=not args.quiet, as_typed=partial(as_typed, args),
                                     dark_line=args.dark_line,
