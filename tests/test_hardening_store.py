@@ -316,3 +316,34 @@ def test_a_killed_sweeps_lock_file_is_removed_by_the_next_run(tmp_path):
     lock.write_text("the user's own notes\n")  # not ours: kept as it is
     sweep({"chi": [1.0, 2.0, 3.0]}, out=str(out), backend="serial", point_fn=point, progress=False)
     assert lock.read_text() == "the user's own notes\n"
+
+
+@pytest.mark.parametrize("server", ["silent", "http"])
+def test_a_port_that_is_no_dask_scheduler_is_refused_in_time(server, monkeypatch):
+    """An HTTP server or a socket that accepts and never answers on the scheduler's port hung the
+    sweep for minutes (the promise: an error within SCHEDULER_TIMEOUT_S naming the address); one
+    answering garbage failed as 'out of memory'. A real scheduler still passes the same check."""
+    import http.server
+    import socket
+    import threading
+    import time
+
+    from flutterswim.sweep import backends
+    from flutterswim.sweep.backends import SchedulerUnreachable
+
+    if server == "silent":
+        s = socket.socket()
+        s.bind(("127.0.0.1", 0))
+        s.listen(5)
+        port = s.getsockname()[1]
+    else:
+        srv = http.server.HTTPServer(("127.0.0.1", 0), http.server.BaseHTTPRequestHandler)
+        threading.Thread(target=srv.serve_forever, daemon=True).start()
+        port = srv.server_address[1]
+    t0 = time.perf_counter()
+    with pytest.raises(SchedulerUnreachable, match=rf"tcp://127.0.0.1:{port}.*did not answer as a Dask scheduler"):
+        backends._reachable(f"tcp://127.0.0.1:{port}", 2.0)
+    assert time.perf_counter() - t0 < 6.0
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=None) as cluster:
+        backends._reachable(cluster.scheduler_address, 5.0)  # no error

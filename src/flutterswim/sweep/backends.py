@@ -416,6 +416,40 @@ def _reachable(scheduler: str, timeout: float) -> None:
         raise SchedulerUnreachable(
             f"scheduler={scheduler!r}: no Dask scheduler answered within {timeout:g} s ({type(exc).__name__}: "
             f"{exc}); check the address (tcp://host:port) and that the scheduler is running") from None
+    # something listens there: it must answer Dask's "identity" as a scheduler, within the time
+    # (an HTTP server or a silent socket on the port hung the Client for minutes; one answering
+    # garbage made it allocate exabytes and fail as "out of memory")
+    try:
+        who = _identity(str(scheduler), timeout)
+    except Exception as exc:  # noqa: BLE001 - anything but an answer: not a scheduler
+        raise SchedulerUnreachable(
+            f"scheduler={scheduler!r} accepts connections but did not answer as a Dask scheduler within {timeout:g} s "
+            f"({type(exc).__name__}); check the address and port (the scheduler's, not its dashboard's)") from None
+    if not (isinstance(who, dict) and who.get("type") == "Scheduler"):
+        kind = who.get("type") if isinstance(who, dict) else type(who).__name__
+        raise SchedulerUnreachable(f"scheduler={scheduler!r} answers as {kind!r}, not as a Dask scheduler; give the "
+                                   "scheduler's address")
+
+
+def _identity(address: str, timeout: float):
+    """Dask's "identity" of the server at ``address``, within ``timeout`` seconds in all."""
+    import asyncio
+
+    from distributed.comm import connect
+
+    async def ask():
+        comm = await connect(address, timeout=timeout)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    from concurrent.futures import ThreadPoolExecutor
+
+    # in a thread of its own: its own event loop, also where one runs already (a notebook)
+    with ThreadPoolExecutor(1) as pool:
+        return pool.submit(asyncio.run, asyncio.wait_for(ask(), timeout)).result(timeout + 5.0)
 
 
 @contextlib.contextmanager
