@@ -256,3 +256,27 @@ def test_the_field_angle_is_spelt_alike_in_every_command():
         assert ap.parse_args(["track", "x.tif", "--px-per-mm", "70", opt, "30"]).field_angle_deg == 30.0
         assert ap.parse_args(["track-batch", "d", opt, "30"]).field_angle_deg == 30.0
         assert ap.parse_args(["simulate", "--t-end", "3", opt, "30"]).field_angle == 30.0
+
+
+def test_an_interrupt_is_one_line_even_when_objects_finalise_with_errors(tmp_path):
+    """Ctrl-C during a NetCDF save left h5netcdf's file half-closed; its finaliser's error was
+    printed as 'Exception ignored in ...' (26 lines) after the one-line message."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "s.py"
+    script.write_text(
+        "import sys, importlib\n"
+        "cli = importlib.import_module('flutterswim.cli')\n"
+        "class HalfClosed:\n"
+        "    def __del__(self):\n"
+        "        raise KeyError('Unable to synchronously open object')\n"
+        "def interrupted_save(*a, **k):\n"
+        "    h = HalfClosed(); h.me = h  # a cycle: finalised by the collector, at exit\n"
+        "    raise KeyboardInterrupt\n"
+        "sim = importlib.import_module('flutterswim.simulate')\n"
+        "sim.simulate = interrupted_save\n"
+        "raise SystemExit(cli.main(['simulate', '--t-end', '0.1', '--quiet', '--out', sys.argv[1]]))\n")
+    r = subprocess.run([sys.executable, str(script), str(tmp_path / "x.nc")], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 130, r.stderr
+    assert r.stderr.strip().splitlines() == ["flutterswim simulate: interrupted"], r.stderr

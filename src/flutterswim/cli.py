@@ -460,6 +460,13 @@ def _quiet_warnings() -> None:
     warnings.showwarning = show
 
 
+def _quiet_unraisable() -> None:
+    """After a Ctrl-C, objects the interrupt left half-closed (h5netcdf's file in the middle of a
+    save) are finalised with errors Python prints as "Exception ignored in ..." (26 lines after
+    the one-line message): the command's line is what is said."""
+    sys.unraisablehook = lambda unraisable: None
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
@@ -488,6 +495,8 @@ def main(argv: list[str] | None = None) -> int:
             import traceback
 
             traceback.print_exc()
+        else:
+            _quiet_unraisable()
         msg = _one_line(exc) or "interrupted"
         print(f"flutterswim {args.command}: {msg}", file=sys.stderr)
         return 130
@@ -495,6 +504,8 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     except Exception as exc:  # noqa: BLE001 - every error becomes one line (traceback with --debug)
         if interrupted(exc):  # Ctrl-C inside a compiled kernel surfaces as its SystemError
+            if not debug:
+                _quiet_unraisable()
             print(f"flutterswim {args.command}: interrupted", file=sys.stderr)
             return 130
         if debug:
