@@ -280,3 +280,28 @@ def test_an_interrupt_is_one_line_even_when_objects_finalise_with_errors(tmp_pat
     r = subprocess.run([sys.executable, str(script), str(tmp_path / "x.nc")], capture_output=True, text=True, timeout=120)
     assert r.returncode == 130, r.stderr
     assert r.stderr.strip().splitlines() == ["flutterswim simulate: interrupted"], r.stderr
+
+
+def test_an_interrupt_names_the_files_already_replaced(tmp_path):
+    """A command writing several files (stability: map, figures, modes), interrupted half way,
+    left new files beside old ones and said only 'interrupted'. It now names those it wrote."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "s.py"
+    script.write_text(
+        "import sys, importlib\n"
+        "cli = importlib.import_module('flutterswim.cli')\n"
+        "from flutterswim._paths import atomic_write_text\n"
+        "def half_done(*a, **k):\n"
+        "    atomic_write_text(sys.argv[1], 'new map')\n"
+        "    raise KeyboardInterrupt\n"
+        "sim = importlib.import_module('flutterswim.simulate')\n"
+        "sim.simulate = half_done\n"
+        "raise SystemExit(cli.main(['simulate', '--t-end', '0.1', '--quiet', '--out', sys.argv[2]]))\n")
+    first = tmp_path / "map.txt"
+    r = subprocess.run([sys.executable, str(script), str(first), str(tmp_path / "x.nc")], capture_output=True,
+                       text=True, timeout=120)
+    assert r.returncode == 130 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert f"interrupted; written before the interrupt: {first}" in r.stderr, r.stderr
+    assert first.read_text() == "new map" and not (tmp_path / "x.nc").exists()

@@ -368,6 +368,11 @@ def check_files_in(folder: Path, names: Sequence[str], *, what: str = "out", kin
         check_output_file(Path(folder) / name, (Path(name).suffix,), what=what, kind=(kinds or {}).get(name))
 
 
+#: every file :func:`atomic_path` has put in place, in order (the command line says which, when a
+#: command writing several is interrupted: the others are still those of an earlier run)
+WRITTEN: list[Path] = []
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     """Yield a temporary path next to ``path`` (same suffix); on success rename it onto
@@ -384,6 +389,7 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         if tmp_p.is_dir():
             raise RuntimeError("atomic_path: a directory was written instead of a file")
         os.replace(tmp_p, p)
+        WRITTEN.append(p)
     except BaseException:
         with contextlib.suppress(OSError):
             tmp_p.unlink()

@@ -460,6 +460,16 @@ def _quiet_warnings() -> None:
     warnings.showwarning = show
 
 
+def _written_note(paths: list) -> str:
+    """The files a command interrupted had already replaced (a stability run left a new map beside
+    the old figures, with only "interrupted" said)."""
+    if not paths:
+        return ""
+    names = list(dict.fromkeys(str(p) for p in paths))
+    shown = ", ".join(names[:6]) + (f" and {len(names) - 6} more" if len(names) > 6 else "")
+    return f"; written before the interrupt: {shown} (any other output is as it was)"
+
+
 def _quiet_unraisable() -> None:
     """After a Ctrl-C, objects the interrupt left half-closed (h5netcdf's file in the middle of a
     save) are finalised with errors Python prints as "Exception ignored in ..." (26 lines after
@@ -487,6 +497,9 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     if not debug:
         _quiet_warnings()
+    from ._paths import WRITTEN
+
+    first_write = len(WRITTEN)
     try:
         _check_optional(args)
         return int(args.func(args) or 0)
@@ -498,7 +511,7 @@ def main(argv: list[str] | None = None) -> int:
         else:
             _quiet_unraisable()
         msg = _one_line(exc) or "interrupted"
-        print(f"flutterswim {args.command}: {msg}", file=sys.stderr)
+        print(f"flutterswim {args.command}: {msg}{_written_note(WRITTEN[first_write:])}", file=sys.stderr)
         return 130
     except BrokenPipeError:
         return 1
