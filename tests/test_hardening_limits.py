@@ -150,3 +150,12 @@ def test_stability_message_names_out(tmp_path, capsys):
     assert code == 2 and (d / "eigenmodes.png").read_bytes() == b"mine"
     line = _one_line(err, "--out=")
     assert "out_dir" not in line
+
+
+def test_a_refused_map_grid_makes_no_folder(tmp_path):
+    """stability --step 1e-6 refused the grid but first made the empty output folder."""
+    from flutterswim.stability import stability_figures
+
+    with pytest.raises(fs.ParameterError, match=r"step=1e-06 gives a map of"):
+        stability_figures(tmp_path / "st3", step=1e-6)
+    assert not (tmp_path / "st3").exists()

@@ -197,8 +197,10 @@ def test_batch_needs_voltage_and_sample(tmp_path, movie):
     folder = tmp_path / "t"
     folder.mkdir()
     tifffile.imwrite(folder / "whatever.tif", movie.frames[:4], photometric="minisblack")
-    _, rows, failed = track_batch(folder, tmp_path / "x.csv", px_per_mm=70, fps=50)  # the trial fails alone
-    assert rows == [] and len(failed) == 1 and "no sidecar JSON" in failed[0][1]
+    # (beside others it fails alone; with none to track, the pattern or the sidecars are wrong: bad input)
+    with pytest.raises(fs.ParameterError, match="none of its 1 trials has a voltage.*no sidecar JSON"):
+        track_batch(folder, tmp_path / "x.csv", px_per_mm=70, fps=50)
+    assert not (tmp_path / "x.csv").exists()
     with pytest.raises(fs.ParameterError, match="named groups"):
         track_batch(folder, tmp_path / "x.csv", px_per_mm=70, fps=50, pattern=r"(\d+)V")
     assert math.isfinite(movie.px_per_mm)

@@ -51,6 +51,12 @@ def stability_figures(out_dir, *, params: Parameters = PAPER, step: float = 0.1,
     from .stability_map import MAP_TITLE
 
     check_files_in(out, names, what="out_dir", kinds={"stability_map.nc": MAP_TITLE})  # before computing
+    from ..defaults import MAX_MAP_POINTS
+
+    n_map = (350.0 / step + 1.5) * (260.0 / step + 1.5)  # (stability_map's default grid, checked there too)
+    if n_map > MAX_MAP_POINTS:  # before the folder is made (a refused grid left an empty one)
+        raise ParameterError(f"step={step!r} gives a map of {n_map:.3g} points; at most {MAX_MAP_POINTS} "
+                             "(flutterswim.defaults.MAX_MAP_POINTS)")
     out.mkdir(exist_ok=True)  # (its parent exists: check_output_dir)
     from ..simulate import single_blas_thread
 

@@ -237,6 +237,9 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
     n_last = positive_int("n_last", n_last)
     track_kwargs = check_options(**track_kwargs)
     trials = find_trials(folder, pattern)
+    if all(tr_.problem for tr_ in trials):  # (not one trial to track: the pattern or the sidecars are wrong)
+        raise ParameterError(f"folder={str(folder)!r}: none of its {len(trials)} trials has a voltage and a sample; "
+                             f"the first, {trials[0].path.name!r}: {trials[0].problem}")
     failed: list[tuple[str, str]] = [(str(tr_.path), tr_.problem) for tr_ in trials if tr_.problem]
     trials = [tr_ for tr_ in trials if not tr_.problem]  # (those without a voltage fail alone)
     for tr_ in trials:
