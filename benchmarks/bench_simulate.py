@@ -3,8 +3,8 @@
 Reports, measured in this run:
 - wall time of ``run_to_limit_cycle`` (the default integrator) at several resolutions, with the errors
   of the period and of the advancement per cycle against a much finer run of this code;
-- the ratio against scipy's ``solve_ivp`` (Radau and BDF, finite-difference Jacobian)
-  on the same semi-discretisation, same window and tolerance;
+- the ratio against scipy's ``solve_ivp`` (Radau and BDF, given the same analytic Jacobian as
+  ours) on the same semi-discretisation and window, at the tolerance that matches our accuracy;
 - peak memory of a run saving 2000 frames of 100 points (in a fresh subprocess).
 
 Usage: OPENBLAS_NUM_THREADS=1 python benchmarks/bench_simulate.py [--quick]

@@ -1,8 +1,11 @@
 """The one place for the numerical defaults shared by the API, the CLI, the demo and the README.
 
-At N_SEGMENTS = 48, RTOL = 1e-4 the paper's limit cycle has its period within 3e-4 and its
-advancement per cycle within 1e-3 of a much finer run (N = 128, rtol 1e-6), see
-``benchmarks/RESULTS.md``.
+At N_SEGMENTS = 48, RTOL = 1e-4 the paper's limit cycle has its period within 4e-4 and its
+advancement per cycle within 4e-3 of a much finer run (N = 128, rtol 1e-6; measured 3.8e-4 and
+3.5e-3), see ``benchmarks/RESULTS.md``. Near the onset the space error grows, roughly as
+(shift of the discrete Hopf point) / (chi - chi_c): at 0.8 kappa_E,fit the advance is 8.5e-3 off
+at N = 48, at 0.72 kappa_E,fit 2.5e-2; resolve such strokes with more segments (the error falls
+as 1/N^2).
 
 Sweeps use a coarser resolution per point (``SWEEP_N_SEGMENTS``) to cover many points; at
 the paper's parameters it gives the period within ``SWEEP_PERIOD_ERROR`` and the advancement
