@@ -81,6 +81,9 @@ def test_frame_names_sort_by_their_numbers_decimals_included():
     times = [float(re.search(r"t([\d.]+)s", p.name).group(1)) for p in got if p.name.startswith("t")]
     assert times == sorted(times)  # "t0.1s" sorted before "t0.02s" digit by digit
     assert [p.name for p in got if p.name.startswith("frame")] == ["frame_1.png", "frame_2.png", "frame_10.png"]
+    # a camera's 17-digit timestamps differ in digits a float does not hold
+    stamps = [f"cam_{20261127123456780 + k}.tif" for k in (3, 1, 2, 0)]
+    assert [p.name for p in sorted(map(Path, stamps), key=_natural_key)] == sorted(stamps)
 
 
 @pytest.mark.parametrize("name,voltage,sample", [

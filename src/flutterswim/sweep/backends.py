@@ -416,6 +416,8 @@ def _reachable(scheduler: str, timeout: float) -> None:
         raise SchedulerUnreachable(
             f"scheduler={scheduler!r}: no Dask scheduler answered within {timeout:g} s ({type(exc).__name__}: "
             f"{exc}); check the address (tcp://host:port) and that the scheduler is running") from None
+    if scheme != "tcp":  # (TLS needs the Client's security settings to ask: left to the Client)
+        return
     # something listens there: it must answer Dask's "identity" as a scheduler, within the time
     # (an HTTP server or a silent socket on the port hung the Client for minutes; one answering
     # garbage made it allocate exabytes and fail as "out of memory")

@@ -41,7 +41,9 @@ def _gray(a: np.ndarray) -> np.ndarray:
 def _natural_key(p: Path) -> list:
     """Sort key of a frame's file name: its numbers by value, decimals included (frame_2 before
     frame_10; t0.02s before t0.1s, which digit by digit sorted after it), the rest by text."""
-    return [float(t) if k % 2 else t.lower() for k, t in enumerate(re.split(r"(\d+(?:\.\d+)?)", p.name))]
+    from decimal import Decimal  # (exact: a 17-digit timestamp is beyond a float's precision)
+
+    return [Decimal(t) if k % 2 else t.lower() for k, t in enumerate(re.split(r"(\d+(?:\.\d+)?)", p.name))]
 
 
 @dataclass
