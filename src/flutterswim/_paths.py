@@ -11,6 +11,7 @@
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import errno
 import json
@@ -368,9 +369,21 @@ def check_files_in(folder: Path, names: Sequence[str], *, what: str = "out", kin
         check_output_file(Path(folder) / name, (Path(name).suffix,), what=what, kind=(kinds or {}).get(name))
 
 
-#: every file :func:`atomic_path` has put in place, in order (the command line says which, when a
-#: command writing several is interrupted: the others are still those of an earlier run)
-WRITTEN: list[Path] = []
+#: the last files :func:`atomic_path` has put in place, with their sequence numbers (the command
+#: line says which, when a command writing several is interrupted: the others are still those of
+#: an earlier run); bounded, for a long-lived process writing many
+WRITTEN: collections.deque = collections.deque(maxlen=256)
+_n_written = 0
+
+
+def write_mark() -> int:
+    """The number of files put in place so far (for :func:`written_since`)."""
+    return _n_written
+
+
+def written_since(mark: int) -> list[Path]:
+    """The files put in place since :func:`write_mark` gave ``mark`` (the last 256 at most)."""
+    return [p for k, p in WRITTEN if k >= mark]
 
 
 @contextlib.contextmanager
@@ -389,7 +402,9 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         if tmp_p.is_dir():
             raise RuntimeError("atomic_path: a directory was written instead of a file")
         os.replace(tmp_p, p)
-        WRITTEN.append(p)
+        global _n_written
+        WRITTEN.append((_n_written, p))
+        _n_written += 1
     except BaseException:
         with contextlib.suppress(OSError):
             tmp_p.unlink()

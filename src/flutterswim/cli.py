@@ -497,9 +497,9 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     if not debug:
         _quiet_warnings()
-    from ._paths import WRITTEN
+    from ._paths import write_mark, written_since
 
-    first_write = len(WRITTEN)
+    first_write = write_mark()
     try:
         _check_optional(args)
         return int(args.func(args) or 0)
@@ -511,7 +511,7 @@ def main(argv: list[str] | None = None) -> int:
         else:
             _quiet_unraisable()
         msg = _one_line(exc) or "interrupted"
-        print(f"flutterswim {args.command}: {msg}{_written_note(WRITTEN[first_write:])}", file=sys.stderr)
+        print(f"flutterswim {args.command}: {msg}{_written_note(written_since(first_write))}", file=sys.stderr)
         return 130
     except BrokenPipeError:
         return 1
