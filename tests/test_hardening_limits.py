@@ -1,7 +1,9 @@
 """Bad sizes and ranges are refused before anything is computed or allocated, one line naming
 the option, exit 2; a failed computation reports on stderr (exit 1)."""
 
+import re
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -159,3 +161,18 @@ def test_a_refused_map_grid_makes_no_folder(tmp_path):
     with pytest.raises(fs.ParameterError, match=r"step=1e-06 gives a map of"):
         stability_figures(tmp_path / "st3", step=1e-6)
     assert not (tmp_path / "st3").exists()
+
+
+@pytest.mark.parametrize("axis,other", [("tau=375", "ms"), ("l=3.7", "mm"), ("kappa_E=19.1", "1/mm"),
+                                        ("B=1.94e-8", "N mm^2")])
+def test_a_sweep_value_a_thousand_times_off_asks_about_units(axis, other):
+    """sweep tau=375 (ms typed for s) and l=3.7 (mm for m) ran and recorded a straight state,
+    without a word. A value within a factor 3 of 1000 (B: a million) times the base's is asked
+    about; the base's own values are not."""
+    from flutterswim.sweep.spec import SweepSpec
+
+    with pytest.warns(UserWarning, match=rf"typed in {re.escape(other)}\?"):
+        SweepSpec.build([axis])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        SweepSpec.build(["tau=0.2,0.375,1", "l=0.003,0.0037"])

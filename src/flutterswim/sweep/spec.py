@@ -13,6 +13,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import warnings
 from dataclasses import asdict, dataclass, field
 from typing import Any, Iterable, Mapping
 
@@ -224,6 +225,7 @@ class SweepSpec:
             raise ParameterError(f"the sweep has {n} points; at most {MAX_SWEEP_POINTS} are allowed "
                                  "(flutterswim.defaults.MAX_SWEEP_POINTS); split it into several sweeps")
         object.__setattr__(self, "axes", axes)
+        _units_warnings(self.base, axes)
         # every point's parameters, with the checks a point makes, before any store is created
         for i in range(self.n_values):
             values = self.values(i)
@@ -336,6 +338,28 @@ class SweepSpec:
                 sa, sb = _short(va), _short(vb)
                 out.append(f"{k}: stored {sb}, requested {sa}")
         return out
+
+
+#: SI units of the physical parameters a sweep may take, and the other unit a value typed a
+#: thousand (B: a million) times off is likely in (tau=375 for 0.375 s swept a straight state)
+_SI_UNITS = {"l": ("m", "mm", 1e3), "a": ("m", "mm", 1e3), "b": ("m", "mm", 1e3), "tau": ("s", "ms", 1e3),
+             "mu": ("Pa s", "mPa s", 1e3), "B": ("N m^2", "N mm^2", 1e6), "kappa_E": ("1/m", "1/mm", 1e-3)}
+
+
+def _units_warnings(base: Any, axes: tuple) -> None:
+    """A warning for a swept physical parameter whose values lie within a factor 3 of a thousand
+    (B: a million) times the base's: a value in mm, ms or mPa s typed for SI."""
+    if not isinstance(base, Parameters):
+        return
+    for a in axes:
+        if a.name not in _SI_UNITS:
+            continue
+        unit, other, factor = _SI_UNITS[a.name]
+        ref = abs(float(getattr(base, a.name)))
+        odd = [v for v in a.values if ref > 0 and v != 0 and abs(math.log10(abs(v) / ref) - math.log10(factor)) < 0.48]
+        if odd:
+            warnings.warn(f"sweep axis {a.name}: {odd[0]:g} {unit} is about {factor:g} times the base's {ref:g} {unit}; "
+                          f"values are in SI ({unit}): was it typed in {other}?", UserWarning, stacklevel=4)
 
 
 def _flatten(d: Any, prefix: str = "") -> dict[str, Any]:
