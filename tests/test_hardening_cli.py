@@ -276,10 +276,26 @@ def test_an_interrupt_is_one_line_even_when_objects_finalise_with_errors(tmp_pat
         "    raise KeyboardInterrupt\n"
         "sim = importlib.import_module('flutterswim.simulate')\n"
         "sim.simulate = interrupted_save\n"
-        "raise SystemExit(cli.main(['simulate', '--t-end', '0.1', '--quiet', '--out', sys.argv[1]]))\n")
+        "sys.argv = ['flutterswim', 'simulate', '--t-end', '0.1', '--quiet', '--out', sys.argv[1]]\n"
+        "raise SystemExit(cli.main())  # as the command runs it\n")
     r = subprocess.run([sys.executable, str(script), str(tmp_path / "x.nc")], capture_output=True, text=True, timeout=120)
     assert r.returncode == 130, r.stderr
     assert r.stderr.strip().splitlines() == ["flutterswim simulate: interrupted"], r.stderr
+    # called in a process that goes on (a notebook, a test), the hook is left as it was
+    import importlib
+
+    cli = importlib.import_module("flutterswim.cli")
+    hook = sys.unraisablehook
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    import pytest as _pytest
+
+    with _pytest.MonkeyPatch.context() as mp:
+        mp.setattr(importlib.import_module("flutterswim.simulate"), "simulate", lambda *a, **k: interrupted(None))
+        assert cli.main(["simulate", "--t-end", "0.1", "--quiet", "--out", str(tmp_path / "y.nc")]) == 130
+    assert sys.unraisablehook is hook
 
 
 def test_an_interrupt_names_the_files_already_replaced(tmp_path):

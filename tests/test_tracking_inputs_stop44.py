@@ -157,3 +157,56 @@ def test_dust_on_the_ends_path_is_flagged_not_kept(movie):
         d = describe(tr, n_last=100)
         for key in ("period_s", "advance_per_cycle_mm"):
             assert getattr(d, key) == pytest.approx(getattr(truth, key), rel=5e-3), (x0, key)
+
+
+def test_imagej_frame_interval_in_its_time_unit_and_not_the_playback_rate(tmp_path, movie):
+    """A frame interval of 20 with tunit=ms was read as 20 s (a period 1000 times too long), and
+    ImageJ's fps (the animation's playback speed) as the camera's rate."""
+    mv, _ = movie
+    frames = mv.frames[:6].astype(np.float32)
+    for desc, fps in (("finterval=20\ntunit=ms\n", FPS), ("finterval=0.02\n", FPS), ("fps=7\n", None),
+                      ("finterval=20\ntunit=fortnights\n", None)):
+        p = tmp_path / "s.tif"
+        tifffile.imwrite(p, frames, description=f"ImageJ=1.54f\nimages=6\nframes=6\n{desc}loop=false\n", metadata=None)
+        got = open_frames(p).fps
+        assert (got is None and fps is None) or got == pytest.approx(fps), (desc, got)
+
+
+@pytest.mark.parametrize("header,scale", [("Elapsed Time (ms)", 1e-3), ("Time Stamp (ms)", 1e-3),
+                                          ("Time elapsed [ms]", 1e-3), ("Elapsed time [us]", 1e-6)])
+def test_a_header_of_several_words_keeps_its_unit(tmp_path, header, scale):
+    """Split on spaces, 'Elapsed Time (ms)' became 'Elapsed' (seconds) and 'Time(ms)'."""
+    p = tmp_path / "t.txt"
+    p.write_text(f"{header}\n0\n20\n40\n")
+    np.testing.assert_allclose(read_times(p), np.array([0.0, 20.0, 40.0]) * scale)
+    q = tmp_path / "u.txt"
+    q.write_text(f"frame {header}\n0 0\n1 20\n")  # names with spaces in columns split by spaces: refused
+    with pytest.raises(ParameterError, match="separate the columns by commas or tabs"):
+        read_times(q)
+
+
+def test_frame_order_takes_the_reading_that_tells_the_names_apart(tmp_path):
+    """Counters after a dot (trial1.2, trial1.10) are whole numbers, times (t0.02s, t0.1s)
+    decimals; names both readings tell apart but order differently are refused."""
+    from flutterswim.tracking.io import _frame_order
+
+    counters = [Path(f"trial1.{k}.png") for k in range(1, 102)]
+    assert _frame_order(sorted(counters), "x") == counters
+    times = [Path(f"t{t:g}s.png") for t in np.arange(0, 0.5, 0.02).round(2)]
+    assert _frame_order(sorted(times), "x") == times
+    with pytest.raises(ParameterError, match="differently read as decimals"):
+        _frame_order([Path("a1.5.png"), Path("a1.10.png"), Path("a2.1.png")], "x")
+
+
+def test_a_lower_case_sample_after_sample_is_read():
+    rx = re.compile(DEFAULT_PATTERN, re.IGNORECASE)
+    m = rx.search("85V_samplea_trial1")
+    assert m and m.group("sample") == "a"
+
+
+def test_tolerances_below_round_off_are_refused_by_a_sweep_before_its_store():
+    """Every point failed, and the store then blocked a corrected rerun."""
+    from flutterswim.sweep.spec import PointSettings
+
+    with pytest.raises(ParameterError, match="both below 1e-12"):
+        PointSettings(rtol=1e-13, atol=1e-14)

@@ -67,8 +67,12 @@ def _h5_fingerprint(h) -> str:
         digest.update(f"{name}|{d.dtype.str}|{d.shape}|".encode())
         if d.dtype.kind == "O":  # variable-length strings
             digest.update("\x1f".join(str(v) for v in np.ravel(d.asstr()[()])).encode())
-        elif d.size:
+        elif d.size and d.ndim == 0:
             digest.update(np.ascontiguousarray(d[()]).tobytes())
+        elif d.size:  # in blocks of rows (~16 MB: a 1 GB run is not read into memory whole)
+            rows = max(1, int(16e6 // max(1, d.dtype.itemsize * (d.size // d.shape[0]))))
+            for i in range(0, d.shape[0], rows):
+                digest.update(np.ascontiguousarray(d[i:i + rows]).tobytes())
     return digest.hexdigest()
 
 

@@ -56,6 +56,14 @@ def tolerance(name: str, value: Any, *, strict: bool = False) -> float:
     return v
 
 
+def tolerances_reachable(rtol: float, atol: float) -> None:
+    """Refuse rtol and atol both below :data:`MIN_TOLERANCE` (the step size would collapse)."""
+    if max(rtol, atol) < MIN_TOLERANCE:
+        raise ParameterError(f"rtol={rtol!r} and atol={atol!r} are both below {MIN_TOLERANCE:g}: round-off in the state "
+                             "exceeds the error asked for, and the step size would collapse; at least one of them "
+                             f">= {MIN_TOLERANCE:g} is required")
+
+
 def non_negative(name: str, value: Any) -> float:
     v = finite(name, value)
     if v < 0.0:

@@ -473,11 +473,13 @@ def _written_note(paths: list) -> str:
 def _quiet_unraisable() -> None:
     """After a Ctrl-C, objects the interrupt left half-closed (h5netcdf's file in the middle of a
     save) are finalised with errors Python prints as "Exception ignored in ..." (26 lines after
-    the one-line message): the command's line is what is said."""
+    the one-line message): the command's line is what is said. Only for the command itself,
+    whose process ends: ``main`` called with arguments, in a process that goes on, keeps the hook."""
     sys.unraisablehook = lambda unraisable: None
 
 
 def main(argv: list[str] | None = None) -> int:
+    program = argv is None  # (run as the command, not called in a process that goes on)
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
     if debug:
@@ -508,7 +510,7 @@ def main(argv: list[str] | None = None) -> int:
             import traceback
 
             traceback.print_exc()
-        else:
+        elif program:
             _quiet_unraisable()
         msg = _one_line(exc) or "interrupted"
         print(f"flutterswim {args.command}: {msg}{_written_note(written_since(first_write))}", file=sys.stderr)
@@ -517,7 +519,7 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     except Exception as exc:  # noqa: BLE001 - every error becomes one line (traceback with --debug)
         if interrupted(exc):  # Ctrl-C inside a compiled kernel surfaces as its SystemError
-            if not debug:
+            if not debug and program:
                 _quiet_unraisable()
             print(f"flutterswim {args.command}: interrupted", file=sys.stderr)
             return 130

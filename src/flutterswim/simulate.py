@@ -13,7 +13,7 @@ from typing import Callable
 import numpy as np
 
 from . import defaults
-from ._validate import MIN_TOLERANCE, ParameterError, angle as _angle, finite, positive, positive_int, tolerance
+from ._validate import ParameterError, angle as _angle, finite, positive, positive_int, tolerance, tolerances_reachable
 from ._validate import n_segments as segments_checked
 from .field import Constant, Field
 from .filament import Filament, centreline
@@ -72,10 +72,7 @@ def simulate(
         raise ParameterError(f"t_end={t_end!r} must be greater than t_start={t_start!r}")
     n_segments = segments_checked(n_segments)
     rtol, atol = tolerance("rtol", rtol, strict=True), tolerance("atol", atol, strict=True)
-    if max(rtol, atol) < MIN_TOLERANCE:
-        raise ParameterError(f"rtol={rtol!r} and atol={atol!r} are both below {MIN_TOLERANCE:g}: round-off in the state "
-                             "exceeds the error asked for, and the step size would collapse; at least one of them "
-                             f">= {MIN_TOLERANCE:g} is required")
+    tolerances_reachable(rtol, atol)
     frame_dt = None if frame_dt is None else positive("frame_dt", frame_dt, strict=True)
     max_step = None if max_step is None else positive("max_step", max_step, strict=True)
     if method not in METHODS:

@@ -19,7 +19,7 @@ from typing import Any, Iterable, Mapping
 
 import numpy as np
 
-from .._validate import ParameterError, finite, positive, positive_int, tolerance
+from .._validate import ParameterError, finite, positive, positive_int, tolerance, tolerances_reachable
 from .._validate import n_segments as segments_checked
 from ..defaults import ATOL, MAX_SWEEP_POINTS, N_CYCLES, RTOL, SWEEP_FRAMES_PER_TAU, SWEEP_N_SEGMENTS
 from ..params import Groups, Parameters, preset
@@ -125,6 +125,7 @@ class PointSettings:
         # the checks of flutterswim.simulate, up front (not at every point)
         for k in ("t_cap", "chunk", "rtol", "atol", "straight_tol", "swim_tol", "damped_tol", "rate_tol"):
             object.__setattr__(self, k, (tolerance if k in ("rtol", "atol") else positive)(k, getattr(self, k)))
+        tolerances_reachable(self.rtol, self.atol)  # (every point failed, and the store blocked a rerun)
         for k in ("n_cycles", "n_segments", "frames_per_tau", "saturated_chunks"):
             v = getattr(self, k)
             if isinstance(v, float) and v.is_integer():

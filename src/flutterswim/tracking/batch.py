@@ -44,10 +44,10 @@ from .io import FRAME_SUFFIXES, MOVIE_SUFFIXES, STACK_SUFFIXES, parse_roi
 __all__ = ["DEFAULT_PATTERN", "CSV_COLUMNS", "Trial", "failures_path", "find_trials", "track_batch"]
 
 # the voltage a whole number (not the end of one: "85,5V" read 5 V), its decimal mark a point, a
-# comma or a p; the sample the token right after "sample" and a separator, or its digits or
-# capitals ("samples_A" read as sample "s")
+# comma or a p; the sample the token after "sample" (and a separator), but not the plural's "s"
+# ("samples_A" read as sample "s")
 DEFAULT_PATTERN = (r"(?<![\d.,])(?P<voltage>\d+(?:[.,p]\d+)?)\s*V.*?"
-                   r"sample(?:[-_ ]|(?=(?-i:[0-9A-Z])))(?P<sample>[A-Za-z0-9]+)")
+                   r"sample(?!s(?:[-_ .]|$))[-_ ]?(?P<sample>[A-Za-z0-9]+)")
 CSV_COLUMNS = ("voltage_V", "sample", "period_s", "advance_mm", "lateral_mm", "leading_lateral_mm",
                "lateral_se_mm", "leading_lateral_se_mm", "period_std_s", "advance_std_mm", "n_cycles", "body_length_mm", "body_length_spread",
                "n_frames", "n_failed_frames", "trial", "tracked_by")

@@ -38,12 +38,33 @@ def _gray(a: np.ndarray) -> np.ndarray:
     return a.astype(np.float32, copy=False)
 
 
-def _natural_key(p: Path) -> list:
-    """Sort key of a frame's file name: its numbers by value, decimals included (frame_2 before
-    frame_10; t0.02s before t0.1s, which digit by digit sorted after it), the rest by text."""
+def _natural_key(p: Path, decimals: bool = True) -> list:
+    """Sort key of a frame's file name: its numbers by value (frame_2 before frame_10), with
+    ``decimals`` a number with a decimal point as one (t0.02s before t0.1s), the rest by text."""
     from decimal import Decimal  # (exact: a 17-digit timestamp is beyond a float's precision)
 
-    return [Decimal(t) if k % 2 else t.lower() for k, t in enumerate(re.split(r"(\d+(?:\.\d+)?)", p.name))]
+    rx = r"(\d+(?:\.\d+)?)" if decimals else r"(\d+)"
+    return [Decimal(t) if k % 2 else t.lower() for k, t in enumerate(re.split(rx, p.name))]
+
+
+def _frame_order(files: list[Path], where: str) -> list[Path]:
+    """The frames in the order of the numbers in their names. Read as decimals (t0.02s, t0.1s)
+    and as whole numbers (trial1.2, trial1.10) the numbers may order the frames differently:
+    the reading that tells every name apart is taken; if both or neither do, the order is
+    ambiguous and refused (it silently shuffled frames: a period 10-20 % off)."""
+    orders = []
+    for decimals in (True, False):
+        keys = [_natural_key(f, decimals) for f in files]
+        distinct = len({tuple(k) for k in keys}) == len(keys)
+        orders.append((distinct, [f for _, f in sorted(zip(keys, files), key=lambda kf: kf[0])]))
+    (dec_ok, by_dec), (int_ok, by_int) = orders
+    if by_dec == by_int or (dec_ok and not int_ok):
+        return by_dec
+    if int_ok and not dec_ok:
+        return by_int
+    raise ParameterError(f"input={where!r}: the frames' names order them differently read as decimals "
+                         f"({by_dec[0].name}, {by_dec[1].name}, ...) and as whole numbers ({by_int[0].name}, "
+                         f"{by_int[1].name}, ...); rename them with zero-padded frame numbers, or give a TIFF stack")
 
 
 @dataclass
@@ -184,17 +205,26 @@ def _tiff_stack(p: Path) -> Frames:
     return fr
 
 
+#: ImageJ's time units (its calibration's ``tunit``; "sec" when absent) in seconds
+_IMAGEJ_TIME_UNITS = {"sec": 1.0, "s": 1.0, "second": 1.0, "seconds": 1.0, "ms": 1e-3, "msec": 1e-3,
+                      "millisecond": 1e-3, "milliseconds": 1e-3, "us": 1e-6, "\u00b5s": 1e-6, "\u03bcs": 1e-6,
+                      "usec": 1e-6, "microsecond": 1e-6, "microseconds": 1e-6, "min": 60.0, "minute": 60.0,
+                      "minutes": 60.0}
+
+
 def _tiff_frame_rate(tf) -> float | None:
-    """The frame rate an ImageJ stack records (its ``finterval`` [s], or ``fps``), else None."""
+    """The frame rate an ImageJ stack records: 1 / its frame interval ``finterval`` in its time
+    unit ``tunit`` (seconds when absent), else None (an unknown unit too). Its ``fps`` is the
+    animation's playback speed, not the camera's, and is not used."""
     meta = tf.imagej_metadata or {}
-    for key, to_fps in (("finterval", lambda v: 1.0 / v), ("fps", lambda v: v)):
-        try:
-            v = float(meta.get(key, 0) or 0)
-        except (TypeError, ValueError):
-            continue
-        if math.isfinite(v) and v > 0:
-            return float(to_fps(v))
-    return None
+    try:
+        v = float(meta.get("finterval", 0) or 0)
+    except (TypeError, ValueError):
+        return None
+    unit = _IMAGEJ_TIME_UNITS.get(str(meta.get("tunit", "sec")).strip().lower())
+    if unit is None or not (math.isfinite(v) and v > 0):
+        return None
+    return 1.0 / (v * unit)
 
 
 def _read_image(p: Path) -> np.ndarray:
@@ -232,8 +262,8 @@ def _image_shape(p: Path) -> tuple[int, ...]:
 
 def _folder(p: Path) -> Frames:
     # hidden files are not frames (macOS leaves "._frame1.png" companions beside copied files)
-    files = sorted((f for f in p.iterdir() if f.is_file() and f.suffix.lower() in FRAME_SUFFIXES
-                    and not f.name.startswith(".")), key=_natural_key)
+    files = _frame_order(sorted((f for f in p.iterdir() if f.is_file() and f.suffix.lower() in FRAME_SUFFIXES
+                                 and not f.name.startswith(".")), key=lambda f: f.name), str(p))
     if not files:
         raise ParameterError(f"input={str(p)!r} is a folder without PNG or TIFF frames")
     sfx = {f.suffix.lower().replace(".tiff", ".tif") for f in files}
@@ -411,6 +441,15 @@ def read_times(path: str | os.PathLike) -> np.ndarray:
 
     col, factor = 0, 1.0
     n0, first = rows[0]
+    if sep == r"\s+" and len(rows) > 1 and any(number(v) is None for v in first):
+        # columns separated by white space, whose header's names may hold spaces: "Elapsed Time
+        # (ms)" split into "Elapsed" (a name without its unit: seconds) and "Time(ms)"
+        width = len(rows[1][1])
+        if width == 1:
+            first = [lines[0][1]]  # one column: the whole line names it
+        elif len(first) != width:
+            raise ParameterError(f"times={str(p)!r}: its header (row {n0}) has {len(first)} names for {width} "
+                                 "columns separated by spaces; separate the columns by commas or tabs")
     if any(number(v) is None for v in first):
         found = [(k, _time_header(v)) for k, v in enumerate(first)]
         named = [(k, f) for k, f in found if f is not None]
