@@ -176,3 +176,4 @@ def test_a_sweep_value_a_thousand_times_off_asks_about_units(axis, other):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         SweepSpec.build(["tau=0.2,0.375,1", "l=0.003,0.0037"])
+        SweepSpec.build(["mu=0.001,0.01,0.1,1"])  # water to glycerol: decades, not a unit slip

@@ -183,6 +183,11 @@ def test_a_header_of_several_words_keeps_its_unit(tmp_path, header, scale):
     q.write_text(f"frame {header}\n0 0\n1 20\n")  # names with spaces in columns split by spaces: refused
     with pytest.raises(ParameterError, match="separate the columns by commas or tabs"):
         read_times(q)
+    q.write_text(f"{header}\n0 1\n20 2\n")  # one name with a unit over two columns: the unit in doubt
+    with pytest.raises(ParameterError, match="separate the columns by commas or tabs"):
+        read_times(q)
+    q.write_text("frame time\n0 0.0\n1 0.02\n")  # two one-word names
+    np.testing.assert_allclose(read_times(q), [0.0, 0.02])
 
 
 def test_frame_order_takes_the_reading_that_tells_the_names_apart(tmp_path):
@@ -194,14 +199,24 @@ def test_frame_order_takes_the_reading_that_tells_the_names_apart(tmp_path):
     assert _frame_order(sorted(counters), "x") == counters
     times = [Path(f"t{t:g}s.png") for t in np.arange(0, 0.5, 0.02).round(2)]
     assert _frame_order(sorted(times), "x") == times
+    # both readings tell these apart: the one whose numbers step evenly decides
+    times = [Path(f"t{t:g}s.png") for t in np.arange(0.1, 0.35, 0.05).round(2)]
+    assert _frame_order(sorted(times), "x") == times
+    counters = [Path(f"trial1.{k}.png") for k in range(5, 26)]
+    assert _frame_order(sorted(counters), "x") == counters
     with pytest.raises(ParameterError, match="differently read as decimals"):
         _frame_order([Path("a1.5.png"), Path("a1.10.png"), Path("a2.1.png")], "x")
 
 
-def test_a_lower_case_sample_after_sample_is_read():
-    rx = re.compile(DEFAULT_PATTERN, re.IGNORECASE)
-    m = rx.search("85V_samplea_trial1")
-    assert m and m.group("sample") == "a"
+@pytest.mark.parametrize("name,sample", [
+    ("85V_samplea_trial1", "a"), ("85V_sampleS_trial1", "S"), ("85V_sampleAB", "AB"),
+    ("85V_downsampled_sampleA_trial1", "A"), ("85V_sampled1kHz_sample2", "2"),
+    ("90V_upsampled_trial1", None), ("85V_samplesA", None), ("85V_samplex2_trial1", None),
+])
+def test_the_sample_is_the_token_after_the_word_sample(name, sample):
+    """'downsampled' gave sample 'd' (samples A and B merged), 'samplea' had stopped matching."""
+    m = re.compile(DEFAULT_PATTERN, re.IGNORECASE).search(name)
+    assert (m.group("sample") if m else None) == sample
 
 
 def test_tolerances_below_round_off_are_refused_by_a_sweep_before_its_store():

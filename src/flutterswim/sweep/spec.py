@@ -348,8 +348,9 @@ _SI_UNITS = {"l": ("m", "mm", 1e3), "a": ("m", "mm", 1e3), "b": ("m", "mm", 1e3)
 
 
 def _units_warnings(base: Any, axes: tuple) -> None:
-    """A warning for a swept physical parameter whose values lie within a factor 3 of a thousand
-    (B: a million) times the base's: a value in mm, ms or mPa s typed for SI."""
+    """A warning for a swept physical parameter whose values all lie within a factor 3 of a
+    thousand (B: a million) times the base's: values in mm, ms or mPa s typed for SI (a sweep
+    spanning decades, water to glycerol, is left alone)."""
     if not isinstance(base, Parameters):
         return
     for a in axes:
@@ -357,8 +358,9 @@ def _units_warnings(base: Any, axes: tuple) -> None:
             continue
         unit, other, factor = _SI_UNITS[a.name]
         ref = abs(float(getattr(base, a.name)))
-        odd = [v for v in a.values if ref > 0 and v != 0 and abs(math.log10(abs(v) / ref) - math.log10(factor)) < 0.48]
-        if odd:
+        vals = [v for v in a.values if v != 0]
+        odd = [v for v in vals if ref > 0 and abs(math.log10(abs(v) / ref) - math.log10(factor)) < 0.48]
+        if odd and len(odd) == len(vals):
             warnings.warn(f"sweep axis {a.name}: {odd[0]:g} {unit} is about {factor:g} times the base's {ref:g} {unit}; "
                           f"values are in SI ({unit}): was it typed in {other}?", UserWarning, stacklevel=4)
 

@@ -44,10 +44,13 @@ from .io import FRAME_SUFFIXES, MOVIE_SUFFIXES, STACK_SUFFIXES, parse_roi
 __all__ = ["DEFAULT_PATTERN", "CSV_COLUMNS", "Trial", "failures_path", "find_trials", "track_batch"]
 
 # the voltage a whole number (not the end of one: "85,5V" read 5 V), its decimal mark a point, a
-# comma or a p; the sample the token after "sample" (and a separator), but not the plural's "s"
-# ("samples_A" read as sample "s")
+# comma or a p; the sample the token after the word "sample" (not inside "downsampled") and a
+# separator, or right after it digits, a capital, or one lower-case letter standing alone but
+# for the plural's "s" and the participle's "d" ("samples_A" and "sampled_" read as samples
+# "s" and "d")
 DEFAULT_PATTERN = (r"(?<![\d.,])(?P<voltage>\d+(?:[.,p]\d+)?)\s*V.*?"
-                   r"sample(?!s(?:[-_ .]|$))[-_ ]?(?P<sample>[A-Za-z0-9]+)")
+                   r"(?<![A-Za-z])sample(?:[-_ ]|(?=\d)|(?=(?-i:[A-Z]))|(?=(?-i:[a-ce-rt-z])(?:[-_ .]|$)))"
+                   r"(?P<sample>[A-Za-z0-9]+)")
 CSV_COLUMNS = ("voltage_V", "sample", "period_s", "advance_mm", "lateral_mm", "leading_lateral_mm",
                "lateral_se_mm", "leading_lateral_se_mm", "period_std_s", "advance_std_mm", "n_cycles", "body_length_mm", "body_length_spread",
                "n_frames", "n_failed_frames", "trial", "tracked_by")

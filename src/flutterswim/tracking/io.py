@@ -47,6 +47,19 @@ def _natural_key(p: Path, decimals: bool = True) -> list:
     return [Decimal(t) if k % 2 else t.lower() for k, t in enumerate(re.split(rx, p.name))]
 
 
+def _evenly_numbered(files: list[Path], decimals: bool) -> bool:
+    """Whether, in this order, the last number that changes between the names steps evenly."""
+    keys = [_natural_key(f, decimals)[1::2] for f in files]
+    if len({len(k) for k in keys}) != 1 or not keys or not keys[0]:
+        return False
+    cols = [j for j in range(len(keys[0])) if len({k[j] for k in keys}) > 1]
+    if not cols:
+        return False
+    v = np.array([float(k[cols[-1]]) for k in keys])
+    d = np.diff(v)
+    return bool(np.all(d > 0) and np.ptp(d) <= 1e-6 * np.max(np.abs(v)) + 1e-9 * np.median(d))
+
+
 def _frame_order(files: list[Path], where: str) -> list[Path]:
     """The frames in the order of the numbers in their names. Read as decimals (t0.02s, t0.1s)
     and as whole numbers (trial1.2, trial1.10) the numbers may order the frames differently:
@@ -62,6 +75,11 @@ def _frame_order(files: list[Path], where: str) -> list[Path]:
         return by_dec
     if int_ok and not dec_ok:
         return by_int
+    # both tell the names apart: the reading under which the numbers step evenly (a frame rate:
+    # t0.1s, t0.15s, t0.2s ...; a counter: trial1.9, trial1.10 ...) when only one does
+    even = [_evenly_numbered(order, decimals) for order, decimals in ((by_dec, True), (by_int, False))]
+    if even[0] != even[1]:
+        return by_dec if even[0] else by_int
     raise ParameterError(f"input={where!r}: the frames' names order them differently read as decimals "
                          f"({by_dec[0].name}, {by_dec[1].name}, ...) and as whole numbers ({by_int[0].name}, "
                          f"{by_int[1].name}, ...); rename them with zero-padded frame numbers, or give a TIFF stack")
@@ -378,7 +396,8 @@ def open_frames(source: Any, roi: Any = None) -> Frames:
 # column names of a timestamps file, and the factor to seconds
 #: header names of a time column (lower case, unit removed) and the units a header may give
 #: (a suffix _s, _ms, _us or a unit in brackets: "Time (ms)", "t [s]")
-_TIME_NAMES = ("t", "time", "timestamp", "time stamp", "elapsed", "elapsed time", "time elapsed", "relative time")
+_TIME_NAMES = ("t", "time", "timestamp", "time stamp", "elapsed", "elapsed time", "time elapsed", "relative time",
+               "frame time", "capture time", "acquisition time", "time since start")
 _TIME_UNITS = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "\u00b5s": 1e-6, "\u03bcs": 1e-6}
 
 
@@ -447,9 +466,12 @@ def read_times(path: str | os.PathLike) -> np.ndarray:
         width = len(rows[1][1])
         if width == 1:
             first = [lines[0][1]]  # one column: the whole line names it
-        elif len(first) != width:
-            raise ParameterError(f"times={str(p)!r}: its header (row {n0}) has {len(first)} names for {width} "
-                                 "columns separated by spaces; separate the columns by commas or tabs")
+        elif len(first) != width or any(_time_header(a) is not None and _time_header(f"{a} {b}") not in
+                                        (None, _time_header(a)) for a, b in zip(first, first[1:])):
+            # (two words that name a time together with a unit, "Time Stamp(ms)", over two
+            # columns: one name whose unit the other column took, or two names? the unit is in doubt)
+            raise ParameterError(f"times={str(p)!r}: its header (row {n0}) names {width} columns separated by spaces "
+                                 "with names that may hold spaces; separate the columns by commas or tabs")
     if any(number(v) is None for v in first):
         found = [(k, _time_header(v)) for k, v in enumerate(first)]
         named = [(k, f) for k, f in found if f is not None]
