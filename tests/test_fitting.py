@@ -307,9 +307,11 @@ def test_fig3e_draws_every_trial_beside_its_voltage_and_the_mean_with_its_sem():
         dots = next(ln for ln in ax.lines if ln.get_label() == "trials")
         x, y = np.asarray(dots.get_xdata(), float), np.asarray(dots.get_ydata(), float)
         np.testing.assert_array_equal(y, vals[:, k])
-        # beside its voltage (not hidden under the mean's error bar), nearer to it than to any other
-        off = x - v
-        assert np.all(off != 0) and np.all(np.abs(off) < 0.25 * 12.5)
+        np.testing.assert_array_equal(x, v)  # at its own voltage in the data
+        # drawn beside it on the page (not hidden under the mean's error bar), nearer to it than to any other
+        off = _page_offset(ax, dots)
+        step = np.diff(ax.transData.transform(np.column_stack([[60.0, 72.5], [0.4, 0.4]]))[:, 0])[0]
+        assert np.all(off < 0) and np.all(np.abs(off) < 0.25 * step)
         mean_line = ax.containers[0].lines[0]
         np.testing.assert_allclose(mean_line.get_ydata(), sm.mean[:, k])
         np.testing.assert_allclose(mean_line.get_xdata(), sm.voltage_V)
@@ -319,6 +321,12 @@ def test_fig3e_draws_every_trial_beside_its_voltage_and_the_mean_with_its_sem():
     import matplotlib.pyplot as plt
 
     plt.close(fig)
+
+
+def _page_offset(ax, dots) -> np.ndarray:
+    """How far [display px] each trial dot is drawn from its voltage on the page."""
+    xy = np.column_stack([dots.get_xdata(), dots.get_ydata()]).astype(float)
+    return dots.get_transform().transform(xy)[:, 0] - ax.transData.transform(xy)[:, 0]
 
 
 def test_fit_figure_draws_the_trials_as_fig3e_and_the_model_at_the_fitted_voltage():
@@ -342,7 +350,10 @@ def test_fit_figure_draws_the_trials_as_fig3e_and_the_model_at_the_fitted_voltag
         fig = plot_fit(res, sm, tr, None, voltage=voltage)
         for k, ax in enumerate(fig.axes[:3]):
             dots = next(ln for ln in ax.lines if ln.get_label() == "trials")
-            assert np.all(np.asarray(dots.get_xdata(), float) < v) and np.all(dots.get_xdata() > v - 2.5)
+            np.testing.assert_array_equal(np.asarray(dots.get_xdata(), float), v)
+            off = _page_offset(ax, dots)
+            step = np.diff(ax.transData.transform(np.column_stack([[80.0, 85.0], [0.4, 0.4]]))[:, 0])[0]
+            assert np.all(off < 0) and np.all(np.abs(off) < 0.25 * step)
             mark = next(ln for ln in ax.lines if ln.get_label() == "model at the fit")
             np.testing.assert_allclose(mark.get_xdata(), [85.0])
             np.testing.assert_allclose(mark.get_ydata(), [res.model[k]])

@@ -24,7 +24,7 @@ from typing import Iterator, Sequence
 
 from ._validate import ParameterError
 
-__all__ = ["MARKER", "SIGNATURE", "FINGERPRINT", "is_ours", "write_netcdf", "row_signature", "figure_metadata", "mark_gif", "check_output_file", "check_output_dir", "atomic_path", "atomic_write_text",
+__all__ = ["MARKER", "SIGNATURE", "FINGERPRINT", "is_ours", "write_netcdf", "row_signature", "save_figure_file", "figure_metadata", "mark_gif", "check_output_file", "check_output_dir", "atomic_path", "atomic_write_text",
            "check_store_path", "write_marker", "has_marker", "remove_own_store"]
 
 #: File inside every store flutterswim creates; nothing without it is ever deleted.
@@ -231,6 +231,20 @@ def figure_metadata(suffix: str) -> dict:
     if sfx in ("jpg", "jpeg"):
         return {"pil_kwargs": {"comment": tag.encode()}}
     return {}
+
+
+#: figure files flutterswim writes
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")
+
+
+def save_figure_file(fig, path: str | os.PathLike, *, dpi: float = 150) -> Path:
+    """Save a matplotlib figure to ``path`` atomically, signed, and never over a file that is not
+    ours (the functions of the API that save a figure; the command line checks before computing)."""
+    p = check_output_file(path, FIGURE_SUFFIXES, what="path")
+    with atomic_path(p) as tmp:
+        fig.savefig(tmp, dpi=dpi, format=p.suffix.lower().lstrip(".").replace("jpg", "jpeg"),
+                    **figure_metadata(p.suffix))
+    return p
 
 
 def mark_gif(path: str | os.PathLike) -> None:

@@ -157,14 +157,19 @@ LABELS = ("period [s]", "advance per cycle [mm]", "lateral peak-to-peak [mm]")
 
 def draw_trials(ax, k: int, summary: Summary, trials: Trials | None = None, tip: str | None = None) -> None:
     """Descriptor k (period, advance, lateral) against voltage on ``ax``: mean +- SEM (red) and
-    the trials (grey dots, drawn just left of their voltage so the error bar does not hide them);
+    the trials (grey dots, drawn 5 points left of their voltage so the error bar does not hide them);
     the number of trials under each voltage's mean on the first panel. ``tip``: which end the
     lateral excursions are ("trailing", "leading"), said on its axis."""
     if trials is not None:
-        u = np.unique(np.asarray(summary.voltage_V, float))
-        shift = 0.06 * (float(np.min(np.diff(u))) if u.size > 1 else max(abs(float(u[0])), 1.0))
-        ax.plot(np.asarray(trials.voltage_V, float) - shift, trials.values[:, k], ".", color="0.5", ms=4,
-                label="trials")
+        from matplotlib.transforms import offset_copy
+
+        # 5 points left of their voltage on the page, not in volts (one voltage, 700 V: the dots sat
+        # at 658 V on the axis, a voltage never applied)
+        left = offset_copy(ax.transData, fig=ax.figure, x=-5.0, y=0.0, units="points")
+        xy = np.column_stack([np.asarray(trials.voltage_V, float), trials.values[:, k]])
+        ax.plot(xy[:, 0], xy[:, 1], ".", color="0.5", ms=4, label="trials", transform=left)
+        ax.update_datalim(xy)  # (a line drawn with an offset is not counted by the autoscaling)
+        ax.autoscale_view()
     ax.errorbar(summary.voltage_V, summary.mean[:, k], yerr=summary.sem[:, k], fmt="o", color="tab:red",
                 capsize=3, label="mean \u00b1 SEM")
     ax.set_xlabel("voltage [V]")
@@ -194,9 +199,8 @@ def plot_trials(summary: Summary, path=None, *, trials: Trials | None = None, mo
             ax.plot(summary.voltage_V, np.asarray(model)[:, k], "s", mfc="none", color="k", label="model")
     axs[0].legend(fontsize=8)
     if path is not None:
-        from .._paths import atomic_path, figure_metadata
+        from .._paths import save_figure_file
 
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=150, **figure_metadata(Path(path).suffix))
+        save_figure_file(fig, path, dpi=150)
         plt.close(fig)
     return fig

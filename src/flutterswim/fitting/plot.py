@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 
@@ -74,9 +73,8 @@ def plot_fit(res, summary, trials, path=None, *, voltage: float | None = None):
                 f"degrees of freedom (p = {st['p_value']:.3g})")
     fig.suptitle(f"{head}\n{res.card.describe()}", fontsize=9)
     if path is not None:
-        from .._paths import atomic_path, figure_metadata
+        from .._paths import save_figure_file
 
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=130, **figure_metadata(Path(path).suffix))
+        save_figure_file(fig, path, dpi=130)
         plt.close(fig)
     return fig

@@ -115,11 +115,9 @@ def plot_branch(ds, path=None, *, x_range: tuple[float, float] | None = None):
                       + (f" (l1 = {l1:.3g} {'<' if l1 < 0 else '>'} 0" + (f", N = {n})" if n is not None else ")")
                          if l1 is not None else ""), fontsize=10)
     if path is not None:
-        from pathlib import Path
 
-        from .._paths import atomic_path, figure_metadata
+        from .._paths import save_figure_file
 
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=150, **figure_metadata(Path(path).suffix))
+        save_figure_file(fig, path, dpi=150)
         plt.close(fig)
     return fig

@@ -74,6 +74,15 @@ def animate(
     if fps > MAX_FPS[fmt]:  # fps=1e9 ran out of memory building the frame list
         raise ParameterError(f"fps={fps!r} is too high for {fmt[1:].upper()}; a frame rate in (0, {MAX_FPS[fmt]:g}] "
                              "frames per second is required")
+    if fmt == ".gif":
+        # a GIF stores each frame's delay in whole hundredths of a second: fps 15 played at 16.7,
+        # 60 at 100 (and browsers slow delays under 2/100 s to 10/100)
+        k = round(100.0 / fps)
+        if k < 2 or abs(100.0 / fps - k) > 0.005 * (100.0 / fps):
+            near = sorted({100.0 / j for j in (max(2, k - 1), max(2, k), max(2, k + 1))}, reverse=True)
+            raise ParameterError(f"fps={fps!r} cannot be stored in a GIF, whose frame delays are whole hundredths of a "
+                                 f"second (at least 2): use 100/k frames per second ({', '.join(f'{v:.4g}' for v in near)}), "
+                                 "or an MP4")
     if not (speed > 0 and math.isfinite(speed)):
         raise ParameterError(f"speed={speed!r} must be a finite number > 0")
     n_video = (tr.t[-1] - tr.t[0]) / speed * fps

@@ -258,11 +258,16 @@ def plot_summary(obj: Any, path: str | Path | None = None, *, cycles: Cycles | N
     fig = new_figure(figsize, dpi)
     gs = fig.add_gridspec(3, 4, height_ratios=[1.0, 1.0, 1.0])
     full = (float(tr.t[0]), float(tr.t[-1]))
+    # the windows named by what the run did: a run without an onset or a limit cycle (describe's
+    # verdicts) has its first and last cycles, not "onset" and "limit" (a review: a run below
+    # settling titled its last cycles "limit")
+    said = {"onset": "onset" if math.isfinite(cyc.onset_time) else "first cycles (no onset found)",
+            "limit": "limit cycle" if cyc.limit_cycle else "last cycles (no limit cycle)"}
     for col, (name, (a, b)) in enumerate(wins.items()):
         ax = fig.add_subplot(gs[0, 2 * col : 2 * col + 2])
         per = (b - a) / max(1, n_cycles)
         draw_ghosts(ax, tr, (a, min(b, a + per)), tip_trail=full,
-                    title=f"{name}: t = {a:.2f}–{a + per:.2f} {figure_units(tr)[2]}")
+                    title=f"{said.get(name, name)}: t = {a:.2f}–{a + per:.2f} {figure_units(tr)[2]}")
         axs = [fig.add_subplot(gs[1 + r, 2 * col + c]) for r in range(2) for c in range(2)]
         draw_kymographs(axs, tr, (a, b))
     return finish(fig, path)

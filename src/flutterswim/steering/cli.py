@@ -9,6 +9,9 @@ from .._json import dumps
 __all__ = ["register"]
 
 
+#: the steer animation's speed, times real time (an 81 s circle in 10 s)
+STEER_VIDEO_SPEED = 8.0
+
 def register(subparsers) -> None:
     p = subparsers.add_parser("steer", help="follow a path by turning the field (closed or open loop)",
                               description="Path following on the full model: the field is turned by a controller "
@@ -34,7 +37,8 @@ def register(subparsers) -> None:
     p.add_argument("--out", default="steer.nc", help="NetCDF of the run (default steer.nc)")
     p.add_argument("--metrics", default="steer.json", help="JSON of the path-following metrics (default steer.json)")
     p.add_argument("--plot", default=None, help="figure of the path, the trajectory and the commanded field")
-    p.add_argument("--animate", default=None, help="animation (.mp4 or .gif) with the rotating field arrow")
+    p.add_argument("--animate", default=None, help="animation (.mp4 or .gif) with the rotating field arrow, at 8 "
+                   "times real speed (at most 600 frames; the time stamps are the run's)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_steer)
 
@@ -172,8 +176,8 @@ def _cmd_steer(args) -> int:
     if args.animate:
         from ..plotting.animation import animate
 
-        animate(res.run, args.animate, speed=8.0, max_frames=600, progress=not args.quiet)
-        print(f"animation: {args.animate}")
+        animate(res.run, args.animate, speed=STEER_VIDEO_SPEED, max_frames=600, progress=not args.quiet)
+        print(f"animation: {args.animate} ({STEER_VIDEO_SPEED:g} x real speed)")
     if m["trapped"]:
         print(trapped_reason(m), file=sys.stderr)
         return 1

@@ -3,7 +3,6 @@ few seconds with the field arrow; the commanded field direction below."""
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 
@@ -46,9 +45,8 @@ def plot_steer(res, path=None):
     ax2.set_xlabel("t [s]")
     ax2.set_ylabel("field direction [deg]")
     if path is not None:
-        from .._paths import atomic_path, figure_metadata
+        from .._paths import save_figure_file
 
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=140, **figure_metadata(Path(path).suffix))
+        save_figure_file(fig, path, dpi=140)
         plt.close(fig)
     return fig

@@ -187,11 +187,9 @@ def plot_radius(model: ReducedModel, omegas, radii, path=None, *, lost=()):
     ax.set_ylabel("turning radius [mm]")
     ax.legend(fontsize=7)
     if path is not None:
-        from pathlib import Path
 
-        from .._paths import atomic_path, figure_metadata
+        from .._paths import save_figure_file
 
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=150, **figure_metadata(Path(path).suffix))
+        save_figure_file(fig, path, dpi=150)
         plt.close(fig)
     return fig

@@ -107,11 +107,9 @@ def plot_trap(tm: TrapMap, path=None):
         a2.set_title(f"field turned from t = {t_turn:.3g} s\n(green: swims, red: bent equilibrium, grey: other; "
                      "line: boundary)", fontsize=8)
     if path is not None:
-        from pathlib import Path
 
-        from .._paths import atomic_path, figure_metadata
+        from .._paths import save_figure_file
 
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=150, **figure_metadata(Path(path).suffix))
+        save_figure_file(fig, path, dpi=150)
         plt.close(fig)
     return fig

@@ -151,9 +151,8 @@ def plot_raw_kymographs(k: RawKymographs, path: str | Path | None = None, *, tr:
         ax4.set(xlabel="s [mm]", title="curvature [1/mm]")
         ax4.set_ylim(t1, t0)
     if path is not None:
-        from .._paths import atomic_path, figure_metadata
+        from .._paths import save_figure_file
 
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=120, **figure_metadata(Path(path).suffix))
+        save_figure_file(fig, path, dpi=120)
         plt.close(fig)
     return fig
