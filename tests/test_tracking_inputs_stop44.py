@@ -7,7 +7,6 @@ from __future__ import annotations
 import math
 import re
 from pathlib import Path
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -15,12 +14,12 @@ import pytest
 pytest.importorskip("skimage")
 tifffile = pytest.importorskip("tifffile")
 
-import flutterswim as fs  # noqa: E402
+from conftest import rendered_paper_stroke  # noqa: E402
 from flutterswim._validate import ParameterError  # noqa: E402
 from flutterswim.analysis.descriptors import describe  # noqa: E402
-from flutterswim.tracking import render, track  # noqa: E402
+from flutterswim.tracking import track  # noqa: E402
 from flutterswim.tracking.batch import DEFAULT_PATTERN, find_trials  # noqa: E402
-from flutterswim.tracking.evaluate import pixel_errors, truth_track  # noqa: E402
+from flutterswim.tracking.evaluate import pixel_errors  # noqa: E402
 from flutterswim.tracking.io import _natural_key, open_frames, read_times  # noqa: E402
 from flutterswim.tracking.track import saturation_level  # noqa: E402
 
@@ -30,10 +29,7 @@ FPS = 50.0
 @pytest.fixture(scope="module")
 def movie():
     """The paper's settled stroke, 101 frames at 50 fps, SNR 5, and its described truth."""
-    r = fs.simulate(fs.PAPER, 10.0, n_segments=24, frame_dt=1.0 / FPS)
-    sl = slice(r.t.size - 101, r.t.size)
-    mv = render(SimpleNamespace(t=r.t[sl], x=r.x[sl], y=r.y[sl]), um_per_px=14.0, snr=5.0, seed=1)
-    return mv, describe(truth_track(mv, 3.7), n_last=100)
+    return rendered_paper_stroke(seed=1, fps=FPS)
 
 
 @pytest.mark.parametrize("text", [

@@ -14,11 +14,11 @@ import pytest
 
 pytest.importorskip("skimage")
 
-import flutterswim as fs  # noqa: E402
+from conftest import rendered_paper_stroke  # noqa: E402
 from flutterswim._validate import ParameterError  # noqa: E402
 from flutterswim.analysis.descriptors import describe  # noqa: E402
 from flutterswim.tracking import failures, render, track  # noqa: E402
-from flutterswim.tracking.evaluate import pixel_errors, truth_track  # noqa: E402
+from flutterswim.tracking.evaluate import pixel_errors  # noqa: E402
 from flutterswim.tracking.io import read_times  # noqa: E402
 from flutterswim.tracking.render import line_image  # noqa: E402
 from flutterswim.tracking.track import static_objects, track_frame  # noqa: E402
@@ -30,10 +30,7 @@ DROP = [20, 47, 73]
 @pytest.fixture(scope="module")
 def movie():
     """The paper's settled stroke, 101 frames at 50 fps, SNR 5, and its described truth."""
-    r = fs.simulate(fs.PAPER, 10.0, n_segments=24, frame_dt=1.0 / FPS)
-    sl = slice(r.t.size - 101, r.t.size)
-    mv = render(SimpleNamespace(t=r.t[sl], x=r.x[sl], y=r.y[sl]), um_per_px=14.0, snr=5.0, seed=0)
-    return mv, describe(truth_track(mv, 3.7), n_last=100)
+    return rendered_paper_stroke(seed=0, fps=FPS)
 
 
 def _rel(a: float, b: float) -> float:

@@ -237,13 +237,15 @@ def figure_metadata(suffix: str) -> dict:
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")
 
 
-def save_figure_file(fig, path: str | os.PathLike, *, dpi: float = 150) -> Path:
+def save_figure_file(fig, path: str | os.PathLike, *, dpi: float = 150,
+                     suffixes: Sequence[str] = FIGURE_SUFFIXES, **savefig_kw) -> Path:
     """Save a matplotlib figure to ``path`` atomically, signed, and never over a file that is not
-    ours (the functions of the API that save a figure; the command line checks before computing)."""
-    p = check_output_file(path, FIGURE_SUFFIXES, what="path")
+    ours (the functions of the API that save a figure; the command line checks before computing).
+    ``savefig_kw`` go to ``savefig`` (bbox_inches ...)."""
+    p = check_output_file(path, suffixes, what="path")
     with atomic_path(p) as tmp:
         fig.savefig(tmp, dpi=dpi, format=p.suffix.lower().lstrip(".").replace("jpg", "jpeg"),
-                    **figure_metadata(p.suffix))
+                    **figure_metadata(p.suffix), **savefig_kw)
     return p
 
 

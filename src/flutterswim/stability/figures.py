@@ -52,8 +52,10 @@ def stability_figures(out_dir, *, params: Parameters = PAPER, step: float = 0.1,
 
     check_files_in(out, names, what="out_dir", kinds={"stability_map.nc": MAP_TITLE})  # before computing
     from ..defaults import MAX_MAP_POINTS
+    from .stability_map import CHI_RANGE, ETA_RANGE
 
-    n_map = (350.0 / step + 1.5) * (260.0 / step + 1.5)  # (stability_map's default grid, checked there too)
+    # (stability_map's grid, which it checks too, but after the folder would be made)
+    n_map = (float(np.ptp(ETA_RANGE)) / step + 1.5) * (float(np.ptp(CHI_RANGE)) / step + 1.5)
     if n_map > MAX_MAP_POINTS:  # before the folder is made (a refused grid left an empty one)
         raise ParameterError(f"step={step!r} gives a map of {n_map:.3g} points; at most {MAX_MAP_POINTS} "
                              "(flutterswim.defaults.MAX_MAP_POINTS)")

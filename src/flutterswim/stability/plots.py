@@ -19,12 +19,9 @@ def _plt():
 
 def _finish(fig, path):
     if path is not None:
-        from .._paths import atomic_path, check_output_file, figure_metadata
+        from .._paths import save_figure_file
 
-        path = check_output_file(path, (".png", ".pdf", ".svg", ".jpg", ".jpeg"), what="path")
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=150, bbox_inches="tight", format=path.suffix.lstrip(".").replace("jpg", "jpeg"),
-                        **figure_metadata(path.suffix))
+        save_figure_file(fig, path, dpi=150, bbox_inches="tight")
     return fig
 
 

@@ -165,8 +165,13 @@ def _columns_numpy(etas, chis, seeds, tol, maxit):
     return out, its
 
 
-def stability_map(*, eta_perp=None, chi=None, eta_range: tuple[float, float] = (0.0, 350.0),
-                  chi_range: tuple[float, float] = (-130.0, 130.0), step: float = 0.1,
+#: the paper's map: eta_perp in [0, 350], chi in [-130, 130]
+ETA_RANGE = (0.0, 350.0)
+CHI_RANGE = (-130.0, 130.0)
+
+
+def stability_map(*, eta_perp=None, chi=None, eta_range: tuple[float, float] = ETA_RANGE,
+                  chi_range: tuple[float, float] = CHI_RANGE, step: float = 0.1,
                   max_step: float = 0.25, tol: float = 1e-10, maxit: int = 30,
                   check_stride: int | None = None, backend: str = "auto",
                   executor: str | None = None, workers: int | None = None,

@@ -218,9 +218,7 @@ def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str
     if axs[1].get_legend_handles_labels()[0]:
         axs[1].legend(handles=_once(axs[1].get_legend_handles_labels()[0]), fontsize=8)
     if path is not None:
-        from .._paths import atomic_path, check_output_file, figure_metadata
+        from .._paths import save_figure_file
 
-        path = check_output_file(path, (".png", ".pdf", ".svg"), what="path")
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=150, format=path.suffix.lstrip("."), **figure_metadata(path.suffix))
+        save_figure_file(fig, path, dpi=150, suffixes=(".png", ".pdf", ".svg"))
     return fig
