@@ -128,7 +128,15 @@ def test_raw_kymographs_follow_the_simulated_crossings(movie, tracked, tmp_path)
     # intensity along the tracked body: on the ridge, so about the line's amplitude
     assert np.nanmedian(k.body) - bg > 0.7 * amp
     p = tmp_path / "kym.png"
-    plot_raw_kymographs(k, p, tr=tracked)
+    fig = plot_raw_kymographs(k, p, tr=tracked)
+    # the two colour-coded panels carry their scale: intensity over the body's range, curvature
+    # symmetric about 0 in 1/mm
+    bars = {ax.get_ylabel(): ax for ax in fig.axes if ax.get_label() == "<colorbar>"}
+    assert set(bars) == {"intensity [grey levels]", "curvature [1/mm]"}
+    lo, hi = bars["intensity [grey levels]"].get_ylim()
+    assert lo <= np.nanpercentile(k.body, 5) and hi >= np.nanpercentile(k.body, 95)
+    lo, hi = bars["curvature [1/mm]"].get_ylim()
+    assert lo == pytest.approx(-hi) and hi > 0
     import matplotlib.image as mpimg
 
     img = mpimg.imread(p)

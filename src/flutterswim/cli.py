@@ -405,7 +405,9 @@ def _as_typed(message: str, parser: argparse.ArgumentParser | None) -> str:
     option = None if m is None else _option(m.group(1), parser)
     if option is None:
         return message
-    return option + message[len(m.group(1)):].replace(f" ({option})", "", 1)
+    message = option + message[len(m.group(1)):].replace(f" ({option})", "", 1)
+    # a second parameter named with the first: "--rtol=1e-13 and atol=1e-14 are both ..."
+    return re.sub(r"(?<= and )([A-Za-z_]\w*)(?==)", lambda g: _option(g.group(1), parser) or g.group(1), message)
 
 
 def as_typed(args: argparse.Namespace, message: str) -> str:

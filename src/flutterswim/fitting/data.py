@@ -186,13 +186,11 @@ def plot_trials(summary: Summary, path=None, *, trials: Trials | None = None, mo
     """Fig. 3e: advance per cycle and period against voltage, mean +- SEM (red), the trials
     (grey dots) and, optionally, model values per voltage (``model``: (m, 3) array); ``tip``:
     which end the lateral column measures, for its axis label."""
-    import matplotlib
+    from ..plotting._common import new_figure
 
-    if path is not None:
-        matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    fig = new_figure((10, 3.4))
 
-    fig, axs = plt.subplots(1, 3, figsize=(10, 3.4), constrained_layout=True)
+    axs = fig.subplots(1, 3)
     for k, ax in enumerate(axs):
         draw_trials(ax, k, summary, trials, tip)
         if model is not None:
@@ -202,5 +200,4 @@ def plot_trials(summary: Summary, path=None, *, trials: Trials | None = None, mo
         from .._paths import save_figure_file
 
         save_figure_file(fig, path, dpi=150)
-        plt.close(fig)
     return fig

@@ -21,16 +21,13 @@ def plot_fit(res, summary, trials, path=None, *, voltage: float | None = None):
     """Figure of a fit at ``voltage`` (default: the voltage whose means are closest to the
     fitted data): the trials and means (Fig. 3e) with the model at the fit, and each
     parameter's profile (or its 1-sigma band)."""
-    import matplotlib
-
-    if path is not None:
-        matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from ..plotting._common import new_figure
     from matplotlib.ticker import MaxNLocator
 
     from .data import draw_trials
 
-    fig, axs = plt.subplots(2, 3, figsize=(10.5, 6.4), constrained_layout=True)
+    fig = new_figure((10.5, 6.4))
+    axs = fig.subplots(2, 3)
     if voltage is None and not res.settings.get("voltages_V"):
         voltage = summary.voltage_V[np.argmin(np.sum(np.abs(summary.mean / res.measured - 1), axis=1))]
     joint = res.settings.get("voltages_V")
@@ -76,5 +73,4 @@ def plot_fit(res, summary, trials, path=None, *, voltage: float | None = None):
         from .._paths import save_figure_file
 
         save_figure_file(fig, path, dpi=130)
-        plt.close(fig)
     return fig

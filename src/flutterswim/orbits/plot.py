@@ -28,11 +28,7 @@ def plot_branch(ds, path=None, *, x_range: tuple[float, float] | None = None):
     """Draw the branch Dataset of :meth:`flutterswim.orbits.Branch.to_dataset`. Returns the figure.
     ``x_range``: the requested parameter range (default: the file's ``range_start`` or
     ``range_end`` with the branch's own values); the axis spans it, the branch and the Hopf point."""
-    import matplotlib
-
-    if path is not None:
-        matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from ..plotting._common import new_figure
     from matplotlib.lines import Line2D
 
     name = ds.attrs["parameter"]
@@ -61,7 +57,8 @@ def plot_branch(ds, path=None, *, x_range: tuple[float, float] | None = None):
         lo, hi = (lo - pad, hi) if stable_side < 0 else (lo, hi + pad)
     straight_end = lo if stable_side < 0 else hi
     xs = np.r_[hopf, x]
-    fig, axes = plt.subplots(3, 1, figsize=(6.0, 8.8), sharex=True, constrained_layout=True)
+    fig = new_figure((6.0, 8.8))
+    axes = fig.subplots(3, 1, sharex=True)
     ax = axes[0]
     ax.plot(sorted([straight_end, hopf]), [0, 0], color="0.5", lw=1.8, label="straight, stable (linear theory)")
     # the straight state past the Hopf point: still a solution, unstable (a review: left out)
@@ -119,5 +116,4 @@ def plot_branch(ds, path=None, *, x_range: tuple[float, float] | None = None):
         from .._paths import save_figure_file
 
         save_figure_file(fig, path, dpi=150)
-        plt.close(fig)
     return fig

@@ -109,10 +109,25 @@ def plot_swimmer(obj: Any, path: str | Path | None = None, *, time: float | None
     return finish(fig, path)
 
 
+def _end_label(tr, i_end: int, pc: dict) -> str:
+    """Legend of the measured end's lateral peak-to-peak: which end (s = 0 or s = l), and whether
+    it leads or trails, when the cycles advance by more than 1 % of the body length."""
+    at = "s = 0" if i_end == 0 else ("s = l" if i_end in (-1, tr.x.shape[1] - 1) else f"sample {i_end}")
+    dx, dy = float(np.sum(pc["dx"])), float(np.sum(pc["dy"]))
+    d = math.hypot(dx, dy)
+    if at == f"sample {i_end}" or not d > 0.01 * tr.length:
+        return f"lateral p-p at {at}"
+    # the end s = l lies ahead along the displacement when (x_l - x_0) . d > 0 on average
+    ahead_l = float(np.mean((tr.x[:, -1] - tr.x[:, 0]) * dx + (tr.y[:, -1] - tr.y[:, 0]) * dy)) > 0
+    leads = ahead_l == (at == "s = l")
+    return f"lateral p-p, {'leading' if leads else 'trailing'} end ({at})"
+
+
 def plot_descriptors(obj: Any, path: str | Path | None = None, *, cycles: Cycles | None = None,
                      figsize=(6.5, 6.0), dpi: float = 150) -> Any:
     """Per-cycle descriptors against time: amplitude envelope (log) with the exponential fit,
-    period, advancement per cycle along the field, tip lateral peak-to-peak and
+    period, advancement per cycle along the field, the measured end's lateral peak-to-peak
+    (named leading or trailing) and
     nonreciprocity; the transient is shaded and the limit-cycle time marked."""
     tr = as_track(obj)
     cyc = detect_cycles(tr) if cycles is None else cycles
@@ -141,7 +156,7 @@ def plot_descriptors(obj: Any, path: str | Path | None = None, *, cycles: Cycles
     axs[1].plot(tm, pc["period"], "o-", ms=3, color="#1f77b4")
     axs[1].set_ylabel(f"period ({T})")
     axs[2].plot(tm, pc["advance"] * f, "o-", ms=3, color=SWIM_COLOR, label="advance / cycle")
-    axs[2].plot(tm, pc["tip_p2p"] * f, "s-", ms=3, color=TIP_COLOR, label="tip lateral p-p")
+    axs[2].plot(tm, pc["tip_p2p"] * f, "s-", ms=3, color=TIP_COLOR, label=_end_label(tr, cyc.tip, pc))
     axs[2].set_ylabel(f"length ({L})")
     axs[2].legend(fontsize=7, frameon=False)
     axs[3].plot(tm, pc["nonreciprocity"], "o-", ms=3, color="0.3")

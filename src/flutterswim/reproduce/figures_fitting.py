@@ -39,8 +39,6 @@ def build_fig3e(ctx: Context) -> Outcome:
 
 
 def _from_trials(ctx: Context) -> Outcome:
-    import matplotlib.pyplot as plt
-
     from ..fitting import plot_trials, read_trials, summarise
     from .datasets import trials_dataset
 
@@ -50,7 +48,6 @@ def _from_trials(ctx: Context) -> Outcome:
     fig = plot_trials(sm, None, trials=tr)
     fig.suptitle("Fig. 3e: descriptors against voltage (mean ± SEM)", fontsize=9)
     save_figure(fig, ctx.path("fig3e.png"))
-    plt.close(fig)
     write_netcdf(ctx.path("fig3e_data.nc"), trials_dataset(sm))
     # (a count, not a result: the user's trials are not the paper's; no verdict)
     rows = (compare("trials", 49, float(sm.n.sum()), paper_text="49 trials on 7 samples", fmt="{:.0f}"),)

@@ -10,7 +10,7 @@ import math
 import numpy as np
 
 from ..params import PAPER
-from .figures_stability import PAPER_ONSET_RATIO, _close, _var
+from .figures_stability import PAPER_ONSET_RATIO, _var
 from .io import save_figure, write_netcdf
 from .targets import Context, Outcome, Settings, compare, cross_check, verdict
 
@@ -243,7 +243,6 @@ def build_fig4b(ctx: Context) -> Outcome:
     fig.axes[0].text(PAPER_ONSET_RATIO, 0.97, "paper: ~0.65 ", transform=fig.axes[0].get_xaxis_transform(),
                      fontsize=8, color="tab:red", ha="right", va="top")
     save_figure(fig, ctx.path("fig4b.png"))
-    _close(fig)
     g = PAPER.groups
     linear = critical_chi(g.eta_perp)[0] / g.chi
     # the strokes reached first from the Hopf point (up to a fold, past which the branch may

@@ -162,7 +162,6 @@ def build_fig6a(ctx: Context) -> Outcome:
     fig = plot_map(smap, neutral=nc, operating_point=(g.eta_perp, g.chi))
     fig.axes[0].set_title("Fig. 6a: stability map (leading eigenvalue of the straight state)", fontsize=9)
     save_figure(fig, ctx.path("fig6a.png"))
-    _close(fig)
     le = leading_eigenvalue(g.chi, g.eta_perp)
     # map boundary (sign change of Re omega in chi at each eta_perp) vs the neutral curve
     re = smap.omega.real
@@ -194,12 +193,6 @@ def build_fig6a(ctx: Context) -> Outcome:
     values = {"omega_max_real": le.omega.real, "omega_max_imag": le.omega.imag, "eta_exit": eta_exit,
               "boundary_vs_neutral_max": worst, "step": prm["step"]}
     return Outcome("ok", rows, (f"Grid step {prm['step']} in eta_perp and chi (the paper: 0.1).",), values)
-
-
-def _close(fig):
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
 
 
 # --- Fig. 6b ----------------------------------------------------------------------------
@@ -234,7 +227,6 @@ def build_fig6b(ctx: Context) -> Outcome:
     fig.suptitle("Fig. 6b: leading eigenvalue against chi and against eta_perp", fontsize=9)
     # (the panels' constrained layout places the title)
     save_figure(fig, ctx.path("fig6b.png"))
-    _close(fig)
     chi_cr, _ = critical_chi(g.eta_perp)
     k = np.flatnonzero((b1.omega.real[:-1] <= 0) & (b1.omega.real[1:] > 0))
     cross = float(np.interp(0.0, b1.omega.real[k[0]:k[0] + 2], b1.values[k[0]:k[0] + 2])) if k.size else math.nan
@@ -315,7 +307,6 @@ def build_fig6cd(ctx: Context) -> Outcome:
     fig.suptitle("Fig. 6c-d: first and second eigenmodes at the operating point", fontsize=9)
     # (the panels' constrained layout places the title)
     save_figure(fig, ctx.path("fig6cd.png"))
-    _close(fig)
     bc = []
     for m in modes:
         f = mode_fields(m.omega, g.chi, g.eta_perp, np.array([0.0, 1.0]))

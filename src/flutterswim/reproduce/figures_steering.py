@@ -55,7 +55,6 @@ def build_fig5(ctx: Context) -> Outcome:
     from ..field import Field
     from ..orbits import periodic_orbit
     from ..simulate import simulate
-    from .figures_stability import _close  # noqa: F401  (Agg figure: nothing to close)
     from .plots import plot_fig5
 
     prm = fig5_params(ctx.settings)

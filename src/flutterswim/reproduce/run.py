@@ -92,9 +92,6 @@ def reproduce(out: str | os.PathLike, *, mode: str = "quick", trials: str | os.P
     folder = check_out(out, todo)
     folder.mkdir(parents=True, exist_ok=True)
     write_marker(folder, STORE_KIND)
-    import matplotlib
-
-    matplotlib.use("Agg")
     from ..simulate import single_blas_thread
 
     with single_blas_thread():

@@ -162,15 +162,14 @@ def _follow_checked(path: np.ndarray, idx: np.ndarray, leading, follow) -> np.nd
 def animate_mode(mode: Eigenmode, path, *, frames: int = 40, amplitude: float = 0.15, fps: int = 20) -> None:
     """GIF of the linear travelling wave r(s, t) = amplitude Re[r(s) e^{i beta t}] over one period
     (growth removed), beta = Im omega; needs matplotlib (Agg) and pillow."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from matplotlib.animation import FuncAnimation, PillowWriter
+
+    from ..plotting._common import new_figure
 
     beta = mode.omega.imag if mode.omega.imag != 0 else 1.0
     t = np.linspace(0.0, 2 * np.pi / abs(beta), frames, endpoint=False)
-    fig, ax = plt.subplots(figsize=(4, 2.4), layout="constrained")
+    fig = new_figure((4, 2.4), dpi=100)
+    ax = fig.subplots()
     (line,) = ax.plot(mode.s, amplitude * mode.r.real, lw=2)
     ax.set_xlim(0, 1)
     ax.set_ylim(-1.2 * amplitude, 1.2 * amplitude)
@@ -186,4 +185,3 @@ def animate_mode(mode: Eigenmode, path, *, frames: int = 40, amplitude: float = 
 
     anim = FuncAnimation(fig, update, frames=frames, blit=True)
     anim.save(str(path), writer=PillowWriter(fps=fps))
-    plt.close(fig)

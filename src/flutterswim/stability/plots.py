@@ -1,4 +1,4 @@
-"""Figures like the paper's Fig. (stability): map, bifurcation plots, eigenmodes (matplotlib, Agg)."""
+"""Figures like the paper's Fig. (stability): map, bifurcation plots, eigenmodes (matplotlib Agg figures, no pyplot)."""
 
 from __future__ import annotations
 
@@ -6,15 +6,6 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["plot_map", "plot_bifurcation", "plot_modes"]
-
-
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def _finish(fig, path):
@@ -30,10 +21,14 @@ def plot_map(smap, *, neutral=None, path=None, ax=None, operating_point=None,
     """Stable vs flutter regions in (eta_perp, chi); flutter split by swimming direction (sign chi).
     smap: StabilityMap; neutral: optional NeutralCurve drawn as +-chi_cr; operating_point:
     (eta_perp, chi) marked with a star and a legend entry. Returns the figure."""
-    plt = _plt()
     from matplotlib.colors import ListedColormap
 
-    fig, ax = (plt.subplots(figsize=(6, 4.5)) if ax is None else (ax.figure, ax))
+    from ..plotting._common import new_figure
+
+    if ax is None:
+        fig = new_figure((6, 4.5))
+        ax = fig.subplots()
+    fig = ax.figure
     re = smap.omega.real.T
     chi = smap.chi[:, None]
     region = np.where(np.isnan(re), np.nan, np.where(re <= 0, 0, np.where(chi > 0, 1, 2)))
@@ -60,8 +55,10 @@ def plot_map(smap, *, neutral=None, path=None, ax=None, operating_point=None,
 
 def plot_bifurcation(curves, *, path=None):
     """Re (blue) and Im (orange) of omega_max vs the varied parameter, one panel per Bifurcation."""
-    plt = _plt()
-    fig, axes = plt.subplots(1, len(curves), figsize=(4.5 * len(curves), 3.2), squeeze=False, layout="constrained")
+    from ..plotting._common import new_figure
+
+    fig = new_figure((4.5 * len(curves), 3.2))
+    axes = fig.subplots(1, len(curves), squeeze=False)
     for ax, b in zip(axes[0], curves):
         ax.plot(b.values, b.omega.real, color="tab:blue", label=r"Re $\omega_{max}$ (growth rate)")
         ax.plot(b.values, b.omega.imag, color="tab:orange", label=r"Im $\omega_{max}$ (angular frequency)")
@@ -77,8 +74,10 @@ def plot_bifurcation(curves, *, path=None):
 
 def plot_modes(modes, *, path=None):
     """Real (blue) and imaginary (orange) parts of normalised r(s), one panel per Eigenmode."""
-    plt = _plt()
-    fig, axes = plt.subplots(1, len(modes), figsize=(4.5 * len(modes), 3.0), squeeze=False, layout="constrained")
+    from ..plotting._common import new_figure
+
+    fig = new_figure((4.5 * len(modes), 3.0))
+    axes = fig.subplots(1, len(modes), squeeze=False)
     for ax, m in zip(axes[0], modes):
         ax.plot(m.s, m.r.real, color="tab:blue", label="Re r")
         ax.plot(m.s, m.r.imag, color="tab:orange", label="Im r")

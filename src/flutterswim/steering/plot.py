@@ -10,17 +10,14 @@ __all__ = ["plot_steer"]
 
 
 def plot_steer(res, path=None):
-    import matplotlib
-
-    if path is not None:
-        matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from ..plotting._common import new_figure
 
     from .turning import _moving_average
 
     run = res.run
     mm = 1e3
-    fig, (ax, ax2) = plt.subplots(2, 1, figsize=(6, 8), gridspec_kw={"height_ratios": [3, 1]}, constrained_layout=True)
+    fig = new_figure((6, 8))
+    (ax, ax2) = fig.subplots(2, 1, gridspec_kw={"height_ratios": [3, 1]})
     ax.plot(*(res.path.points * mm).T, color="0.6", lw=1.5, label="path")
     cx, cy = run.x.mean(axis=1), run.y.mean(axis=1)
     period = res.metrics["period_s"]
@@ -48,5 +45,4 @@ def plot_steer(res, path=None):
         from .._paths import save_figure_file
 
         save_figure_file(fig, path, dpi=140)
-        plt.close(fig)
     return fig

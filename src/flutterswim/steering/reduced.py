@@ -163,14 +163,11 @@ def identify(params: Parameters, *, n_segments: int = 24, onset: float | None = 
 def plot_radius(model: ReducedModel, omegas, radii, path=None, *, lost=()):
     """Turning radius against the rotation rate: measured points (circle fits of the full
     model), U / Omega, the step-out rate; ``lost``: rates at which the swimmer did not follow."""
-    import matplotlib
-
-    if path is not None:
-        matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from ..plotting._common import new_figure
     from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter
 
-    fig, ax = plt.subplots(figsize=(5, 3.6), constrained_layout=True)
+    fig = new_figure((5, 3.6))
+    ax = fig.subplots()
     w = np.geomspace(min(omegas) * 0.8, model.omega_max * 1.3, 100)
     ax.loglog(w, model.U / w * 1e3, "-", color="0.4", label=r"$U/\Omega$ (U from the periodic orbit)")
     ax.loglog(omegas, np.asarray(radii) * 1e3, "o", color="tab:red", label="full model (circle fit)")
@@ -191,5 +188,4 @@ def plot_radius(model: ReducedModel, omegas, radii, path=None, *, lost=()):
         from .._paths import save_figure_file
 
         save_figure_file(fig, path, dpi=150)
-        plt.close(fig)
     return fig

@@ -76,14 +76,11 @@ def turn_basin(params: Parameters, angles_deg, rates_deg_s, *, onset: float = 10
 
 
 def plot_trap(tm: TrapMap, path=None):
-    import matplotlib
-
-    if path is not None:
-        matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from ..plotting._common import new_figure
 
     late = tm.late_turn_outcomes is not None
-    fig, axes = plt.subplots(1, 3 if late else 2, figsize=(13 if late else 9, 3.6), constrained_layout=True)
+    fig = new_figure((13 if late else 9, 3.6))
+    axes = fig.subplots(1, 3 if late else 2)
     a1 = axes[0]
     a1.plot(tm.tilts_deg, np.isin(tm.tilt_outcomes, SWIMS).astype(int), "o-", color="k")
     a1.set_xlabel("initial tilt of the straight state [deg]")
@@ -111,5 +108,4 @@ def plot_trap(tm: TrapMap, path=None):
         from .._paths import save_figure_file
 
         save_figure_file(fig, path, dpi=150)
-        plt.close(fig)
     return fig

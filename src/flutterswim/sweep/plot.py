@@ -121,11 +121,7 @@ def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str
     ``kappa_E_ratio``); returns the Figure, saved to ``path`` if given (Agg backend). A
     continuation sweep draws both its branches ("up", then "down"; ``branch``: one of them),
     a jump to another stroke dotted; points without a stroke are marked by their outcome."""
-    import matplotlib
-
-    if path is not None:
-        matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
+    from ..plotting._common import new_figure
     from matplotlib.lines import Line2D
 
     if "branch" in ds.dims:
@@ -145,7 +141,8 @@ def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str
             f"plot_sweep(ds.isel({dims[0]}=0)), or read the store with xarray.open_zarr for a map")
     x = x or dims[0]
     xv = np.asarray(ds[x].values, float)
-    fig, axs = plt.subplots(2, 1, figsize=(5.5, 5.2), sharex=True, constrained_layout=True)
+    fig = new_figure((5.5, 5.2))
+    axs = fig.subplots(2, 1, sharex=True)
     styles = {None: ("k", "-", "o"), "up": ("k", "-", "o"), "down": ("tab:blue", "--", "s")}
     proxies = []
     any_red = False

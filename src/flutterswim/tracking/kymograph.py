@@ -97,17 +97,13 @@ def plot_raw_kymographs(k: RawKymographs, path: str | Path | None = None, *, tr:
     below it the horizontal-line kymograph (x across, time down), to its right the
     vertical-line kymograph (time across, y up the frame), each with the average-velocity
     line (yellow); and the intensity along the tracked body (s across, time down)."""
-    import matplotlib
-
-    if path is not None:
-        matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from ..plotting._common import new_figure
 
     ppm = k.px_per_mm
     H, W = k.frame.shape
     t0, t1 = float(k.t[0]), float(k.t[-1])
     ext_x, ext_y = (-0.5 / ppm, (W - 0.5) / ppm), (-0.5 / ppm, (H - 0.5) / ppm)
-    fig = plt.figure(figsize=(11, 7.5), constrained_layout=True)
+    fig = new_figure((11, 7.5))
     gs = fig.add_gridspec(2, 3, width_ratios=[W / max(H, 1) * 1.0, 1.0, 1.0], height_ratios=[1.0, 1.6])
     ax0 = fig.add_subplot(gs[0, 0])
     ax0.imshow(k.frame, cmap="gray", extent=(*ext_x, ext_y[1], ext_y[0]))
@@ -138,21 +134,22 @@ def plot_raw_kymographs(k: RawKymographs, path: str | Path | None = None, *, tr:
     ax2.set(xlabel="t [s]", title=f"along the vertical line (column {k.col})")
     ax2.legend(fontsize=7, loc="lower right")
     ax3 = fig.add_subplot(gs[1, 1])
-    ax3.imshow(np.ma.masked_invalid(k.body), cmap="magma", aspect="auto",
-               extent=(float(k.s[0]), float(k.s[-1]), t1, t0))
+    im3 = ax3.imshow(np.ma.masked_invalid(k.body), cmap="magma", aspect="auto",
+                     extent=(float(k.s[0]), float(k.s[-1]), t1, t0))
     ax3.set(xlabel="s [mm]", ylabel="t [s]", title="intensity along the body")
+    fig.colorbar(im3, ax=ax3, label="intensity [grey levels]", shrink=0.9)
     if tr is not None:
         from ..analysis.kymograph import body_kymograph
 
         bk = body_kymograph(tr)
         ax4 = fig.add_subplot(gs[1, 2], sharey=ax3)
         lim = float(np.nanpercentile(np.abs(bk.kappa), 99)) or 1.0
-        ax4.pcolormesh(bk.s, bk.t, bk.kappa, cmap="RdBu_r", vmin=-lim, vmax=lim, shading="nearest")
-        ax4.set(xlabel="s [mm]", title="curvature [1/mm]")
+        pm = ax4.pcolormesh(bk.s, bk.t, bk.kappa, cmap="RdBu_r", vmin=-lim, vmax=lim, shading="nearest")
+        ax4.set(xlabel="s [mm]", title="curvature along the body")
+        fig.colorbar(pm, ax=ax4, label="curvature [1/mm]", shrink=0.9)
         ax4.set_ylim(t1, t0)
     if path is not None:
         from .._paths import save_figure_file
 
         save_figure_file(fig, path, dpi=120)
-        plt.close(fig)
     return fig
