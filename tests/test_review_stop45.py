@@ -1,6 +1,7 @@
 """Stop 45: the descriptors figure names the end whose lateral peak-to-peak it draws."""
 
 import dataclasses
+import math
 
 import numpy as np
 import pytest
@@ -54,3 +55,142 @@ def test_both_tolerances_are_named_as_typed(tmp_path, capsys):
     assert named == ["--rtol", "--atol"], err
     build_parser().parse_args(["simulate"] + [f"{o}=1e-6" for o in named])  # both parse
     assert not (tmp_path / "r.nc").exists()
+
+
+def test_round_off_makes_no_spurious_flutter_at_high_resolution():
+    """A review (stop 45): at N = 384-512 and eta_perp = 8 the dense eigensolver's round-off
+    (||J|| ~ N^4 / eta_perp ~ 1e11) made a spurious pair 0.73 +- 1.68i, read as an unstable
+    straight state 14 % below the threshold; the Hopf search then found chi = 104 for 121.
+    The leading pair must stay the continuum's (characteristic equation) within its
+    discretisation error, and say that round-off limits it; N = 48 must not warn."""
+    import warnings
+
+    from flutterswim.orbits.linear import RoundoffWarning, leading_pair
+    from flutterswim.stability import critical_chi, leading_eigenvalue
+
+    g = fs.Groups(8 / 1.7, 8.0, 104.433232)
+    assert g.chi < 0.9 * critical_chi(g.eta_perp)[0]  # the straight state is stable here
+    ref = leading_eigenvalue(g.chi, g.eta_perp).omega
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RoundoffWarning)
+        coarse = leading_pair(g, 48)
+    for n in (384,):
+        with pytest.warns(RoundoffWarning, match=f"n_segments={n}"):
+            lam = leading_pair(g, n)
+        assert lam.real < 0
+        assert abs(lam - ref) < abs(coarse - ref)  # no worse than N = 48's discretisation error
+
+
+def test_the_look_beyond_leg_stays_where_the_parameter_is_physical():
+    """A review (stop 45): past ``to`` the branch was followed look_beyond times the range
+    more, linearly; below a small ``to`` in B or tau that reach was negative, so the branch was
+    followed towards B = 0 (eta_perp -> infinity, each orbit stiffer) until the corrector failed:
+    10-15 times the cost, all of it dropped. The reach must stay positive and lie past ``to``,
+    for any range; a signed parameter (chi) keeps the linear reach."""
+    from flutterswim.orbits.continuation import look_beyond_limit
+    from flutterswim.orbits.parameter import Axis
+
+    rng = np.random.default_rng(45)
+    for name in ("B", "tau", "mu", "l", "eta_perp"):
+        axis = Axis(fs.PAPER, name)
+        v = axis.value()
+        for hopf, to in v * np.exp(rng.uniform(-5, 5, size=(20, 2))):
+            side = 1 if to > hopf else -1
+            lim = look_beyond_limit(axis, hopf, to, 0.2, side)
+            assert lim > 0 and (lim - to) * side > 0, (name, hopf, to, lim)
+            assert lim == pytest.approx(to * (to / hopf) ** 0.2)  # a fifth of the range, on a log scale
+    chi = Axis(fs.PAPER, "chi")
+    assert look_beyond_limit(chi, 48.3, -10.0, 0.2, -1) == pytest.approx(-10.0 - 0.2 * 58.3)
+
+
+def test_a_motion_about_an_unstable_orbit_is_not_promised_a_stroke():
+    """A review (stop 45): Groups(10, 20, 100) at N = 48 has lost its stroke to a torus (the
+    orbit's complex pair |mu| = 1.0129 by the review's own monodromy; a run stays
+    quasi-periodic for 800 tau). run_to_limit_cycle said "capped ... a longer t_max may reach
+    the stroke". Newton finds that orbit: the verdict must be not periodic, and say why."""
+    import re
+
+    run = fs.run_to_limit_cycle(fs.Groups(10.0, 20.0, 100.0), n_segments=48)
+    out, why = run.settings["outcome"], run.settings["outcome_reason"]
+    assert out == "not_periodic", (out, why)
+    assert "longer t_max may reach" not in why
+    mu = float(re.search(r"\|mu\| = ([0-9.]+)", why).group(1))
+    assert 1.0 < mu < 1.05 and "complex pair" in why
+
+
+def test_small_bad_inputs_of_the_hopf_tools_are_named():
+    from flutterswim._validate import ParameterError
+    from flutterswim.orbits import hopf_point, normal_form
+
+    with pytest.raises(ParameterError, match="hopf=3 must be a HopfPoint"):
+        normal_form(3)  # (had been an AttributeError)
+    with pytest.raises(ParameterError, match="start=0"):
+        hopf_point(fs.PAPER, "kappa_E_ratio", start=0.0)  # (had searched "between 0 and 0")
+
+
+def test_a_range_holding_both_branches_names_the_mirror_one(tmp_path, capsys):
+    """A review (stop 45): `branch chi=-100:100` wrote the branch from +48.3 and said nothing of
+    the mirror branch from -48.3 in the same range. The note must name it, at minus the Hopf
+    point written, and the command it suggests must continue it."""
+    import re
+
+    import xarray as xr
+
+    from flutterswim.cli import main
+
+    opts = ["--points", "4", "--segments", "8", "--steps", "16", "--quiet"]
+    a = tmp_path / "a.nc"
+    assert main(["branch", "kappa_E_ratio=-1:1", "--out", str(a), *opts]) == 0
+    err = capsys.readouterr().err
+    hopf = xr.open_dataset(a, engine="h5netcdf").attrs["hopf_kappa_E_ratio"]
+    m = re.search(r"continue it with (kappa_E_ratio=\S+:\S+)", err)
+    assert m, err
+    b = tmp_path / "b.nc"
+    assert main(["branch", m.group(1), "--out", str(b), *opts]) == 0
+    assert xr.open_dataset(b, engine="h5netcdf").attrs["hopf_kappa_E_ratio"] == pytest.approx(-hopf, rel=1e-9)
+    # one branch per sign: a range on one side has no note
+    assert main(["branch", "kappa_E_ratio=0.7:1", "--out", str(tmp_path / "c.nc"), *opts]) == 0
+    assert "mirror" not in capsys.readouterr().err
+
+
+def test_the_half_thickness_is_no_continuation_parameter():
+    """`branch a=1e-6:1e-4` answered "no Hopf point ... (unstable throughout)" for a range it had
+    not been asked: a does not enter the dynamics (the drag holds b; B the thickness)."""
+    from flutterswim._validate import ParameterError
+    from flutterswim.orbits.linear import leading_pair
+    from flutterswim.orbits.parameter import Axis
+
+    # the reason, checked: the spectrum does not move with a
+    g1, g2 = (fs.PAPER.replace(a=a).groups for a in (2e-6, 8e-6))
+    assert leading_pair(g1, 12) == leading_pair(g2, 12)
+    with pytest.raises(ParameterError, match="half thickness"):
+        Axis(fs.PAPER, "a")
+
+
+@pytest.mark.parametrize("dt", [0.10, 0.12])
+def test_below_four_frames_per_stroke_no_lateral_excursion_is_measured(dt):
+    """A review (stop 45): at 3.1-3.8 frames per stroke some cycles hold 4 frames, and the
+    ends' lateral excursions were reported 8-11 % short, without the README's note. On average
+    below 4 frames per stroke they must be NaN, and the note must say so."""
+    run = fs.simulate(fs.PAPER, 30.0, frame_dt=dt, n_segments=24)
+    d = fs.describe(run, n_last=15)
+    assert 0.377 / dt < 4  # (the paper's stroke: 0.377 s)
+    assert math.isnan(d.leading_lateral_p2p_mm) and math.isnan(d.trailing_lateral_p2p_mm)
+    assert math.isnan(d.tip_lateral_p2p_mm)
+    assert "lateral excursions are not measured" in d.note
+
+
+@pytest.mark.parametrize("dimensionless", [False, True])
+def test_the_settle_reason_gives_its_time_with_its_unit(dimensionless):
+    """A review (stop 45): a sweep's reason said "from t=21.21" in tau beside a store's
+    time_to_limit_cycle_s of 6.36 s, and in seconds on another axis. The reason's time must
+    carry its unit and equal the run's limit-cycle time in it."""
+    import re
+
+    p = fs.PAPER.groups if dimensionless else fs.PAPER
+    run = fs.run_to_limit_cycle(p, n_segments=12)
+    why = run.settings["outcome_reason"]
+    m = re.search(r"from t=([0-9.e+-]+) (s|tau)\b", why)
+    assert m, why
+    assert m.group(2) == ("tau" if dimensionless else "s")
+    assert float(m.group(1)) == pytest.approx(run.settings["limit_cycle_time"], rel=1e-3)

@@ -75,9 +75,17 @@ def test_runs_of_dropped_frames_with_their_times(movie, drop, tmp_path, capsys):
     assert float(np.sqrt(np.mean(E ** 2))) < 0.5 and float(E.max()) < 1.0
     d = describe(tr, n_last=100)
     assert _rel(d.period_s, truth.period_s) < 1e-3
+    # the file says where its times come from (it had said "index / fps" of timestamps)
+    import xarray as xr
+
+    save_track(tr, tmp_path / "stamped.nc")
+    with xr.open_dataset(tmp_path / "stamped.nc", engine="h5netcdf") as ds:
+        assert "timestamp" in ds["time"].attrs["long_name"] and np.allclose(ds["time"].values, mv.t[keep])
     # without the times: the hint reaches the track file, describe and the command's output
     naive = track(mv.frames[keep], px_per_mm=mv.px_per_mm, fps=FPS)
     save_track(naive, tmp_path / "naive.nc")
+    with xr.open_dataset(tmp_path / "naive.nc", engine="h5netcdf") as ds:
+        assert "index / fps" in ds["time"].attrs["long_name"]
     back = load_track(tmp_path / "naive.nc")
     assert "give the frames' times" in back.meta["temporal"]["periodic"]
     assert main(["describe", str(tmp_path / "naive.nc")]) == 0
@@ -153,6 +161,10 @@ def test_read_times(tmp_path):
     np.testing.assert_allclose(read_times(p), [0.0, 0.0205, 0.04])
     p.write_text("# camera clock\n0.0\n0.02\n0.041\n")
     np.testing.assert_allclose(read_times(p), [0.0, 0.02, 0.041])
+    # a name of several words joined by underscores, with its unit (had been refused)
+    for head, f in (("elapsed_time_ms", 1e-3), ("Elapsed_Time_us", 1e-6), ("time_since_start_s", 1.0)):
+        p.write_text(f"frame,{head}\n0,0\n1,20\n")
+        np.testing.assert_allclose(read_times(p), [0.0, 20 * f])
     p.write_text("frame;stamp\n0;0\n")
     with pytest.raises(ParameterError, match="names no time column"):
         read_times(p)

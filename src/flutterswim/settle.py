@@ -107,6 +107,7 @@ class _Watch:
         self.up_t: list[float] = []
         self.up_i: list[tuple[int, int, float]] = []  # (chunk, frame, fraction)
         self.amps: list[float] = []
+        self.unstable = None  # the periodic orbit the last Newton shooting found, if unstable
         self._prev: tuple[np.ndarray, np.ndarray] | None = None  # last two frames (t, q) seen so far
 
     def add(self, k: int, t: np.ndarray, q: np.ndarray, skipped: int = 0) -> float:
@@ -286,7 +287,7 @@ def settle(params: Parameters | Groups, *, initial=None, n_cycles: int = default
             if after >= n_cycles:
                 outcome = "limit_cycle"
                 reason = (f"stable periodic orbit (max non-trivial multiplier {orbit.max_multiplier:.4f}); "
-                          f"within {SETTLE_TOLERANCE:.0%} of it from t={t_lc:.4g}")
+                          f"within {SETTLE_TOLERANCE:.0%} of it from t={t_lc:.4g} {'s' if si else 'tau'}")
                 break
             next_len = max((n_cycles - after + 0.5) * T_ref * tau, 0.05 * tau)
         if t0 >= t_max * (1 - 1e-12):
@@ -328,6 +329,7 @@ def _refine(params, parts, watch: _Watch, n_segments: int, steps: int | None):
     from .orbits.system import ShapeSystem
     from .orbits.shooting import StepFailure
 
+    watch.unstable = None
     k, j, f = watch.up_i[-1]
     part = parts[k]
     n = n_segments
@@ -346,7 +348,10 @@ def _refine(params, parts, watch: _Watch, n_segments: int, steps: int | None):
     except (OrbitNotFound, StepFailure, np.linalg.LinAlgError):
         return None
     orb = (_packaged if check else orbit_from_flow)(params, sysm, fl, res, it, steps)
-    if orb.amplitude < 1e-6 or not orb.stable:
+    if orb.amplitude < 1e-6:
+        return None
+    if not orb.stable:
+        watch.unstable = orb  # (said at the cap: a motion near it will not settle on it)
         return None
     if not check:
         return orb
@@ -406,6 +411,19 @@ def _at_cap(params, groups, orbit, watch: _Watch, lam: complex, n_segments: int,
     if amps and amps[-1] > SWIM_AMPLITUDE and irregular:
         return ("not_periodic", f"an oscillation (half-range {amps[-1]:.3g} rad) that is not a stable periodic "
                 f"orbit: {irregular}", None)
+    near = watch.unstable
+    if amps and amps[-1] > SWIM_AMPLITUDE and near is not None \
+            and abs(math.log(2 * amps[-1] / max(_orbit_p2p(near), 1e-300))) < math.log(1.5):
+        # Newton found the periodic orbit this motion oscillates about, and it is unstable (a
+        # torus: Groups(10, 20, 100) at N = 48, |mu| = 1.013, quasi-periodic for 800 tau, had
+        # been "capped ... a longer t_max may reach the stroke")
+        from .orbits.continuation import leading_multiplier, multiplier_kind
+
+        kind = {"torus": "a complex pair: quasi-periodic motion about it",
+                "period doubling": "real and negative: period doubling"}.get(multiplier_kind(near), "real")
+        return ("not_periodic", f"an oscillation (half-range {amps[-1]:.3g} rad) about a periodic orbit that is "
+                f"unstable (largest multiplier |mu| = {abs(leading_multiplier(near)):.4f}, {kind}): no stable stroke "
+                "here, and a longer t_max will not reach one", None)
     if amps and amps[-1] > SWIM_AMPLITUDE:
         # a motion that may still be on its way to a stroke (eta_perp = 30 < eta_par: reached at
         # 110 tau) is not called "not periodic" at the cap

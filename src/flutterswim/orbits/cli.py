@@ -128,6 +128,14 @@ def _cmd_branch(args) -> int:
 
         print(f"flutterswim branch: note: no Hopf point in {name}={lo:g}:{hi:g}; the branch starts at the "
               f"nearest one, {name}={hp.value:.6g}, outside the range", file=sys.stderr)
+    if not axis.positive and min(lo, hi) < -hp.value < max(lo, hi):
+        import sys
+
+        # (a field reversed mirrors every stroke: one branch per sign of the field, one per run)
+        far = lo if -hp.value < 0 else hi
+        print(f"flutterswim branch: note: {name}={lo:g}:{hi:g} also holds the mirror branch from {name}="
+              f"{-hp.value:.6g} (the field reversed: the same strokes mirrored, swimming the other way); "
+              f"continue it with {name}={-hp.value:.6g}:{far:g}", file=sys.stderr)
     print(f"{out}: {len(br.values)} orbits from the Hopf point {name}={br.hopf_value:.6g} to {short_of(br.values[-1], to)} "
           f"({ds.attrs['bifurcation']}, l1={br.lyapunov_coefficient:.3g}) in {br.wall_time:.1f} s; {br.message}"
           + ("" if ds.attrs["multiplier_crossings"] == "none" else f"; stability changes at {ds.attrs['multiplier_crossings']}"))

@@ -194,6 +194,18 @@ def unreachable(nf, hopf_value: float, to: float, parameter: str) -> str:
     return ""
 
 
+def look_beyond_limit(axis: Axis, hopf: float, to: float, look_beyond: float, side: int) -> float:
+    """How far past ``to`` the branch is followed, towards ``side`` (+1 up, -1 down):
+    ``look_beyond`` times the range from the Hopf point, or, for a parameter that is positive
+    only, that fraction of it on a log scale, to exp(side look_beyond |ln(to / hopf)|) (the
+    linear reach below a small ``to`` went to 0 or below, where
+    eta_perp ~ 1 / (B tau) diverges (B from 1e-13 to 5e-15: the branch was followed to B =
+    7e-19, 10 times the cost, and all of it dropped))."""
+    if axis.positive and hopf > 0 and to > 0:
+        return to * math.exp(side * look_beyond * abs(math.log(to / hopf)))
+    return to + side * look_beyond * abs(to - hopf)
+
+
 @one_blas_thread
 def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
                     n_segments: int = defaults.SWEEP_N_SEGMENTS, steps: int | None = None, tol: float = 1e-10,
@@ -204,7 +216,8 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     (``flutterswim.defaults.SWEEP_N_SEGMENTS``, with its stated accuracy). ``tol``: closing
     residual max|Phi(u) - u| relative to 1 + max|u| (see :func:`_scaled`).
 
-    ``look_beyond``: past ``to`` the branch is followed for this fraction of its range more,
+    ``look_beyond``: past ``to`` the branch is followed for this fraction of its range more
+    (of its logarithm for a parameter that is positive only: :func:`look_beyond_limit`),
     for a fold that turns it back into the range (an S-shaped branch: strokes that coexist
     there). When it turns back it is followed until it leaves the range again (or ends), and
     the orbits beyond ``to`` stay in the branch; otherwise they are dropped and the branch ends
@@ -285,7 +298,7 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     message = f"reached {parameter}={to:g}"
     # past ``to`` (look_beyond): the orbits up to ``to``, the outer limit, whether it turned back
     target, n_at_to, turned = to, None, False
-    limit = to + side * look_beyond * length_p
+    limit = look_beyond_limit(axis, hopf.value, to, look_beyond, side)
     try:
         while True:
             if len(orbits) >= max_points:
@@ -393,19 +406,32 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
 REAL_MULTIPLIER = 1e-6
 
 
+def leading_multiplier(orbit) -> complex:
+    """The largest non-trivial Floquet multiplier of ``orbit`` (the trivial one, the orbit's
+    own phase, is the one nearest 1)."""
+    mu = np.asarray(orbit.multipliers)
+    mu = np.delete(mu, int(np.argmin(np.abs(mu - 1.0))))
+    return complex(mu[int(np.argmax(np.abs(mu)))])
+
+
+def multiplier_kind(orbit) -> str:
+    """What the largest non-trivial multiplier of ``orbit`` is: "torus" (a complex pair),
+    "period doubling" (real, negative) or "real" (real, positive)."""
+    lead = leading_multiplier(orbit)
+    if abs(lead.imag) > REAL_MULTIPLIER * abs(lead):
+        return "torus"
+    return "period doubling" if lead.real < 0 else "real"
+
+
 def crossing_kind(orbit, values: np.ndarray, i: int) -> str:
     """How the stability changes between orbits i and i + 1 of a branch at ``values``, from
     ``orbit`` (the one of the two with a non-trivial multiplier outside the unit circle): its
     largest non-trivial multiplier real and positive, "fold" if the parameter turns back
     within two orbits of the crossing (its steps change sign), else "branch point"; real and
     negative, "period doubling"; complex, "torus"."""
-    mu = np.asarray(orbit.multipliers)
-    mu = np.delete(mu, int(np.argmin(np.abs(mu - 1.0))))  # the trivial one (the orbit's own phase)
-    lead = mu[int(np.argmax(np.abs(mu)))]
-    if abs(lead.imag) > REAL_MULTIPLIER * abs(lead):
-        return "torus"
-    if lead.real < 0:
-        return "period doubling"
+    kind = multiplier_kind(orbit)
+    if kind != "real":
+        return kind
     d = np.diff(values[max(i - 2, 0):i + 4])
     return "fold" if np.any(d[:-1] * d[1:] < 0) else "branch point"
 

@@ -22,7 +22,7 @@ from .parameter import Axis
 from ._threads import one_blas_thread
 from .system import ShapeSystem
 
-__all__ = ["discrete_spectrum", "leading_pair", "leading_mode", "HopfPoint", "hopf_point", "hopf_bracket"]
+__all__ = ["RoundoffWarning", "discrete_spectrum", "leading_pair", "leading_mode", "HopfPoint", "hopf_point", "hopf_bracket"]
 
 
 def discrete_spectrum(params, n_segments: int) -> np.ndarray:
@@ -33,15 +33,48 @@ def discrete_spectrum(params, n_segments: int) -> np.ndarray:
     return lam[np.argsort(-lam.real)]
 
 
+class RoundoffWarning(RuntimeWarning):
+    """The discrete spectrum's round-off is no longer small against the leading pair."""
+
+
+#: the leading pair's round-off bound, relative to |lambda|, beyond which it is said to be
+#: round-off limited (a study of convergence in N needs it well below the discretisation error)
+ROUNDOFF_WARN = 1e-5
+
+
 def leading_pair(params, n_segments: int) -> complex:
-    """The complex eigenvalue with Im > 0 of largest real part [1/tau]."""
-    lam = discrete_spectrum(params, n_segments)
+    """The complex eigenvalue with Im > 0 of largest real part [1/tau].
+
+    Each eigenvalue's round-off is bounded by its condition number times eps ||A||_F (||A||
+    grows like N^4 / eta_perp: 1e10 at N = 256 and eta_perp = 8). An eigenvalue is complex when
+    its Im exceeds round-off relative to itself and 100 times its own bound: at N = 384-512 and
+    eta_perp = 8 round-off made spurious pairs near 0 (0.73 +- 1.68i, bound 4e-1, condition
+    1e3) that read as an unstable straight state, and the Hopf point search found 104 for 121.
+    A leading pair whose bound exceeds :data:`ROUNDOFF_WARN` of it warns (RoundoffWarning): the
+    bound is about the error seen, and it warns where convergence in N stops (eta_perp = 3, 8,
+    71.5: from N = 192, 256, 384)."""
+    import scipy.linalg as sl
+
+    sysm = ShapeSystem.of(params, n_segments)
+    a = sysm.jac(sysm.straight())
+    lam, vl, vr = sl.eig(a, left=True, right=True)
+    cond = (np.linalg.norm(vl, axis=0) * np.linalg.norm(vr, axis=0)
+            / np.maximum(np.abs(np.einsum("ij,ij->j", vl.conj(), vr)), np.finfo(float).tiny))
+    bound = cond * np.finfo(float).eps * np.linalg.norm(a)
     # complex: Im beyond round-off relative to the eigenvalue itself (a cut relative to the
     # largest |lambda|, which grows like N^4, dropped the flutter pair 0.60 +- 7.2i at N = 256)
-    cplx = lam[lam.imag > 1e-6 * np.abs(lam)]
-    if cplx.size == 0:
+    ok = (lam.imag > 1e-6 * np.abs(lam)) & (lam.imag > 100.0 * bound)
+    if not ok.any():
         raise ParameterError("the straight state has no oscillatory mode here (no complex eigenvalue)")
-    return complex(cplx[np.argmax(cplx.real)])
+    k = np.flatnonzero(ok)[np.argmax(lam.real[ok])]
+    if bound[k] > ROUNDOFF_WARN * abs(lam[k]):
+        import warnings
+
+        warnings.warn(f"n_segments={n_segments}: round-off in the discrete Jacobian (norm {np.linalg.norm(a):.0e}) "
+                      f"limits the leading eigenvalue (bound above {ROUNDOFF_WARN:g} of it): its growth rate and the "
+                      "Hopf point are round-off limited; fewer segments converge better here",
+                      RoundoffWarning, stacklevel=2)
+    return complex(lam[k])
 
 
 def flutter_growth(axis: Axis, value: float, n_segments: int) -> float:
@@ -115,7 +148,11 @@ def hopf_point(params, parameter: str = "kappa_E_ratio", *, n_segments: int = 48
         return flutter_growth(axis, v, n_segments)
 
     if bracket is None:
-        bracket = _bracket(growth, axis.value() if start is None else finite("start", start), parameter)
+        v0 = axis.value() if start is None else finite("start", start)
+        if v0 == 0:
+            raise ParameterError(f"{'start' if start is not None else parameter}=0: the search scans geometrically "
+                                 "from it (0.8x, 1.25x, ...); give a non-zero value, or a bracket")
+        bracket = _bracket(growth, v0, parameter)
     lo, hi = bracket
     glo, ghi = growth(lo), growth(hi)
     if glo * ghi > 0:

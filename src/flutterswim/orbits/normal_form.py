@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._validate import ParameterError
 from .linear import HopfPoint
 from .system import ShapeSystem
 
@@ -82,6 +83,8 @@ def _bc(f, x: np.ndarray, y: np.ndarray, eps: float) -> np.ndarray:
 
 def normal_form(hopf: HopfPoint, *, eps_b: float = 1e-3, eps_c: float = 1e-2) -> NormalForm:
     """First Lyapunov coefficient at ``hopf`` (see the module docstring)."""
+    if not isinstance(hopf, HopfPoint):
+        raise ParameterError(f"hopf={hopf!r} must be a HopfPoint (from flutterswim.orbits.hopf_point)")
     sysm = ShapeSystem.of(hopf.params, hopf.n_segments)
     x0 = sysm.straight()
     f0 = sysm.f(x0)

@@ -1,6 +1,7 @@
 """A named continuation parameter: read and set any physical or dimensionless parameter.
 
-Names: any field of :class:`Parameters` (l, a, b, B, tau, kappa_E, mu) or of :class:`Groups`
+Names: any field of :class:`Parameters` that enters the dynamics (l, b, B, tau, kappa_E, mu; not
+the half thickness a, which the drag does not hold: B carries the thickness) or of :class:`Groups`
 (eta_par, eta_perp, chi), and ``kappa_E_ratio`` (kappa_E relative to the base set's, as on
 the paper's Fig. 4b axis). For physical parameters, eta_par, eta_perp and chi are changed
 through the quantity that carries them alone: chi through kappa_E, eta_par and eta_perp
@@ -17,7 +18,7 @@ from ..params import LONG_NAMES, UNITS, Groups, Parameters
 
 __all__ = ["Axis"]
 
-_PHYSICAL = ("l", "a", "b", "B", "tau", "kappa_E", "mu", "kappa_E_ratio", "chi", "eta_perp")
+_PHYSICAL = ("l", "b", "B", "tau", "kappa_E", "mu", "kappa_E_ratio", "chi", "eta_perp")
 _GROUPS = ("eta_par", "eta_perp", "chi", "kappa_E_ratio")
 
 
@@ -32,9 +33,19 @@ class Axis:
         allowed = _PHYSICAL if isinstance(self.base, Parameters) else _GROUPS
         if not isinstance(self.base, (Parameters, Groups)):
             raise ParameterError(f"params={self.base!r} must be flutterswim.Parameters or flutterswim.Groups")
+        if self.name == "a" and isinstance(self.base, Parameters):
+            raise ParameterError("parameter='a' (the ribbon's half thickness) does not enter the dynamics: the drag "
+                                 "holds the half width b alone, and B the thickness; choose one of "
+                                 + ", ".join(allowed))
         if self.name not in allowed:
             raise ParameterError(f"parameter={self.name!r} is not a continuation parameter here; "
                                  f"choose one of {', '.join(allowed)}")
+
+    @property
+    def positive(self) -> bool:
+        """Only positive values are physical (lengths, moduli, times, viscosities, eta's); the
+        field's kappa_E, chi and kappa_E_ratio take either sign (the swimming direction)."""
+        return self.name not in ("kappa_E", "chi", "kappa_E_ratio")
 
     @property
     def units(self) -> str:

@@ -23,7 +23,8 @@ def register(subparsers) -> None:
     p.add_argument("--fps", type=float, default=None, help="frame rate [1/s] (default: the movie's own)")
     p.add_argument("--times", default=None,
                    help="text/CSV file of the frames' times, one per frame (a camera's timestamps: dropped or "
-                        "uneven frames); a header may name the column t, time or timestamp (_s or _ms)")
+                        "uneven frames); a header may name the column t, time, timestamp, elapsed time, ... with its "
+                        "unit s, ms or us as a suffix or in brackets (time_ms, Time (ms), t [s]; default s)")
     p.add_argument("--out", default=None, help="NetCDF file (.nc); default track.nc, never one tracked from another input")
     p.add_argument("--roi", default=None, help="region of interest x0,y0,x1,y1 [pixels]")
     p.add_argument("--points", type=int, default=49, help="arc-length samples along the body (default 49)")

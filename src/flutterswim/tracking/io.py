@@ -410,7 +410,8 @@ def _time_header(field: str) -> float | None:
         f, unit = m.group(1).strip(), m.group(2)
     else:
         m = re.fullmatch(r"(.*?)[ _]([a-z\u00b5\u03bc]+)", f)
-        if m and m.group(2) in _TIME_UNITS and m.group(1).strip() in _TIME_NAMES:
+        # (words joined by underscores as by spaces: elapsed_time_ms had been refused)
+        if m and m.group(2) in _TIME_UNITS and re.sub(r"[_\s]+", " ", m.group(1).strip()) in _TIME_NAMES:
             f, unit = m.group(1).strip(), m.group(2)
     f = re.sub(r"[_\s]+", " ", f)
     if f not in _TIME_NAMES:

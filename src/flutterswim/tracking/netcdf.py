@@ -56,7 +56,8 @@ def to_xarray(tr: Track):
                                {"units": "mm", "long_name": "mean point distance to the last good frame"}),
         },
         coords={
-            "time": ("frame", np.asarray(info["t"], float), {"units": "s", "long_name": "time of the frame (index / fps)",
+            "time": ("frame", np.asarray(info["t"], float), {"units": "s", "long_name": "time of the frame " + (
+                "(its timestamp, as given)" if tr.meta.get("times_given") else "(index / fps)"),
                                                              "standard_name": "time"}),
             "frame": ("frame", np.arange(ok.size), {"units": "1", "long_name": "frame index"}),
             "s": ("point", np.asarray(tr.s, float), {"units": "mm", "long_name": "arc length from the s = 0 end"}),

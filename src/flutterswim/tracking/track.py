@@ -829,6 +829,7 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
                       "noise and moves the ends by several % (encode at CRF <= 18, or lossless)", stacklevel=2)
     meta = {
         "source": frames.source, "px_per_mm": px_per_mm, "fps": fps, "roi": frames.roi,
+        "times_given": times is not None,  # the frames' own times (timestamps), not index / fps
         # a folder's frame files in the order tracked (by the numbers in their names)
         **({"frame_files": list(frames.names)} if frames.names else {}),
         "unchanged_fraction": unchanged,
