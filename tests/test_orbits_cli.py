@@ -208,7 +208,7 @@ def test_a_range_of_negative_fields_without_a_branch_names_the_mirror_hopf_point
 
 
 def test_a_typed_value_that_is_not_slender_is_warned_about_once(tmp_path, capsys, monkeypatch):
-    """The range's end a=5e-05 m (a/b = 0.25) is not slender: the warning came twice, once
+    """The range's end b=0.0009 m (b/l = 0.24) is not slender: the warning came twice, once
     when the end was checked and again when the Hopf search met it, whenever the warning
     filters changed in between (Python then forgets the warnings it showed): a first compile
     or a lazy import does, as the search's growth rates here."""
@@ -224,9 +224,10 @@ def test_a_typed_value_that_is_not_slender_is_warned_about_once(tmp_path, capsys
         return real(*a, **kw)
 
     monkeypatch.setattr(linear, "flutter_growth", growth)
-    main(["branch", "a=0.00001:0.00005", "--out", str(tmp_path / "a.nc"), "--segments", "8", "--quiet"])
+    main(["branch", "b=0.0002:0.0009", "--out", str(tmp_path / "a.nc"), "--segments", "8", "--steps", "16",
+          "--points", "4", "--quiet"])
     err = capsys.readouterr().err.splitlines()
-    typed = [ln for ln in err if "warning" in ln and "a=5e-05 m" in ln and "not slender" in ln]
+    typed = [ln for ln in err if "warning" in ln and "b=0.0009 m" in ln and "not slender" in ln]
     assert len(typed) == 1, err
     assert len(set(err)) == len(err), err  # no line said twice
 
