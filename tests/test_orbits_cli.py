@@ -27,6 +27,13 @@ def test_branch_and_plot(tmp_path, capsys):
     fig = plot_branch(ds)
     ys = [line.get_ydata() for line in fig.axes[0].lines if len(line.get_xdata()) == x.size + 1]
     assert any(np.allclose(np.asarray(y)[1:], ds["advance"].values * 1e3, equal_nan=True) for y in ys)
+    # the legend lists what the branch draws: no red entry for a branch that never self-intersects
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert ("self-intersecting stroke" in labels) == bool(ds["self_intersecting"].values.any())
+    assert ("unstable orbit" in " ".join(labels)) == (not ds["stable"].values.all())
+    red = ds.copy()
+    red["self_intersecting"] = red["self_intersecting"] | (red["kappa_E_ratio"] > 0.85)
+    assert "self-intersecting stroke" in [t.get_text() for t in plot_branch(red).legends[0].get_texts()]
 
 
 def test_branch_of_negative_fields_is_the_mirror_branch(tmp_path):

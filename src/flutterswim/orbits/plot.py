@@ -94,8 +94,9 @@ def plot_branch(ds, path=None, *, x_range: tuple[float, float] | None = None):
     handles = [Line2D([], [], color="0.5", lw=1.8, label="straight, stable (linear theory)"),
                Line2D([], [], color="0.5", lw=1.2, ls="--", label="straight, unstable"),
                Line2D([], [], color="k", lw=1.8, label="stroke (periodic orbit)"),
-               Line2D([], [], color="tab:red", lw=1.8, label="self-intersecting stroke"),
                Line2D([], [], color="0.3", ls=":", label="Hopf point (discrete linear stability)")]
+    if np.any(red):  # (only what the branch draws: a review found the red entry on branches without it)
+        handles.insert(3, Line2D([], [], color="tab:red", lw=1.8, label="self-intersecting stroke"))
     if np.any(unstable):
         handles.insert(3, Line2D([], [], marker="o", mfc="none", color="tab:orange", ls="none", ms=4,
                                  label="unstable orbit (a Floquet multiplier outside the unit circle)"))
