@@ -38,3 +38,14 @@ def rendered_paper_stroke(seed: int, snr: float = 5.0, fps: float = 50.0):
     sl = slice(r.t.size - 101, r.t.size)
     mv = render(SimpleNamespace(t=r.t[sl], x=r.x[sl], y=r.y[sl]), um_per_px=14.0, snr=snr, seed=seed)
     return mv, describe(truth_track(mv, 3.7), n_last=100)
+
+
+@pytest.fixture(autouse=True)
+def _close_pyplot_figures():
+    """Figures returned for the screen (path None) are pyplot's: close them after each test."""
+    yield
+    import sys
+
+    plt = sys.modules.get("matplotlib.pyplot")
+    if plt is not None:
+        plt.close("all")

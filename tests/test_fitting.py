@@ -105,8 +105,8 @@ def test_identifiability_card_sensitivities_match_finite_differences(coarse):
     truth = (1.94e-14, 0.375, 19.1e3)
     y = model(to_identifiable(BASE, *truth))
     res = fit(y, y * REL_SEM, model=model, guess=truth)
-    # the card is the model's the fit ended with (data made by the 24/48 model: the 48/96 one
-    # moves the parameters by 0.26 %, so the fit is repeated with it)
+    # the card is the model's the fit ended with (the 24-segment model here; an extrapolated
+    # model may end on its finer one, the 48/96 pair)
     used = model if res.settings["n_segments"] == model.n_segments else model.finer()
     at = (res.B, res.tau, res.kappa_E)
     fd = np.zeros((3, 3))

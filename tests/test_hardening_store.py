@@ -287,7 +287,7 @@ def test_an_unreachable_scheduler_leaves_no_store_behind(tmp_path, monkeypatch):
 
     monkeypatch.setattr(defaults, "SCHEDULER_TIMEOUT_S", 1.0)
     out = tmp_path / "s.zarr"
-    with pytest.raises(SchedulerUnreachable, match="no Dask scheduler answered"):
+    with pytest.raises(SchedulerUnreachable, match="no Dask scheduler"):
         sweep({"chi": [1.0, 2.0]}, out=str(out), backend="dask", scheduler="tcp://127.0.0.1:1", point_fn=point,
               progress=False)
     assert list(tmp_path.iterdir()) == []  # no store, no lock file, no remnant

@@ -83,10 +83,11 @@ def test_round_off_makes_no_spurious_flutter_at_high_resolution():
 
 def test_the_look_beyond_leg_stays_where_the_parameter_is_physical():
     """A review (stop 45): past ``to`` the branch was followed look_beyond times the range
-    more, linearly; below a small ``to`` in B or tau that reach was negative, so the branch was
-    followed towards B = 0 (eta_perp -> infinity, each orbit stiffer) until the corrector failed:
-    10-15 times the cost, all of it dropped. The reach must stay positive and lie past ``to``,
-    for any range; a signed parameter (chi) keeps the linear reach."""
+    more; below a small ``to`` in B or tau that reach was negative, so the branch was followed
+    towards B = 0 (eta_perp -> infinity, each orbit stiffer) until the corrector failed: 10-15
+    times the cost, all of it dropped. The reach must stay positive and lie past ``to`` for any
+    range, and not fall short of a fold the linear reach found (a second review: at twice the
+    paper's field the B branch folds at 0.75 B_paper, past a ``to`` of 1.24 B_paper)."""
     from flutterswim.orbits.continuation import look_beyond_limit
     from flutterswim.orbits.parameter import Axis
 
@@ -97,8 +98,11 @@ def test_the_look_beyond_leg_stays_where_the_parameter_is_physical():
         for hopf, to in v * np.exp(rng.uniform(-5, 5, size=(20, 2))):
             side = 1 if to > hopf else -1
             lim = look_beyond_limit(axis, hopf, to, 0.2, side)
+            linear = to + side * 0.2 * abs(to - hopf)
             assert lim > 0 and (lim - to) * side > 0, (name, hopf, to, lim)
-            assert lim == pytest.approx(to * (to / hopf) ** 0.2)  # a fifth of the range, on a log scale
+            assert lim == pytest.approx(linear) or (side < 0 and linear < lim <= 0.5 * to * (1 + 1e-12))
+    b = Axis(fs.PAPER, "B").value()
+    assert look_beyond_limit(Axis(fs.PAPER, "B"), 12.48 * b, 1.24 * b, 0.2, -1) < 0.75 * b
     chi = Axis(fs.PAPER, "chi")
     assert look_beyond_limit(chi, 48.3, -10.0, 0.2, -1) == pytest.approx(-10.0 - 0.2 * 58.3)
 
@@ -194,3 +198,34 @@ def test_the_settle_reason_gives_its_time_with_its_unit(dimensionless):
     assert m, why
     assert m.group(2) == ("tau" if dimensionless else "s")
     assert float(m.group(1)) == pytest.approx(run.settings["limit_cycle_time"], rel=1e-3)
+
+
+def test_a_transient_past_a_saddle_orbit_is_not_called_not_periodic():
+    """A second review (stop 45): near a subcritical Hopf point (Groups(173.4, 300, chi), fold
+    ~43.1, Hopf ~50.65) a run started 10 % outside the unstable small orbit grows, slowly, to
+    the stable stroke (reached at 289 tau). At t_max = 200 it had been called not periodic,
+    "a longer t_max will not reach one": the saddle's multiplier is real, and the motion is
+    passing it. It stays undecided (capped)."""
+    from flutterswim.initial import InitialState
+    from flutterswim.orbits.continuation import continue_orbits, multiplier_kind
+    from flutterswim.settle import settle
+
+    br = continue_orbits(fs.Groups(173.4, 300.0, 50.0), "chi", 50.0, n_points=6, n_segments=24, look_beyond=0.0)
+    i = int(np.argmin(np.abs(br.values - 50.3)))
+    orb, chi = br.orbits[i], float(br.values[i])
+    assert not orb.stable and multiplier_kind(orb) == "real"  # a saddle
+    m = orb.theta[0].mean()
+    init = InitialState(theta=m + 1.1 * (orb.theta[0] - m), kappa=1.1 * orb.kappa[0])
+    st = settle(fs.Groups(173.4, 300.0, chi), initial=init, n_segments=24, t_max=200.0)
+    assert st.outcome == "capped" and "longer t_max may reach" in st.reason, (st.outcome, st.reason)
+
+
+def test_a_refused_scheduler_is_not_said_to_have_timed_out():
+    """`--scheduler tcp://127.0.0.1:1` is refused at once, but the message said "no Dask
+    scheduler answered within 10 s"."""
+    pytest.importorskip("distributed")
+    from flutterswim.sweep.backends import SchedulerUnreachable, _reachable
+
+    with pytest.raises(SchedulerUnreachable) as exc:
+        _reachable("tcp://127.0.0.1:1", 5.0)
+    assert "connection failed" in str(exc.value) and "within" not in str(exc.value)

@@ -81,6 +81,9 @@ def test_runs_of_dropped_frames_with_their_times(movie, drop, tmp_path, capsys):
     save_track(tr, tmp_path / "stamped.nc")
     with xr.open_dataset(tmp_path / "stamped.nc", engine="h5netcdf") as ds:
         assert "timestamp" in ds["time"].attrs["long_name"] and np.allclose(ds["time"].values, mv.t[keep])
+    save_track(load_track(tmp_path / "stamped.nc"), tmp_path / "again.nc")  # (reloaded, saved anew)
+    with xr.open_dataset(tmp_path / "again.nc", engine="h5netcdf") as ds:
+        assert "timestamp" in ds["time"].attrs["long_name"]
     # without the times: the hint reaches the track file, describe and the command's output
     naive = track(mv.frames[keep], px_per_mm=mv.px_per_mm, fps=FPS)
     save_track(naive, tmp_path / "naive.nc")

@@ -300,7 +300,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("stability", help="stability map, neutral curve, bifurcation plots and eigenmodes")
     p.add_argument("--out", default="stability", help="output folder (made in an existing one; default stability)")
     p.add_argument("--step", type=float, default=0.1, help="map grid step in eta_perp and chi (default 0.1, the paper's)")
-    p.add_argument("--float32", action="store_true", help="store the map in single precision (about a third of the size, compressed)")
+    p.add_argument("--float32", action="store_true", help="store the map in single precision (a third to a half of the size, compressed)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_stability)
 

@@ -37,6 +37,9 @@ from .params import Groups, Parameters
 
 __all__ = ["Settled", "settle", "OUTCOMES", "SETTLE_TOLERANCE"]
 
+#: an oscillation whose half-range changed by less than this (log) over its last 3 chunks is steady
+STEADY_LOG_CHANGE = 0.02
+
 OUTCOMES = ("straight", "bent_equilibrium", "limit_cycle", "not_periodic", "capped", "failed")
 #: Relative closeness to the orbit (period and peak-to-peak) that counts as on the limit cycle.
 SETTLE_TOLERANCE = 1e-2
@@ -412,18 +415,21 @@ def _at_cap(params, groups, orbit, watch: _Watch, lam: complex, n_segments: int,
         return ("not_periodic", f"an oscillation (half-range {amps[-1]:.3g} rad) that is not a stable periodic "
                 f"orbit: {irregular}", None)
     near = watch.unstable
-    if amps and amps[-1] > SWIM_AMPLITUDE and near is not None \
-            and abs(math.log(2 * amps[-1] / max(_orbit_p2p(near), 1e-300))) < math.log(1.5):
-        # Newton found the periodic orbit this motion oscillates about, and it is unstable (a
-        # torus: Groups(10, 20, 100) at N = 48, |mu| = 1.013, quasi-periodic for 800 tau, had
-        # been "capped ... a longer t_max may reach the stroke")
-        from .orbits.continuation import leading_multiplier, multiplier_kind
+    from .orbits.continuation import leading_multiplier, multiplier_kind
 
-        kind = {"torus": "a complex pair: quasi-periodic motion about it",
-                "period doubling": "real and negative: period doubling"}.get(multiplier_kind(near), "real")
-        return ("not_periodic", f"an oscillation (half-range {amps[-1]:.3g} rad) about a periodic orbit that is "
-                f"unstable (largest multiplier |mu| = {abs(leading_multiplier(near)):.4f}, {kind}): no stable stroke "
-                "here, and a longer t_max will not reach one", None)
+    kind = None if near is None else {"torus": "a complex pair: quasi-periodic motion about it",
+                                      "period doubling": "real and negative: period doubling"}.get(multiplier_kind(near))
+    steady = len(amps) >= 3 and abs(math.log(amps[-1] / max(amps[-3], 1e-300))) < STEADY_LOG_CHANGE
+    if amps and amps[-1] > SWIM_AMPLITUDE and kind and steady \
+            and abs(math.log(2 * amps[-1] / max(_orbit_p2p(near), 1e-300))) < math.log(1.5):
+        # Newton found the periodic orbit this motion oscillates about, it lost its stability to
+        # a torus or a period doubling, and the motion's size stays put (Groups(10, 20, 100) at
+        # N = 48, |mu| = 1.013, quasi-periodic for 800 tau, had been "capped ... a longer t_max
+        # may reach the stroke"). A saddle (a real multiplier above 1: the small orbit of a
+        # subcritical Hopf point) is passed on the way to a stroke or to rest: still "capped".
+        return ("not_periodic", f"an oscillation (half-range {amps[-1]:.3g} rad, steady) about a periodic orbit that "
+                f"is unstable (largest multiplier |mu| = {abs(leading_multiplier(near)):.4f}, {kind}): no stable "
+                "stroke here, and a longer t_max will not reach one", None)
     if amps and amps[-1] > SWIM_AMPLITUDE:
         # a motion that may still be on its way to a stroke (eta_perp = 30 < eta_par: reached at
         # 110 tau) is not called "not periodic" at the cap

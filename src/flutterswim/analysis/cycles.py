@@ -556,13 +556,15 @@ def detect_cycles(
         # the summed covariance P_k + P_j: its trace, and its squared norm
         tr_s = sum_vm * (cov_trace[k] + cov_trace[j])
         tr_s2 = sum_vm2 * (cov_sq[k] + cov_sq[j] + 2.0 * float(np.vdot(shape_cov[k], shape_cov[j])))
-        noise_s = math.sqrt(_chi2_999(tr_s * tr_s / tr_s2) * tr_s) if tr_s2 > 0 else 0.0
+        # (a covariance's trace from a cycle of few frames can come out below 0 by round-off: a
+        # movie with 60 % of its frames dropped raised "math domain error" here)
+        noise_s = math.sqrt(_chi2_999(tr_s * tr_s / tr_s2) * tr_s) if tr_s2 > 0 and tr_s > 0 else 0.0
         # P_k - P_j = s[k+1] - s[k] - s[j+1] + s[j] (the middle crossing twice when adjacent)
         coef: dict[int, float] = {}
         for i, c in ((k + 1, 1.0), (k, -1.0), (j + 1, -1.0), (j, 1.0)):
             coef[i] = coef.get(i, 0.0) + c
         noise_p = _Z_999 * math.sqrt(sum((c * sig_x[i]) ** 2 for i, c in coef.items()))
-        noise_a = _Z_999 * math.sqrt(v_u * (amp_gain[k] + amp_gain[j]))
+        noise_a = _Z_999 * math.sqrt(max(v_u * (amp_gain[k] + amp_gain[j]), 0.0))
         row = np.array([tol + noise_p / periods[k], tol + noise_a / max(fit_amp[k], 1e-300), tol + noise_s / den])
         change = np.array([dp, da, num / den])
         return change, row, bool(np.all(change < row) and np.all(row[:2] <= _MAX_RESOLVABLE))

@@ -188,7 +188,7 @@ def plot_trials(summary: Summary, path=None, *, trials: Trials | None = None, mo
     which end the lateral column measures, for its axis label."""
     from ..plotting._common import new_figure
 
-    fig = new_figure((10, 3.4))
+    fig = new_figure((10, 3.4), shown=path is None)
 
     axs = fig.subplots(1, 3)
     for k, ax in enumerate(axs):

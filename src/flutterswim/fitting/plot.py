@@ -26,7 +26,7 @@ def plot_fit(res, summary, trials, path=None, *, voltage: float | None = None):
 
     from .data import draw_trials
 
-    fig = new_figure((10.5, 6.4))
+    fig = new_figure((10.5, 6.4), shown=path is None)
     axs = fig.subplots(2, 3)
     if voltage is None and not res.settings.get("voltages_V"):
         voltage = summary.voltage_V[np.argmin(np.sum(np.abs(summary.mean / res.measured - 1), axis=1))]

@@ -196,14 +196,16 @@ def unreachable(nf, hopf_value: float, to: float, parameter: str) -> str:
 
 def look_beyond_limit(axis: Axis, hopf: float, to: float, look_beyond: float, side: int) -> float:
     """How far past ``to`` the branch is followed, towards ``side`` (+1 up, -1 down):
-    ``look_beyond`` times the range from the Hopf point, or, for a parameter that is positive
-    only, that fraction of it on a log scale, to exp(side look_beyond |ln(to / hopf)|) (the
-    linear reach below a small ``to`` went to 0 or below, where
-    eta_perp ~ 1 / (B tau) diverges (B from 1e-13 to 5e-15: the branch was followed to B =
-    7e-19, 10 times the cost, and all of it dropped))."""
-    if axis.positive and hopf > 0 and to > 0:
-        return to * math.exp(side * look_beyond * abs(math.log(to / hopf)))
-    return to + side * look_beyond * abs(to - hopf)
+    ``look_beyond`` times the range from the Hopf point; for a parameter that is positive only,
+    downwards no further than half of ``to`` (the reach below a small ``to`` in B or tau went to 0
+    or below, where eta_perp ~ 1 / (B tau) diverges: from 1e-13 to 5e-15 the branch was followed
+    to B = 7e-19, 10 times the cost, all of it dropped). Half, not less: at twice the paper's
+    field an S-shaped branch in B folds at 0.75 and 1.28 times the paper's B, 0.6 of a ``to`` of
+    1.24 times it (a fifth of the range on a log scale, 0.78, missed that fold)."""
+    limit = to + side * look_beyond * abs(to - hopf)
+    if axis.positive and side < 0 and to > 0:
+        limit = max(limit, 0.5 * to)
+    return limit
 
 
 @one_blas_thread
@@ -217,7 +219,7 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
     residual max|Phi(u) - u| relative to 1 + max|u| (see :func:`_scaled`).
 
     ``look_beyond``: past ``to`` the branch is followed for this fraction of its range more
-    (of its logarithm for a parameter that is positive only: :func:`look_beyond_limit`),
+    (for a parameter that is positive only, downwards to half of ``to`` at most: :func:`look_beyond_limit`),
     for a fold that turns it back into the range (an S-shaped branch: strokes that coexist
     there). When it turns back it is followed until it leaves the range again (or ends), and
     the orbits beyond ``to`` stay in the branch; otherwise they are dropped and the branch ends

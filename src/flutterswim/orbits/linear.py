@@ -37,22 +37,31 @@ class RoundoffWarning(RuntimeWarning):
     """The discrete spectrum's round-off is no longer small against the leading pair."""
 
 
-#: the leading pair's round-off bound, relative to |lambda|, beyond which it is said to be
-#: round-off limited (a study of convergence in N needs it well below the discretisation error)
-ROUNDOFF_WARN = 1e-5
+#: the leading pair's round-off bound beyond which it is said to be round-off limited: relative
+#: to |lambda| (the growth rate), or to its Im (the frequency of a slow oscillation)
+ROUNDOFF_WARN = 1e-4
+ROUNDOFF_WARN_IM = 1e-2
+
+
+def _roundoff_warning(n_segments: int, a: np.ndarray, what: str) -> None:
+    import warnings
+
+    warnings.warn(f"n_segments={n_segments}: round-off in the discrete Jacobian (its norm grows like N^4 / eta_perp) "
+                  f"{what}; the growth rate and the Hopf point are round-off limited here: fewer segments, or the "
+                  "continuum's flutterswim.stability.leading_eigenvalue", RoundoffWarning, stacklevel=3)
 
 
 def leading_pair(params, n_segments: int) -> complex:
     """The complex eigenvalue with Im > 0 of largest real part [1/tau].
 
     Each eigenvalue's round-off is bounded by its condition number times eps ||A||_F (||A||
-    grows like N^4 / eta_perp: 1e10 at N = 256 and eta_perp = 8). An eigenvalue is complex when
-    its Im exceeds round-off relative to itself and 100 times its own bound: at N = 384-512 and
-    eta_perp = 8 round-off made spurious pairs near 0 (0.73 +- 1.68i, bound 4e-1, condition
-    1e3) that read as an unstable straight state, and the Hopf point search found 104 for 121.
-    A leading pair whose bound exceeds :data:`ROUNDOFF_WARN` of it warns (RoundoffWarning): the
-    bound is about the error seen, and it warns where convergence in N stops (eta_perp = 3, 8,
-    71.5: from N = 192, 256, 384)."""
+    grows like N^4 / eta_perp: 1e10 at N = 256 and eta_perp = 8; the bound is about 10 times the
+    error seen). An eigenvalue is complex when its Im exceeds round-off relative to itself and
+    10 times its own bound: at N = 384-512 and eta_perp = 8 round-off made spurious pairs near 0
+    (0.12 + 1.07i, bound 0.3, condition 3e3) that read as an unstable straight state, and the
+    Hopf point search found 104 for 121. A leading pair whose bound exceeds :data:`ROUNDOFF_WARN`
+    of |lambda| or :data:`ROUNDOFF_WARN_IM` of its Im warns (RoundoffWarning), and so does a
+    straight state whose only pairs are within round-off of the real axis."""
     import scipy.linalg as sl
 
     sysm = ShapeSystem.of(params, n_segments)
@@ -63,17 +72,16 @@ def leading_pair(params, n_segments: int) -> complex:
     bound = cond * np.finfo(float).eps * np.linalg.norm(a)
     # complex: Im beyond round-off relative to the eigenvalue itself (a cut relative to the
     # largest |lambda|, which grows like N^4, dropped the flutter pair 0.60 +- 7.2i at N = 256)
-    ok = (lam.imag > 1e-6 * np.abs(lam)) & (lam.imag > 100.0 * bound)
+    cplx = lam.imag > 1e-6 * np.abs(lam)
+    ok = cplx & (lam.imag > 10.0 * bound)
     if not ok.any():
+        if cplx.any():
+            _roundoff_warning(n_segments, a, "puts every complex pair within its bound of the real axis")
         raise ParameterError("the straight state has no oscillatory mode here (no complex eigenvalue)")
     k = np.flatnonzero(ok)[np.argmax(lam.real[ok])]
-    if bound[k] > ROUNDOFF_WARN * abs(lam[k]):
-        import warnings
-
-        warnings.warn(f"n_segments={n_segments}: round-off in the discrete Jacobian (norm {np.linalg.norm(a):.0e}) "
-                      f"limits the leading eigenvalue (bound above {ROUNDOFF_WARN:g} of it): its growth rate and the "
-                      "Hopf point are round-off limited; fewer segments converge better here",
-                      RoundoffWarning, stacklevel=2)
+    if bound[k] > ROUNDOFF_WARN * abs(lam[k]) or bound[k] > ROUNDOFF_WARN_IM * lam[k].imag:
+        # (no numbers in the text: a Hopf search meets it at every step, and says it once)
+        _roundoff_warning(n_segments, a, "limits the leading pair")
     return complex(lam[k])
 
 

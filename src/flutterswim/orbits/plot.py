@@ -57,7 +57,7 @@ def plot_branch(ds, path=None, *, x_range: tuple[float, float] | None = None):
         lo, hi = (lo - pad, hi) if stable_side < 0 else (lo, hi + pad)
     straight_end = lo if stable_side < 0 else hi
     xs = np.r_[hopf, x]
-    fig = new_figure((6.0, 8.8))
+    fig = new_figure((6.0, 8.8), shown=path is None)
     axes = fig.subplots(3, 1, sharex=True)
     ax = axes[0]
     ax.plot(sorted([straight_end, hopf]), [0, 0], color="0.5", lw=1.8, label="straight, stable (linear theory)")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import math
 from pathlib import Path
 from typing import Any
@@ -16,8 +18,30 @@ FIELD_COLOR = "#d62728"  # red
 SWIM_COLOR = "#e6b800"  # yellow
 
 
-def new_figure(figsize: tuple[float, float], dpi: float = 150):
-    """A matplotlib Figure with an Agg canvas (no pyplot, no global backend change)."""
+_OFFSCREEN = contextvars.ContextVar("flutterswim_offscreen", default=False)
+
+
+@contextlib.contextmanager
+def offscreen():
+    """Within it, every figure is an Agg figure without pyplot, also those returned to the
+    caller (a batch job that saves them itself: reproduce)."""
+    token = _OFFSCREEN.set(True)
+    try:
+        yield
+    finally:
+        _OFFSCREEN.reset(token)
+
+
+def new_figure(figsize: tuple[float, float], dpi: float = 150, *, shown: bool = False):
+    """A matplotlib Figure, laid out constrained. One the function saves: an Agg canvas, no
+    pyplot, nothing left open in a session and its backend never switched. ``shown``, one it
+    returns for the screen (its ``path`` None): made by pyplot in the session's own backend, at
+    its dpi, so plt.show() and a notebook display it (an Agg figure showed only as text there),
+    except within :func:`offscreen`."""
+    if shown and not _OFFSCREEN.get():
+        import matplotlib.pyplot as plt
+
+        return plt.figure(figsize=figsize, layout="constrained")
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 

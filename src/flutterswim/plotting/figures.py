@@ -76,7 +76,7 @@ def plot_ghosts(obj: Any, path: str | Path | None = None, *, cycle: int | None =
     of the tip (``tip``: "end" = s=l, "start" = s=0) in magenta and the field arrow in red."""
     tr = as_track(obj)
     win = _cycle_window(tr, cycles, cycle, window)
-    fig = new_figure(figsize, dpi)
+    fig = new_figure(figsize, dpi, shown=path is None)
     ax = fig.add_subplot()
     draw_ghosts(ax, tr, win, n_ghosts=n_ghosts, tip=tip)
     return finish(fig, path)
@@ -90,7 +90,7 @@ def plot_swimmer(obj: Any, path: str | Path | None = None, *, time: float | None
     f, L, T = figure_units(tr)
     i = tr.n_frames - 1 if time is None else int(np.argmin(np.abs(tr.t - float(time))))
     it = tip_index(tr, tip)
-    fig = new_figure(figsize, dpi)
+    fig = new_figure(figsize, dpi, shown=path is None)
     ax = fig.add_subplot()
     if trail:
         ax.plot(tr.x[: i + 1, it] * f, tr.y[: i + 1, it] * f, color=TIP_COLOR, lw=0.8,
@@ -132,7 +132,7 @@ def plot_descriptors(obj: Any, path: str | Path | None = None, *, cycles: Cycles
     tr = as_track(obj)
     cyc = detect_cycles(tr) if cycles is None else cycles
     f, L, T = figure_units(tr)
-    fig = new_figure(figsize, dpi)
+    fig = new_figure(figsize, dpi, shown=path is None)
     axs = fig.subplots(4, 1, sharex=True)
     if cyc.n_cycles == 0:
         for ax in axs:
@@ -257,7 +257,7 @@ def plot_kymographs(obj: Any, path: str | Path | None = None, *, window: tuple[f
     """Kymographs over ``window`` (default: the whole track): lab-frame line crossings (dots
     coloured by arc length) and body-frame curvature / tangent-angle maps."""
     tr = as_track(obj)
-    fig = new_figure(figsize, dpi)
+    fig = new_figure(figsize, dpi, shown=path is None)
     axs = fig.subplots(2, 2).ravel()
     draw_kymographs(axs, tr, window, h_level=h_level, v_level=v_level)
     return finish(fig, path)
@@ -270,7 +270,7 @@ def plot_summary(obj: Any, path: str | Path | None = None, *, cycles: Cycles | N
     tr = as_track(obj)
     cyc = detect_cycles(tr) if cycles is None else cycles
     wins = kymograph_windows(tr, n_cycles=n_cycles, cycles=cyc)
-    fig = new_figure(figsize, dpi)
+    fig = new_figure(figsize, dpi, shown=path is None)
     gs = fig.add_gridspec(3, 4, height_ratios=[1.0, 1.0, 1.0])
     full = (float(tr.t[0]), float(tr.t[-1]))
     # the windows named by what the run did: a run without an onset or a limit cycle (describe's

@@ -94,7 +94,9 @@ def reproduce(out: str | os.PathLike, *, mode: str = "quick", trials: str | os.P
     write_marker(folder, STORE_KIND)
     from ..simulate import single_blas_thread
 
-    with single_blas_thread():
+    from ..plotting._common import offscreen
+
+    with single_blas_thread(), offscreen():  # (its figures are saved, never shown: no pyplot)
         records = build_targets(todo, folder, settings, log=log, force=force)
     from .catalog import TARGETS
     from .targets import with_earlier

@@ -26,7 +26,7 @@ def plot_map(smap, *, neutral=None, path=None, ax=None, operating_point=None,
     from ..plotting._common import new_figure
 
     if ax is None:
-        fig = new_figure((6, 4.5))
+        fig = new_figure((6, 4.5), shown=path is None)
         ax = fig.subplots()
     fig = ax.figure
     re = smap.omega.real.T
@@ -57,7 +57,7 @@ def plot_bifurcation(curves, *, path=None):
     """Re (blue) and Im (orange) of omega_max vs the varied parameter, one panel per Bifurcation."""
     from ..plotting._common import new_figure
 
-    fig = new_figure((4.5 * len(curves), 3.2))
+    fig = new_figure((4.5 * len(curves), 3.2), shown=path is None)
     axes = fig.subplots(1, len(curves), squeeze=False)
     for ax, b in zip(axes[0], curves):
         ax.plot(b.values, b.omega.real, color="tab:blue", label=r"Re $\omega_{max}$ (growth rate)")
@@ -76,7 +76,7 @@ def plot_modes(modes, *, path=None):
     """Real (blue) and imaginary (orange) parts of normalised r(s), one panel per Eigenmode."""
     from ..plotting._common import new_figure
 
-    fig = new_figure((4.5 * len(modes), 3.0))
+    fig = new_figure((4.5 * len(modes), 3.0), shown=path is None)
     axes = fig.subplots(1, len(modes), squeeze=False)
     for ax, m in zip(axes[0], modes):
         ax.plot(m.s, m.r.real, color="tab:blue", label="Re r")

@@ -16,7 +16,7 @@ def plot_steer(res, path=None):
 
     run = res.run
     mm = 1e3
-    fig = new_figure((6, 8))
+    fig = new_figure((6, 8), shown=path is None)
     (ax, ax2) = fig.subplots(2, 1, gridspec_kw={"height_ratios": [3, 1]})
     ax.plot(*(res.path.points * mm).T, color="0.6", lw=1.5, label="path")
     cx, cy = run.x.mean(axis=1), run.y.mean(axis=1)

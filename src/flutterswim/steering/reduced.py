@@ -166,7 +166,7 @@ def plot_radius(model: ReducedModel, omegas, radii, path=None, *, lost=()):
     from ..plotting._common import new_figure
     from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter
 
-    fig = new_figure((5, 3.6))
+    fig = new_figure((5, 3.6), shown=path is None)
     ax = fig.subplots()
     w = np.geomspace(min(omegas) * 0.8, model.omega_max * 1.3, 100)
     ax.loglog(w, model.U / w * 1e3, "-", color="0.4", label=r"$U/\Omega$ (U from the periodic orbit)")

@@ -79,7 +79,7 @@ def plot_trap(tm: TrapMap, path=None):
     from ..plotting._common import new_figure
 
     late = tm.late_turn_outcomes is not None
-    fig = new_figure((13 if late else 9, 3.6))
+    fig = new_figure((13 if late else 9, 3.6), shown=path is None)
     axes = fig.subplots(1, 3 if late else 2)
     a1 = axes[0]
     a1.plot(tm.tilts_deg, np.isin(tm.tilt_outcomes, SWIMS).astype(int), "o-", color="k")

@@ -141,7 +141,7 @@ def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str
             f"plot_sweep(ds.isel({dims[0]}=0)), or read the store with xarray.open_zarr for a map")
     x = x or dims[0]
     xv = np.asarray(ds[x].values, float)
-    fig = new_figure((5.5, 5.2))
+    fig = new_figure((5.5, 5.2), shown=path is None)
     axs = fig.subplots(2, 1, sharex=True)
     styles = {None: ("k", "-", "o"), "up": ("k", "-", "o"), "down": ("tab:blue", "--", "s")}
     proxies = []

@@ -103,7 +103,7 @@ def plot_raw_kymographs(k: RawKymographs, path: str | Path | None = None, *, tr:
     H, W = k.frame.shape
     t0, t1 = float(k.t[0]), float(k.t[-1])
     ext_x, ext_y = (-0.5 / ppm, (W - 0.5) / ppm), (-0.5 / ppm, (H - 0.5) / ppm)
-    fig = new_figure((11, 7.5))
+    fig = new_figure((11, 7.5), shown=path is None)
     gs = fig.add_gridspec(2, 3, width_ratios=[W / max(H, 1) * 1.0, 1.0, 1.0], height_ratios=[1.0, 1.6])
     ax0 = fig.add_subplot(gs[0, 0])
     ax0.imshow(k.frame, cmap="gray", extent=(*ext_x, ext_y[1], ext_y[0]))

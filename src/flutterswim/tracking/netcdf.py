@@ -133,7 +133,9 @@ def load_track(path: str | os.PathLike) -> Track:
             "roi": json.loads(a.get("roi", "null")), "dark_line": bool(a.get("dark_line", 0)), "n_frames": int(a["n_frames"]), "n_failed": int(a["n_failed"]),
             "length_px": float(a["body_length"]) * a["px_per_mm"],
             "length_std_px": float(a["body_length_std"]) * a["px_per_mm"],
-            "length_spread": float(a["body_length_spread"]), "frames": frames}
+            "length_spread": float(a["body_length_spread"]), "frames": frames,
+            # (the frames' own timestamps: said so again when the track is saved anew)
+            "times_given": "timestamp" in str(ds["time"].attrs.get("long_name", ""))}
     temporal = {k[len("temporal_"):]: str(v) for k, v in a.items() if k.startswith("temporal_")}
     if temporal:
         meta["temporal"] = temporal
