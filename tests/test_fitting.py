@@ -98,10 +98,11 @@ def test_reported_sigma_matches_the_spread_of_refits(surrogate):
     assert np.all(np.abs(boot / reported - 1) < 0.35), (boot, reported)
 
 
-def test_identifiability_card_sensitivities_match_finite_differences(coarse):
-    # (the 24-segment model: the point is the card against finite differences, not the
-    # discretisation; the extrapolated one refits on 48/96 segments, 10 times the cost)
-    model = coarse
+@pytest.mark.parametrize("which", ["coarse", pytest.param("model", marks=pytest.mark.slow)])
+def test_identifiability_card_sensitivities_match_finite_differences(request, which):
+    # (the default run: the 24-segment model, the point being the card against finite
+    # differences; the extrapolated one, which refits on 48/96 segments at 10 times the cost: slow)
+    model = request.getfixturevalue(which)
     truth = (1.94e-14, 0.375, 19.1e3)
     y = model(to_identifiable(BASE, *truth))
     res = fit(y, y * REL_SEM, model=model, guess=truth)
