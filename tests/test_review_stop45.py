@@ -229,3 +229,17 @@ def test_a_refused_scheduler_is_not_said_to_have_timed_out():
     with pytest.raises(SchedulerUnreachable) as exc:
         _reachable("tcp://127.0.0.1:1", 5.0)
     assert "connection failed" in str(exc.value) and "within" not in str(exc.value)
+
+
+def test_a_whole_number_of_frames_per_stroke_is_said_to_bunch_the_phases():
+    """A diff review (stop 45): at 5.0 and 6.0 frames per stroke every cycle's frames fall on
+    the same phases, the trailing end reads ~6 % short, and its standard error (1e-5 mm) does
+    not hold it, without a word. describe must say so there, and not at 4.5 frames per stroke,
+    where the phases drift over the cycles and the excursion is right."""
+    ref = fs.describe(fs.simulate(fs.PAPER, 30.0, n_segments=24), n_last=15)
+    for per_stroke, bunched in ((5.0, True), (4.5, False)):
+        run = fs.simulate(fs.PAPER, 30.0, frame_dt=ref.period_s / per_stroke, n_segments=24)
+        d = fs.describe(run, n_last=15)
+        err = abs(d.trailing_lateral_p2p_mm / ref.trailing_lateral_p2p_mm - 1)
+        assert ("fall on few phases" in d.note) == bunched, (per_stroke, d.note)
+        assert (err > 0.02) == bunched, (per_stroke, err)  # the note where the excursion is short
