@@ -243,3 +243,26 @@ def test_a_whole_number_of_frames_per_stroke_is_said_to_bunch_the_phases():
         err = abs(d.trailing_lateral_p2p_mm / ref.trailing_lateral_p2p_mm - 1)
         assert ("fall on few phases" in d.note) == bunched, (per_stroke, d.note)
         assert (err > 0.02) == bunched, (per_stroke, err)  # the note where the excursion is short
+
+
+def test_a_leading_pair_in_the_cluster_at_minus_one_says_its_frequency_is_unresolved():
+    """A second diff review (stop 45): far below the threshold (|chi| < 1) the pairs crowd at
+    Re = -1 and which one leads is decided by 1e-5 in Re; at N = 128 the pair taken had 0.58 of
+    the continuum's frequency, without a word. Its growth rate is right; it must say that its
+    frequency is not resolved. The paper's pair at N = 48 and 192 must not."""
+    import warnings
+
+    from flutterswim.orbits.linear import UnresolvedFrequencyWarning, flutter_growth, leading_pair
+    from flutterswim.orbits.parameter import Axis
+    from flutterswim.stability import leading_eigenvalue
+
+    g = fs.Groups(0.8, 0.8, 0.24)
+    ref = leading_eigenvalue(g.chi, g.eta_perp).omega
+    with pytest.warns(UnresolvedFrequencyWarning):
+        lam = leading_pair(g, 128)
+    assert lam.real == pytest.approx(ref.real, abs=1e-4)  # the growth rate is resolved
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        flutter_growth(Axis(g, "chi"), g.chi, 128)  # (its growth rate alone: no warning)
+        for n in (48, 192):
+            leading_pair(fs.PAPER.groups, n)
