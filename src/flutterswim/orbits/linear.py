@@ -95,8 +95,8 @@ def leading_pair(params, n_segments: int) -> complex:
         import warnings
 
         warnings.warn(f"n_segments={n_segments}: other oscillatory modes decay within {ROUNDOFF_WARN:g} of the "
-                      "leading pair's rate (a cluster, far below the threshold): which of them leads, and so its "
-                      "frequency, is not resolved; its growth rate is", UnresolvedFrequencyWarning, stacklevel=2)
+                      "leading pair's rate (a cluster, far below the threshold): its growth rate is resolved, but not "
+                      "which of them leads, and so not its frequency", UnresolvedFrequencyWarning, stacklevel=2)
     return complex(lam[k])
 
 
