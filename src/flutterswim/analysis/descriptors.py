@@ -76,6 +76,13 @@ def _fourier_p2p(phase: np.ndarray, q: np.ndarray, harmonics: int, keep: np.ndar
 _MIN_FRAMES_PER_STROKE = 4
 
 
+def start_ahead(tr: Track, direction: float) -> float:
+    """How far the end s = 0 lies ahead of the end s = l along ``direction`` [rad], on average
+    over the frames: > 0 when s = 0 leads a swimmer going that way."""
+    e = (math.cos(direction), math.sin(direction))
+    return float(np.mean((tr.x[:, 0] - tr.x[:, -1]) * e[0] + (tr.y[:, 0] - tr.y[:, -1]) * e[1]))
+
+
 def _lateral_series(tr: Track, st: np.ndarray, i_end: int, ang: np.ndarray) -> list:
     """Per cycle: (phase, lateral coordinate of point ``i_end`` across direction ang[k]), or
     None for a cycle with fewer than 4 frames.
@@ -731,9 +738,7 @@ def describe(
     dir_spread = float(np.degrees(np.sqrt(max(0.0, -2 * math.log(max(1e-300, abs(np.mean(np.exp(1j * dirs))))))))) if dirs.size > 1 else 0.0
     fa = float(np.angle(np.mean(np.exp(1j * w.field_angle))))
     rel = math.atan2(math.sin(swim - fa), math.cos(swim - fa))
-    # leading end: the end whose position lies ahead along the swimming direction
-    e = np.array([math.cos(swim), math.sin(swim)])
-    ahead = float(np.mean((w.x[:, 0] - w.x[:, -1]) * e[0] + (w.y[:, 0] - w.y[:, -1]) * e[1]))
+    ahead = start_ahead(w, swim)
     nrec = pc["nonreciprocity"]
     nrec_mean = float(np.mean(nrec))
     # lateral peak-to-peak of both ends, named by the swimming direction

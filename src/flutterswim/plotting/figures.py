@@ -117,9 +117,9 @@ def _end_label(tr, i_end: int, pc: dict) -> str:
     d = math.hypot(dx, dy)
     if at == f"sample {i_end}" or not d > 0.01 * tr.length:
         return f"lateral p-p at {at}"
-    # the end s = l lies ahead along the displacement when (x_l - x_0) . d > 0 on average
-    ahead_l = float(np.mean((tr.x[:, -1] - tr.x[:, 0]) * dx + (tr.y[:, -1] - tr.y[:, 0]) * dy)) > 0
-    leads = ahead_l == (at == "s = l")
+    from ..analysis.descriptors import start_ahead  # (describe's rule for the leading end)
+
+    leads = (start_ahead(tr, math.atan2(dy, dx)) > 0) == (at == "s = 0")
     return f"lateral p-p, {'leading' if leads else 'trailing'} end ({at})"
 
 

@@ -1,4 +1,5 @@
-"""Figures like the paper's Fig. (stability): map, bifurcation plots, eigenmodes (matplotlib Agg figures, no pyplot)."""
+"""Figures like the paper's Fig. (stability): map, bifurcation plots, eigenmodes (matplotlib; saved: Agg
+figures outside pyplot; returned, path None: pyplot's, in the session's backend)."""
 
 from __future__ import annotations
 
