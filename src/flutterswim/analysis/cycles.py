@@ -147,6 +147,9 @@ class Cycles:
     (the paper's run: 6.70 s against 7.38 s), as a cycle can be that close to the orbit while
     its shape still changes from the one before by more than tol.
     growth_note: why the growth rate is not given where the onset is in the record ("" else).
+    merged: (K,) the cycle holds two or more strokes, the section's crossings between them
+    missed (a few frames per stroke, some dropped); the limit-cycle run and describe leave
+    such cycles out like those missing frames.
     """
 
     starts: np.ndarray
@@ -170,6 +173,7 @@ class Cycles:
     tip: int
     tol_used: np.ndarray = field(default_factory=lambda: np.empty((0, 3)))
     growth_note: str = ""
+    merged: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
 
     @property
     def n_cycles(self) -> int:
@@ -275,6 +279,37 @@ def _envelope_onset(t: np.ndarray, d: np.ndarray, var: np.ndarray, W: float, t_f
 
 _Z_999 = 3.29  # two-sided 99.9 % point of the normal distribution
 _MAX_RESOLVABLE = 0.2  # a limit cycle needs comparisons that resolve a change of this (relative)
+
+
+def _merged_strokes(t: np.ndarray, d: np.ndarray, starts: np.ndarray, periods: np.ndarray,
+                    W0: float | None) -> np.ndarray:
+    """(K,) True for a cycle that holds m >= 2 strokes: the section missed the crossings between
+    them (a few frames per stroke, some dropped, leave strokes with no frame beyond the
+    hysteresis band). Such a cycle lasts about m periods of the stroke (``W0``, the spectrum's,
+    which sees the stroke however coarse and uneven the frames: the paper's stroke at 2.1 frames
+    per stroke, half dropped, within 0.1 %; else the cycles' median), and over its own phase its
+    frames swing m times: the m-th harmonic of the detrended lateral signal d above the first.
+    A stroke whose period changed (the field changed) swings once. A cycle of fewer than 6
+    frames cannot tell: in a record of under 6 frames per stroke it counts as merged (there
+    missed crossings are what make long cycles), else it is kept."""
+    K = periods.size
+    out = np.zeros(K, bool)
+    if K < 1:
+        return out
+    ref = float(W0) if W0 is not None and math.isfinite(W0) and W0 > 0 else float(np.median(periods))
+    sparse = (t[-1] - t[0]) / max(t.size - 1, 1) > ref / 6.0
+    f0 = np.searchsorted(t, starts[:-1], side="left")
+    f1 = np.searchsorted(t, starts[1:], side="left")
+    for k in np.nonzero(periods > 1.5 * ref)[0]:
+        m = max(int(round(periods[k] / ref)), 2)
+        if f1[k] - f0[k] < 6:
+            out[k] = sparse
+            continue
+        ph = 2.0 * np.pi * (t[f0[k] : f1[k]] - starts[k]) / periods[k]
+        A = np.column_stack([np.ones_like(ph), np.cos(ph), np.sin(ph), np.cos(m * ph), np.sin(m * ph)])
+        c = np.linalg.lstsq(A, d[f0[k] : f1[k]], rcond=None)[0]
+        out[k] = bool(np.hypot(c[3], c[4]) > np.hypot(c[1], c[2]))
+    return out
 
 
 def _chi2_quantile(q: float, p: float) -> float:
@@ -452,7 +487,8 @@ def detect_cycles(
             u, ax_angle = lateral_signal(tr, tip=itip, axis_angle=local_axis_angle(tr, W))
         starts, d, W = section_crossings(t, u, period=W, hysteresis=hysteresis, iterations=0)
     else:
-        starts, d, W = section_crossings(t, u, period=period, hysteresis=hysteresis)
+        W0 = float(period) if period is not None else estimate_period(t, u)
+        starts, d, W = section_crossings(t, u, period=W0, hysteresis=hysteresis)
     K = max(starts.size - 1, 0)
     periods = np.diff(starts)
     amps = np.empty(K)
@@ -569,6 +605,7 @@ def detect_cycles(
         change = np.array([dp, da, num / den])
         return change, row, bool(np.all(change < row) and np.all(row[:2] <= _MAX_RESOLVABLE))
 
+    merged = _merged_strokes(t, d, starts, periods, W0)
     d_period, d_amp, d_shape = np.full(K, np.nan), np.full(K, np.nan), np.full(K, np.nan)
     conv = np.zeros(K, bool)
     tol_used = np.full((K, 3), np.nan)
@@ -577,7 +614,7 @@ def detect_cycles(
     # trailing run of converged comparisons between the cycles clear of missing frames (a
     # tracked movie's failed frames), each with the one before it clear of them, across a gap
     # if need be (a change hidden in the gap shows there)
-    clear = np.nonzero(~(_frame_gaps(starts, t, GAP_MARGIN) > MAX_GAP))[0]
+    clear = np.nonzero(~(_frame_gaps(starts, t, GAP_MARGIN) > MAX_GAP) & ~merged)[0]
     run, k_run = 0, K
     for i in range(clear.size - 1, 0, -1):
         j, k = int(clear[i - 1]), int(clear[i])
@@ -719,4 +756,5 @@ def detect_cycles(
         tip=itip,
         tol_used=tol_used,
         growth_note=growth_note,
+        merged=merged,
     )

@@ -664,8 +664,17 @@ def describe(
     # a cycle missing frames is left out and the window goes on past it (the same stroke);
     # skipped strokes end the window (before them, the stroke was another or under the noise)
     skip = gaps > max_gap
-    ends = long_ & ~same & ~skip  # a cycle long because frames are missing skipped no stroke
-    good = ~skip & ~ends
+    # a cycle that holds two or more strokes (the section missed a crossing between them) is
+    # left out like one missing frames: the same stroke goes on past it
+    merged = cyc.merged if cyc.merged.size == K else np.zeros(K, bool)
+    ends = long_ & ~same & ~skip & ~merged  # a cycle long because frames are missing skipped no stroke
+    good = ~skip & ~ends & ~merged
+    if not np.any(good) and np.count_nonzero(merged) * 2 >= K:
+        raise ParameterError(
+            f"{np.count_nonzero(merged)} of the track's {K} stroke cycles hold two or more strokes each: its frames "
+            f"({tr.n_frames} over {tr.t[-1] - tr.t[0]:.4g} s) are too few or too uneven "
+            "for the section to see every stroke; descriptors need at least 4 frames in each stroke (a higher "
+            "frame rate, or fewer frames dropped)")
     if not np.any(good):
         raise ParameterError(
             f"every one of the track's {K} stroke cycles misses frames, in it or within {GAP_MARGIN:g} period of it, "
@@ -826,7 +835,8 @@ def describe(
                        f"cycle{'s' if k_first != 1 else ''} before {'are' if k_first != 1 else 'is'} the onset, "
                        "not the stroke")
         elif idx.size < min(K, n_last):
-            why.append(f"{K - idx.size} of its {K} cycles are left out for missing frames (max_gap, --max-gap) or "
+            why.append(f"{K - idx.size} of its {K} cycles are left out for missing frames (max_gap, --max-gap), "
+                       "for holding two strokes (a crossing missed between them: few frames per stroke) or "
                        "cut off at skipped strokes")
         note = (note + "; " if note else "") + (
             f"described over {idx.size} cycle{'s' if idx.size != 1 else ''}, fewer than the {n_last} asked for "
