@@ -56,6 +56,19 @@ def _roundoff_warning(n_segments: int, a: np.ndarray, what: str) -> None:
                   "continuum's flutterswim.stability.leading_eigenvalue", RoundoffWarning, stacklevel=3)
 
 
+def _spectrum_bounds(params, n_segments: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The straight state's eigenvalues, each one's round-off bound (its condition number times
+    eps ||A||_F) and the Jacobian A."""
+    import scipy.linalg as sl
+
+    sysm = ShapeSystem.of(params, n_segments)
+    a = sysm.jac(sysm.straight())
+    lam, vl, vr = sl.eig(a, left=True, right=True)
+    cond = (np.linalg.norm(vl, axis=0) * np.linalg.norm(vr, axis=0)
+            / np.maximum(np.abs(np.einsum("ij,ij->j", vl.conj(), vr)), np.finfo(float).tiny))
+    return lam, cond * np.finfo(float).eps * np.linalg.norm(a), a
+
+
 def leading_pair(params, n_segments: int) -> complex:
     """The complex eigenvalue with Im > 0 of largest real part [1/tau].
 
@@ -67,14 +80,7 @@ def leading_pair(params, n_segments: int) -> complex:
     Hopf point search found 104 for 121. A leading pair whose bound exceeds :data:`ROUNDOFF_WARN`
     of |lambda| or :data:`ROUNDOFF_WARN_IM` of its Im warns (RoundoffWarning), and so does a
     straight state whose only pairs are within round-off of the real axis."""
-    import scipy.linalg as sl
-
-    sysm = ShapeSystem.of(params, n_segments)
-    a = sysm.jac(sysm.straight())
-    lam, vl, vr = sl.eig(a, left=True, right=True)
-    cond = (np.linalg.norm(vl, axis=0) * np.linalg.norm(vr, axis=0)
-            / np.maximum(np.abs(np.einsum("ij,ij->j", vl.conj(), vr)), np.finfo(float).tiny))
-    bound = cond * np.finfo(float).eps * np.linalg.norm(a)
+    lam, bound, a = _spectrum_bounds(params, n_segments)
     # complex: Im beyond round-off relative to the eigenvalue itself (a cut relative to the
     # largest |lambda|, which grows like N^4, dropped the flutter pair 0.60 +- 7.2i at N = 256)
     cplx = lam.imag > 1e-6 * np.abs(lam)
@@ -131,11 +137,18 @@ def hopf_bracket(axis: Axis, n: int, base: float, to: float, *, prefer: float | 
 
 def leading_mode(params, n_segments: int) -> complex:
     """The eigenvalue of largest real part [1/tau] (Im >= 0), leaving out the zero mode of the
-    bent-equilibrium family: the growth rate and angular frequency of the straight state."""
-    lam = discrete_spectrum(params, n_segments)
-    lam = lam[np.abs(lam) > 1e-9 * max(1.0, np.abs(lam).max())]
+    bent-equilibrium family: the growth rate and angular frequency of the straight state.
+
+    The zero mode is what lies within 10 times its round-off bound of 0 (as in
+    :func:`leading_pair`). A cut at 1e-9 of the largest |lambda|, which grows like N^4 / eta_perp,
+    dropped the flutter pair at eta_perp = 8 from N = 256 (-63.3 for -0.642 + 7.855i); and a pair
+    within its round-off of the real axis counts as real."""
+    lam, bound, _ = _spectrum_bounds(params, n_segments)
+    keep = np.abs(lam) > 10.0 * bound
+    lam, bound = lam[keep], bound[keep]
     top = lam[np.argmax(lam.real)]
-    return complex(top.real, abs(top.imag))
+    im = abs(top.imag) if abs(top.imag) > 10.0 * bound[np.argmax(lam.real)] else 0.0
+    return complex(top.real, im)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,32 @@
+"""settle's linear rate (leading_mode) at many segments: the zero mode is left out by its
+round-off bound, not by a cut relative to the largest |lambda| (which grows like N^4 / eta_perp
+and dropped the flutter pair itself)."""
+
+import math
+import warnings
+
+import pytest
+
+from flutterswim.orbits.linear import leading_mode, leading_pair
+from flutterswim.params import Groups
+
+
+def test_the_flutter_pair_is_kept_where_the_spectrum_is_wide():
+    """eta_perp = 8 at N = 256: leading_mode had returned -63.3 (a real bending mode). It must
+    agree with leading_pair and with the converged value at N = 96."""
+    g = Groups(eta_par=41.49, eta_perp=8.0, chi=70.67)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        lp = leading_pair(g, 256)
+    lm = leading_mode(g, 256)
+    assert abs(lm - lp) < 1e-6 * abs(lp)
+    assert abs(lm - leading_mode(g, 96)) < 1e-3 * abs(lp)
+
+
+@pytest.mark.parametrize("n", [24, 96])
+def test_no_field_leaves_the_passive_relaxation(n):
+    """chi = 0: the spontaneous curvature relaxes at 1/tau and the bending modes faster, so the
+    straight state's leading rate is -1 exactly (real). At eta_perp = 0.5, N = 96 the relative
+    cut had dropped it and returned -1000."""
+    lm = leading_mode(Groups(eta_par=41.49, eta_perp=0.5, chi=0.0), n)
+    assert math.isclose(lm.real, -1.0, rel_tol=1e-6) and lm.imag == 0.0
