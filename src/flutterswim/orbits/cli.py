@@ -103,7 +103,7 @@ def _cmd_branch(args) -> int:
     nf = normal_form(hp)
     side = branch_side(nf)
     to = hi if side > 0 else lo
-    why = unreachable(nf, hp.value, to, name)
+    why = unreachable(nf, hp.value, to, name, mirror=not axis.positive)
     if why:  # (continue_orbits would name the Hopf point it finds from the base value)
         raise ParameterError(f"range={args.range!r} holds no stroke branch: {why}")
     extra = {} if args.look_beyond is None else {"look_beyond": args.look_beyond}

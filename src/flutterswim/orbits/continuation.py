@@ -183,14 +183,20 @@ def branch_side(nf) -> int:
     return nf.direction if nf.supercritical else -nf.direction
 
 
-def unreachable(nf, hopf_value: float, to: float, parameter: str) -> str:
+def unreachable(nf, hopf_value: float, to: float, parameter: str, mirror: bool = False) -> str:
     """Why the branch from the Hopf point cannot end at ``to`` ("" if it may). A supercritical
     branch exists on one side only; a subcritical one on both (from its fold, unknown before
-    the branch is followed, to beyond the Hopf point: bistable between them)."""
+    the branch is followed, to beyond the Hopf point: bistable between them). ``mirror``: the
+    parameter changes sign with the field, so a ``to`` of the other sign may lie on the mirror
+    branch (the field reversed), which is said."""
     side = branch_side(nf)
     if nf.supercritical and (to - hopf_value) * side <= 0:
-        return (f"the stroke branch exists for {parameter} {'above' if side > 0 else 'below'} the Hopf point "
-                f"{hopf_value:.6g} (supercritical)")
+        why = (f"the stroke branch exists for {parameter} {'above' if side > 0 else 'below'} the Hopf point "
+               f"{hopf_value:.6g} (supercritical)")
+        if mirror and to * hopf_value < 0:
+            why += (f"; {parameter}={to:g} lies on the mirror branch from {-hopf_value:.6g} (the field reversed): "
+                    "follow it from a base value of that sign")
+        return why
     return ""
 
 
@@ -259,7 +265,7 @@ def continue_orbits(params, parameter: str, to: float, *, n_points: int = 100,
                       bracket=None if span == 0 else hopf_bracket(axis, n_segments, base, to))
     nf = normal_form(hopf)
     side = branch_side(nf)
-    why = unreachable(nf, hopf.value, to, parameter)
+    why = unreachable(nf, hopf.value, to, parameter, mirror=not axis.positive)
     if why:
         raise ParameterError(f"to={to:g}: {why}")
     first_leg = not nf.supercritical  # (a subcritical branch first runs to its fold, then turns back)

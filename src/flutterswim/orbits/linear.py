@@ -193,6 +193,14 @@ def hopf_point(params, parameter: str = "kappa_E_ratio", *, n_segments: int = 48
             raise ParameterError(f"{'start' if start is not None else parameter}=0: the search scans geometrically "
                                  "from it (0.8x, 1.25x, ...); give a non-zero value, or a bracket")
         bracket = _bracket(growth, v0, parameter)
+    else:
+        try:
+            lo, hi = (float(v) for v in bracket)
+        except (TypeError, ValueError):
+            raise ParameterError(f"bracket={bracket!r} must be two numbers (values of {parameter})") from None
+        if not (math.isfinite(lo) and math.isfinite(hi)) or lo == hi:
+            raise ParameterError(f"bracket={bracket!r} must be two different finite values of {parameter}")
+        bracket = (lo, hi)
     lo, hi = bracket
     glo, ghi = growth(lo), growth(hi)
     if glo * ghi > 0:
