@@ -308,6 +308,27 @@ def _ffmpeg_said(exc: BaseException) -> str:
     return said if len(said) <= 200 else said[:197] + "..."
 
 
+def _avi_frames(p: Path) -> int | None:
+    """The frame count an AVI's header records (OpenDML's dmlh, else the main header's avih),
+    None for another container or a header that says nothing."""
+    import struct
+
+    try:
+        with open(p, "rb") as fh:
+            head = fh.read(1 << 16)
+    except OSError:
+        return None
+    if head[:4] != b"RIFF" or head[8:12] != b"AVI ":
+        return None
+    for tag, at in ((b"dmlh", 8), (b"avih", 24)):
+        i = head.find(tag)
+        if i >= 0 and i + at + 4 <= len(head):
+            n = struct.unpack_from("<I", head, i + at)[0]
+            if n > 0:
+                return int(n)
+    return None
+
+
 def _movie(p: Path) -> Frames:
     import imageio_ffmpeg
 
@@ -326,6 +347,13 @@ def _movie(p: Path) -> Frames:
         raise
     except Exception as exc:  # an empty, truncated or foreign file: ffmpeg's log is in the message
         raise ParameterError(f"input={str(p)!r} cannot be read as a movie ({_ffmpeg_said(exc)})") from None
+    listed = _avi_frames(p)
+    if listed is not None and n < listed:
+        # (ffmpeg estimates a cut file's length from its size: only the header knows)
+        import warnings
+
+        warnings.warn(f"input={str(p)!r}: its header lists {listed} frames, {n} can be read: the file is "
+                      f"truncated; the first {n} are tracked", stacklevel=3)
 
     def it() -> Iterator[np.ndarray]:
         g = imageio_ffmpeg.read_frames(str(p), pix_fmt=fmt, bpp=bpp)
