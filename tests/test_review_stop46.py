@@ -61,3 +61,38 @@ def test_a_truncated_avi_says_so(tmp_path):
     with pytest.warns(UserWarning, match=rf"header lists {n} frames, (\d+) can be read") as rec:
         m = len(open_frames(cut))
     assert 0 < m < n and f"{m} can be read" in str(rec[0].message)
+
+
+def test_field_start_after_the_run_is_refused(tmp_path, capsys):
+    """--field-start 50 with --t-end 5 ran, its field never turning, without a word."""
+    from flutterswim.cli import main
+
+    out = tmp_path / "r.nc"
+    assert main(["simulate", "--t-end", "5", "--field-rotate", "10", "--field-start", "50", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "--field-start=50.0" in err and "--t-end=5.0" in err and not out.exists()
+
+
+def test_describe_of_a_turning_field_says_why_there_is_no_limit_cycle():
+    """A field turning at a changing rate over the cycles described: no limit cycle, and the
+    advice is not to simulate longer (a longer run turns on) but that the field turns."""
+    import numpy as np
+
+    from flutterswim.analysis.descriptors import describe
+    from flutterswim.field import Field, Piecewise
+
+    f = Field(direction=Piecewise(np.array([0, 9, 11, 13, 16.0]), np.radians([0, 0, 20, 25, 60.0]), kind="linear"))
+    d = describe(fs.simulate(fs.PAPER, 16.0, n_segments=16, field=f))
+    assert not d.limit_cycle
+    assert d.note.startswith("no limit cycle: the field turns by") and "simulate longer" not in d.note
+
+
+def test_describe_of_a_field_step_says_why_the_turning_figures_are_nan():
+    import math
+
+    from flutterswim.analysis.descriptors import describe
+    from flutterswim.steering.schedules import _step
+
+    d = describe(fs.simulate(fs.PAPER, 14.0, n_segments=16, field=_step(math.radians(10), 11.0, 0.0)))
+    assert math.isnan(d.turning_radius_mm)
+    assert "the field turns by 10 deg in the record, but not steadily" in d.note

@@ -267,8 +267,9 @@ def fast_steer(monkeypatch):
         calls.kw = kw
         path = factory(np.zeros(2), 0.0)
         return st.SteerResult(run, path, {"cross_track_rms_bl": 0.05, "cross_track_max_bl": 0.1,
-                                          "corner_overshoot_bl": 0.0, "trapped": False,
-                                          "waypoint_arrival_s": [math.nan]}, True, 0.0)
+                                          "corner_overshoot_bl": 0.0, "trapped": False, "completed": True,
+                                          "path_covered_fraction": 1.0, "waypoint_arrival_s": [math.nan]},
+                               True, 0.0)
 
     def orbit(*a, **kw):  # the CLI checks the path's duration at the orbit's speed before identify
         calls.append("orbit")
@@ -699,3 +700,29 @@ def test_min_radius_finds_a_hairpin_beside_a_long_chord():
     s = np.r_[0.0, np.cumsum(np.hypot(*np.diff(pts, axis=0).T))]
     p = RefPath(pts, s, np.array([], int), False, "hairpin")
     assert min_radius(p, 1.37 * L) == pytest.approx(0.5 * L, rel=0.01)
+
+
+def test_a_path_starting_behind_the_swimmer_is_followed_to_its_end(reduced):
+    """The run's length had been the time the path's length takes: a path leading straight back
+    (the swimmer must first turn about) ended a quarter of the way along, scored and reported as a
+    success. Now the run goes on until the end is reached (up to three times as long), and the
+    end is reached; a path the swimmer cannot finish in that time says so (completed False, a
+    warning)."""
+    make = lambda p, h: _polyline(np.array([p, p - np.array([4 * L, 0.0])]), False, "back", 1e-5)  # noqa: E731
+    m = steer(P, make, reduced, seed=0).metrics
+    assert m["completed"] and math.isfinite(m["end_arrival_s"]) and not m["trapped"]
+    assert m["path_covered_fraction"] > 0.95
+
+
+def test_joined_runs_say_their_field_changed():
+    """A steered run is many short runs joined: its settings had kept the first one's field,
+    "direction=constant(0)", though the field turned."""
+    from flutterswim.result import concatenate
+
+    a = fs.simulate(P, 0.05, n_segments=8)
+    b = fs.simulate(P, 0.1, t_start=0.05, initial=a.final_state(), field=fs.Field(direction=fs.field.Constant(0.5)),
+                    n_segments=8)
+    assert concatenate([a, a]).settings["field"] == a.settings["field"]
+    said = concatenate([a, b]).settings["field"]
+    assert said.startswith("changes between the 2 joined runs") and a.settings["field"] in said
+    assert b.settings["field"] in said

@@ -123,6 +123,9 @@ def _simulate(args: argparse.Namespace) -> int:
     field = field_from_args(args)
     if field is not None and args.t_end is None:
         raise ParameterError("a field schedule (--field-*) needs --t-end: the settle engine runs in a steady field")
+    if getattr(args, "field_start", None) is not None and args.t_end is not None and args.field_start >= args.t_end:
+        raise ParameterError(f"--field-start={args.field_start!r} is not before --t-end={args.t_end!r}: the field would "
+                             "never change; start it earlier, or run longer")
     if args.t_end is not None:
         import warnings
 

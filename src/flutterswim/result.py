@@ -268,6 +268,12 @@ def concatenate(parts: "list[SimulationResult]") -> SimulationResult:
         first.stats.method, first.stats.order, *(sum(getattr(s, k) for s in st)
         for k in ("n_steps", "n_rejected", "n_rhs", "n_jac", "n_lu")), sum(s.wall_time for s in st),
     )
+    settings = {**first.settings, "t_end": last.settings.get("t_end"), "parts": len(parts)}
+    fields = [p.settings.get("field") for p in parts]
+    if any(f != fields[0] for f in fields):
+        # (a steered run's settings had said "direction=constant(0)", its first part's, while its
+        # field turned by 400 degrees)
+        settings["field"] = (f"changes between the {len(parts)} joined runs (field_angle and field_strength hold it "
+                             f"frame by frame); the first: {fields[0]}; the last: {fields[-1]}")
     return replace(first, **arrays, stats=stats, status=last.status, message=last.message,
-                   state_final=last.state_final, t_final=last.t_final,
-                   settings={**first.settings, "t_end": last.settings.get("t_end"), "parts": len(parts)})
+                   state_final=last.state_final, t_final=last.t_final, settings=settings)

@@ -778,10 +778,16 @@ def describe(
         se_end = dict.fromkeys(se_end, math.nan)
     lead, trail = ("end", "start") if still else ("start", "end") if ahead > 0 else ("end", "start")
     settled = bool(cyc.limit_cycle)
+    # a turning field has no one direction to swim along: the turning figures describe it
+    turned = float(np.ptp(np.unwrap(np.asarray(w.field_angle, float))))
+    field_turns = turned > math.radians(5.0)
     note = "" if settled else (
         "no limit cycle: the stroke is still changing from cycle to cycle (onset or transient), so the "
         "averages describe unsettled cycles and the limit-cycle time, transient duration and onset time "
-        "are unknown; " + ("record longer" if movie else "simulate longer (run_to_limit_cycle)"))
+        "are unknown; " + ("record longer" if movie else "simulate longer (run_to_limit_cycle)")) if not field_turns else (
+        f"no limit cycle: the field turns by {math.degrees(turned):.3g} deg over the cycles described and the "
+        "stroke changes with it, so the averages describe a turning swimmer's cycles and the limit-cycle "
+        "time, transient duration and onset time are unknown")
     last = cyc.tol_used[-min(cyc.n_cycles - 1, 3):, :2] if cyc.n_cycles > 1 else np.empty((0, 2))
     if not settled and last.size and np.nanmax(last) > _MAX_RESOLVABLE:
         note = (f"no limit cycle found: the noise hides changes from cycle to cycle of up to "
@@ -831,8 +837,11 @@ def describe(
             why.append(f"the track holds {K} complete cycle{'s' if K != 1 else ''} between section crossings (a "
                        "record of n strokes from an arbitrary phase holds n - 1)")
         if k0 == k_first > 0 and idx.size < min(K, n_last):
+            before = np.asarray(tr.field_angle, float)[tr.t < cyc.limit_cycle_time] if np.ndim(tr.field_angle) else []
+            what = ("the onset or the field's turn" if np.size(before) > 1 and np.ptp(np.unwrap(before)) > math.radians(5.0)
+                    else "the onset")
             why.append(f"the stroke settles at t = {cyc.limit_cycle_time:.4g} s (limit_cycle_time_s): the {k_first} "
-                       f"cycle{'s' if k_first != 1 else ''} before {'are' if k_first != 1 else 'is'} the onset, "
+                       f"cycle{'s' if k_first != 1 else ''} before {'are' if k_first != 1 else 'is'} {what}, "
                        "not the stroke")
         elif idx.size < min(K, n_last):
             why.append(f"{K - idx.size} of its {K} cycles are left out for missing frames (max_gap, --max-gap), "
@@ -868,8 +877,6 @@ def describe(
             f"the centreline crosses itself in {100 * float(np.mean(inter)):.2g} % of the frames described: "
             + ("the tracked shape joins two parts of the body there" if movie else
                "the model has no contact between parts of the body, so those shapes are not physical"))
-    # a turning field has no one direction to swim along: the turning figures describe it
-    field_turns = float(np.ptp(np.unwrap(np.asarray(w.field_angle, float)))) > math.radians(5.0)
     if not still and not field_turns and abs(math.cos(rel)) < _ALONG_FIELD_COS:  # (along its line, either way)
         note = (note + "; " if note else "") + (
             f"swims at {math.degrees(rel):.3g} deg to the field direction taken ({math.degrees(fa):.3g} deg in the "
@@ -883,6 +890,12 @@ def describe(
     from ..steering.turning import turning_summary
 
     turn = turning_summary(tr.t, tr.x.mean(axis=1), tr.y.mean(axis=1), tr.field_angle, float(np.mean(per)))
+    whole_turn = float(np.ptp(np.unwrap(np.asarray(tr.field_angle, float))))
+    if whole_turn > math.radians(5.0) and not math.isfinite(turn["turning_radius"]):
+        note = (note + "; " if note else "") + (
+            f"the field turns by {math.degrees(whole_turn):.3g} deg in the record, but not steadily over more than "
+            "5 periods (a step, or a short turn): the turning figures (radius, heading lag, turn rates) need such "
+            "a turn, and are NaN")
     if turn["turning_speed"] < STEPPED_OUT * turn["speed_before_turning"]:
         note = (note + "; " if note else "") + (
             f"stepped out: while the field turns ({math.degrees(turn['field_turn_rate']):.3g} deg/s) the swimmer "

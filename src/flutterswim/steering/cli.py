@@ -151,8 +151,12 @@ def _cmd_steer(args) -> int:
     orbit = periodic_orbit(params, n_segments=args.segments)
     check_duration(probe, orbit.speed, orbit.period, what=f"--path {args.path}")
     reduced = identify(params, n_segments=args.segments, orbit=orbit)
-    res = steer(params, factory, reduced, closed_loop=not args.open_loop, noise_px=args.noise_px,
-                um_per_px=args.um_per_px, n_segments=args.segments, seed=args.seed, progress=not args.quiet)
+    import warnings
+
+    with warnings.catch_warnings():  # (said below, as the run's failure)
+        warnings.filterwarnings("ignore", message=r".*(were not swum|end was not reached) in")
+        res = steer(params, factory, reduced, closed_loop=not args.open_loop, noise_px=args.noise_px,
+                    um_per_px=args.um_per_px, n_segments=args.segments, seed=args.seed, progress=not args.quiet)
     from .._cf import cf_dataset
     from .._paths import write_netcdf
     from .steer import steer_dataset
@@ -164,7 +168,9 @@ def _cmd_steer(args) -> int:
     atomic_write_text(met, dumps(m, indent=2))
     print(f"{out}: {res.path.name}, {'closed' if res.closed_loop else 'open'} loop: cross-track RMS "
           f"{m['cross_track_rms_bl']:.3f} body lengths (max {m['cross_track_max_bl']:.3f}), corner overshoot "
-          f"{m['corner_overshoot_bl']:.3f}, trapped: {m['trapped']}; metrics in {met}"
+          f"{m['corner_overshoot_bl']:.3f}, trapped: {m['trapped']}, "
+          f"{'completed' if m['completed'] else 'not completed'} ({100 * m['path_covered_fraction']:.0f} % of "
+          f"the path covered); metrics in {met}"
           + ("" if m.get("path_feasible", True) else
              f" (the path bends down to a radius of {m['path_min_radius_bl']:.2f} body lengths, tighter than the "
              f"controller turns, {m['controller_min_radius_bl']:.2f}: not followed there)"))
@@ -180,6 +186,12 @@ def _cmd_steer(args) -> int:
         print(f"animation: {args.animate} ({STEER_VIDEO_SPEED:g} x real speed)")
     if m["trapped"]:
         print(trapped_reason(m), file=sys.stderr)
+        return 1
+    if not m["completed"]:
+        print(f"failed: the swimmer did not {'swim the laps of' if res.path.closed else 'reach the end of'} the path "
+              f"({100 * m['path_covered_fraction']:.0f} % covered) in three times the time its length takes; a path "
+              "starting behind the swimmer or across its heading, bends tighter than it turns (path_feasible) "
+              "or too much tracking noise can do this", file=sys.stderr)
         return 1
     return 0
 

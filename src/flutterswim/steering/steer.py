@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -73,6 +73,8 @@ def _centroid(run) -> tuple[np.ndarray, np.ndarray]:
 # ~1 mm/s, ~1000 body lengths; 50 fps frames of N = 24: ~150 MB); a waypoint 1e9 m away ran out
 # of memory
 _MAX_DURATION_S = 3600.0
+# a run goes on past the time its path's length takes, up to this many times that, until done
+_CAP_FACTOR = 3.0
 
 
 def check_duration(path: RefPath, U: float, period: float, laps: float = 1.0, what: str = "path") -> float:
@@ -144,7 +146,11 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     m = first.t > onset - reduced.period
     start = np.array([cx[m].mean(), cy[m].mean()]) + reduced.U * reduced.period / 2 * np.array([1.0, 0.0])
     path: RefPath = path_factory(start, 0.0)
-    duration = 1.1 * laps * path.length / reduced.U + 3 * reduced.period  # corners slow it down
+    # the time the path takes (corners slow it down); the run goes on past it, up to three times
+    # as long, until an open path's end is reached or the laps are swum (a path starting behind
+    # the swimmer, or across its heading, needs a turn first: it ended a quarter of the way)
+    duration = 1.1 * laps * path.length / reduced.U + 3 * reduced.period
+    cap = min(_CAP_FACTOR * duration, max(duration, _MAX_DURATION_S))
     # the controller tracks the path with its corners rounded to the tightest turn it commands
     tracked = fillet(path, r_turn)
     ctrl = Controller(tracked, reduced.period, reduced.U, reduced.omega_max, lookahead_bl * params.l,
@@ -156,6 +162,10 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     t = onset
     pending = deque_of(delay_frames, 0.0)
     n = int(round(duration / dt))
+    n_cap = int(round(cap / dt))
+    check = max(int(round(2 * reduced.period / dt)), int(round(0.1 * duration / dt)), 1)
+    true_t, true_x, true_y = list(first.t), list(cx), list(cy)
+    done, covered = False, 0.0
     plan = _open_loop_plan(path, reduced, onset, rate_fraction, fps) if not closed_loop else None
     bar = None
     if progress:
@@ -163,7 +173,8 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
 
         bar = tqdm(total=n, desc="steer", unit="frame", leave=False)
     trapped_at = math.nan
-    for k in range(n):
+    k = 0
+    while k < n_cap:
         cmd = pending.popleft()
         # (Constant: the commanded angle is unwrapped, more than a turn is no unit mix-up)
         with warnings.catch_warnings():  # (a failure is raised below)
@@ -174,7 +185,10 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
             raise RuntimeError(f"the simulation failed at t={t:.4g} s: {part.message}")
         parts.append(part)
         state, t = part.final_state(), t + dt
-        xy = np.array([part.x[-1].mean(), part.y[-1].mean()]) + sigma * rng.standard_normal(2)
+        true_t.append(t)
+        true_x.append(float(part.x[-1].mean()))
+        true_y.append(float(part.y[-1].mean()))
+        xy = np.array([true_x[-1], true_y[-1]]) + sigma * rng.standard_normal(2)
         ctrl.observe(t, xy)
         pending.append(ctrl.update(t) if closed_loop else plan(t))
         if bar is not None:
@@ -182,9 +196,29 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
         if k % int(10 * fps) == 0 and k > 0 and _stalled(parts, reduced):
             trapped_at = t
             break
+        k += 1
+        if k >= n and (k - n) % check == 0:
+            done, covered = _completed(true_t, true_x, true_y, path, reduced.period, onset, params.l, laps)
+            if done:
+                break
+            if bar is not None and k == n:
+                bar.total = n_cap
+                bar.refresh()
     if bar is not None:
         bar.close()
+    if not done and not math.isfinite(trapped_at):
+        done, covered = _completed(true_t, true_x, true_y, path, reduced.period, onset, params.l, laps)
+        if not done:
+            what = f"{laps:g} lap(s) of the path were not swum" if path.closed else "the path's end was not reached"
+            warnings.warn(f"{what} in {t - onset:.3g} s of control, {_CAP_FACTOR:g} times the {duration:.3g} s its "
+                          f"length takes ({100 * covered:.0f} % covered): the swimmer cannot follow it (a path starting "
+                          "behind it or across its heading, bends tighter than it turns, or too much tracking noise)",
+                          stacklevel=2)
     run = concatenate(parts)
+    run = replace(run, settings={**run.settings, "field": (
+        f"{'closed' if closed_loop else 'open'}-loop steering from t = {onset:.6g} s: the direction set every frame "
+        f"({fps:g} fps) by the {'controller' if closed_loop else 'planned schedule'}, held in field_angle "
+        f"(before: {parts[0].settings.get('field')})")})
     met = metrics(run, path, reduced, onset, params.l)
     met["path_min_radius_bl"] = r_path / params.l
     met["period_s"] = reduced.period  # (the stroke the figure averages over; it assumed 0.38 s)
@@ -193,6 +227,7 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     met["corner_cut_max_bl"] = cut / params.l
     met["trapped"] = bool(math.isfinite(trapped_at)) or met["trapped"]
     met["trapped_at_s"] = trapped_at  # when the run was stopped for it (NaN: not stopped)
+    met["completed"] = bool(done)  # the open path's end reached, or the laps swum
     met.update(closed_loop=closed_loop, noise_px=noise_px, um_per_px=um_per_px, fps=fps, delay_frames=delay_frames,
                path=path.name, lookahead_bl=lookahead_bl, correction_bl=correction_bl)
     return SteerResult(run, path, met, closed_loop, onset)
@@ -283,6 +318,32 @@ def _distance_to_path(path: RefPath, q: np.ndarray) -> tuple[np.ndarray, np.ndar
     return sign * best, i
 
 
+def _averaged_progress(t: np.ndarray, cx: np.ndarray, cy: np.ndarray, path: RefPath, period: float, t0: float,
+                       bl: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The centroid averaged over a period from ``t0`` on: its times, positions (Q, 2) and
+    progress along the path (laps counted, :func:`_progress`)."""
+    from .turning import _moving_average
+
+    ts, ax = _moving_average(t, cx, period)
+    _, ay = _moving_average(t, cy, period)
+    m = ts >= t0
+    q = np.stack([ax[m], ay[m]], axis=1)
+    return ts[m], q, _progress(path, q, back=0.5 * bl, ahead=2.0 * bl, slack=0.5 * bl)
+
+
+def _completed(t: list, cx: list, cy: list, path: RefPath, period: float, t0: float, bl: float,
+               laps: float) -> tuple[bool, float]:
+    """Whether the swimmer has reached an open path's end or swum ``laps`` of a closed one, and
+    the fraction of the path (of the laps) covered."""
+    ts, _, prog = _averaged_progress(np.asarray(t), np.asarray(cx), np.asarray(cy), path, period, t0, bl)
+    if prog.size == 0:
+        return False, 0.0
+    if path.closed:
+        covered = float(prog.max() - prog[0]) / (laps * path.length)
+        return covered >= 1.0, covered
+    return bool(prog.max() >= path.s[-1]), float(prog.max() - prog[0]) / path.length
+
+
 def _progress(path: RefPath, q: np.ndarray, back: float, ahead: float, slack: float) -> np.ndarray:
     """The arc length along ``path`` reached by the points ``q`` (Q, 2) in order, unwrapped on a
     closed path (laps counted on, from the path's start: a swimmer just behind the start is
@@ -358,19 +419,11 @@ def metrics(run, path: RefPath, reduced: ReducedModel, t0: float, body_length: f
     the path (arrivals, the corners' zones, the fraction covered) is the arc length of the
     nearest point, counted on continuously from where control starts (laps counted; see
     ``_progress``): a corner is reached when the swimmer passes its bisector."""
-    from .turning import _moving_average
-
-    cx, cy = _centroid(run)
-    ts, ax = _moving_average(run.t, cx, reduced.period)
-    _, ay = _moving_average(run.t, cy, reduced.period)
-    m = ts >= t0
-    ts, ax, ay = ts[m], ax[m], ay[m]
-    q = np.stack([ax, ay], axis=1)
     bl = body_length
+    ts, q, prog = _averaged_progress(run.t, *_centroid(run), path, reduced.period, t0, bl)
+    ax, ay = q[:, 0], q[:, 1]
     # the whole run's speed: trapped is whether the run ended stalled
     speed_all = np.hypot(np.gradient(ax, ts), np.gradient(ay, ts)) if ts.size > 1 else np.zeros(ts.size)
-    # progress along the path, on from where control starts (laps counted)
-    prog = _progress(path, q, back=0.5 * bl, ahead=2.0 * bl, slack=0.5 * bl)
     end_arrival = math.nan
     if not path.closed:
         # an open path is scored up to where the swimmer reaches its end (then swims on past it)
