@@ -209,17 +209,49 @@ def test_cli_notes_sems_from_few_trials(tmp_path, coarse, capsys):
     assert f"factor {1 / math.sqrt(chi2.ppf(0.05, 1)):.2g}" in err
 
 
-def test_profile_interval_is_exact_on_a_parabola_and_open_on_a_flat_side():
-    from flutterswim.fitting.profile import profile_interval
+class _Linear:
+    """Descriptors linear in the identifiable x: chi^2 is quadratic, its profile exact."""
 
-    dv = np.linspace(-0.3, 0.3, 61)
-    lo, hi = profile_interval(dv, 3.0 + (dv / 0.1) ** 2)  # chi2 rises by 1 at +-0.1
-    assert lo == pytest.approx(0.1, abs=2e-3) and hi == pytest.approx(0.1, abs=2e-3)
-    flat = np.where(dv < 0, (dv / 0.1) ** 2, 0.5 * (1 - np.exp(-dv / 0.02)))  # levels off at 0.5 above
-    lo, hi = profile_interval(dv, flat)
-    assert lo == pytest.approx(0.1, abs=2e-3) and hi == math.inf
-    rising = np.where(dv < 0, (dv / 0.1) ** 2, 0.5 * dv / 0.3)  # still rising at the scan's end
-    assert profile_interval(dv, rising)[1] == pytest.approx(0.3)  # a lower bound: the scan
+    def __init__(self, A):
+        self.A = np.asarray(A, float)
+
+    def __call__(self, x):
+        return np.array([1.0, 2.0, 3.0]) + self.A @ np.asarray(x, float)
+
+
+@pytest.mark.parametrize("sigma_given", [0.05, 30.0])
+def test_profile_bounds_are_the_exact_intervals_of_a_quadratic_chi2(sigma_given):
+    """For descriptors linear in the parameters, chi^2 + 1 is crossed at +-sqrt(C_ii) (C the
+    inverse Hessian in log B, log tau, log kappa_E), whatever the grid: with the Jacobian's sigma
+    meaningless (30, as at a fold) the grid's step was a factor 1.28 and linear interpolation
+    across it put the bounds at s^2 / h (a review: 3 of 18 intervals held the truth)."""
+    from flutterswim.fitting.model import LOG_MAP
+    from flutterswim.fitting.profile import profile_likelihood
+
+    model = _Linear([[0.0, 1.0, -0.3], [0.5, 0.5, 1.0], [0.3, 0.3, 0.8]])
+    sem = np.array([0.02, 0.05, 0.03])
+    J = (model.A / sem[:, None]) @ np.linalg.inv(LOG_MAP)
+    want = np.sqrt(np.diag(np.linalg.inv(J.T @ J)))
+    out = profile_likelihood(model, fs.PAPER, np.zeros(3), model(np.zeros(3)), sem, np.full(3, sigma_given))
+    for k, name in enumerate(("B", "tau", "kappa_E")):
+        assert out[name]["lower"] == pytest.approx(want[k], rel=0.01), name
+        assert out[name]["upper"] == pytest.approx(want[k], rel=0.01), name
+
+
+def test_a_flat_profile_is_unbounded():
+    """Only B tau (and kappa_E) informed: B's profile is flat, its interval unbounded (inf),
+    not the scan's edge (a review: interval_rel [1.0, 1.0] for a profile rising by 0.003)."""
+    from flutterswim.fitting.model import LOG_MAP
+    from flutterswim.fitting.profile import profile_likelihood
+
+    # descriptors depending on log B + log tau and log kappa_E only, written in x
+    # (B itself enters by a thousandth, so the profile rises, by 0.003 over the grid: too little)
+    A = np.array([[1.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.001, 1.0, 2.0]]) @ LOG_MAP
+    model = _Linear(A)
+    sem = np.array([0.02, 0.05, 0.03])
+    out = profile_likelihood(model, fs.PAPER, np.zeros(3), model(np.zeros(3)), sem, np.full(3, 0.05))
+    assert out["B"]["lower"] == math.inf and out["B"]["upper"] == math.inf
+    assert math.isfinite(out["kappa_E"]["lower"]) and math.isfinite(out["kappa_E"]["upper"])
 
 
 def test_calibration_spread_matches_the_reported_sigma():

@@ -96,3 +96,53 @@ def test_describe_of_a_field_step_says_why_the_turning_figures_are_nan():
     d = describe(fs.simulate(fs.PAPER, 14.0, n_segments=16, field=_step(math.radians(10), 11.0, 0.0)))
     assert math.isnan(d.turning_radius_mm)
     assert "the field turns by 10 deg in the record, but not steadily" in d.note
+
+
+def test_paper_cost_takes_a_descriptor_without_spread(tmp_path, monkeypatch, capsys):
+    """Three trials with the same period (frame quantisation): the error suggests --paper-cost,
+    which then failed on the zero SEM with an API message. It must fit, and say the standard
+    errors are missing."""
+    import importlib
+    import json
+
+    from flutterswim.cli import main
+    from flutterswim.fitting import to_identifiable
+    from flutterswim.fitting.surrogate import ScalingSurrogate
+
+    sur = ScalingSurrogate(fs.PAPER)
+    y = sur(to_identifiable(fs.PAPER, 1.9e-14, 0.38, 19e3))
+    fit_module = importlib.import_module("flutterswim.fitting.fit")
+    real = fit_module.fit
+    monkeypatch.setattr(fit_module, "fit", lambda *a, **kw: real(*a, **{**kw, "model": sur}))
+    rows = [f"70,s{i},{y[0]:.9g},{y[1] * (1 + d):.9g},{y[2] * (1 + d):.9g}" for i, d in enumerate((-0.01, 0.0, 0.01))]
+    csv = tmp_path / "t.csv"
+    csv.write_text("voltage_V,sample,period_s,advance_mm,lateral_mm\n" + "\n".join(rows) + "\n")
+    out = tmp_path / "f.json"
+    assert main(["fit", str(csv), "--preset", "paper", "--out", str(out)]) == 2  # the SEM cost: refused
+    assert "--paper-cost" in capsys.readouterr().err
+    assert main(["fit", str(csv), "--preset", "paper", "--paper-cost", "--out", str(out)]) == 0
+    assert "fitted without standard errors" in capsys.readouterr().err
+    assert json.loads(out.read_text())["values"]["B_N_m2"] > 0
+
+
+def test_voltages_equal_within_tolerance_are_one_group(tmp_path):
+    from flutterswim.fitting.data import read_trials, summarise
+
+    csv = tmp_path / "t.csv"
+    csv.write_text("voltage_V,sample,period_s,advance_mm,lateral_mm\n85,a,0.40,0.30,1.0\n85.0000001,b,0.42,0.32,1.1\n"
+                   "85,c,0.41,0.31,1.2\n90,d,0.38,0.35,1.3\n")
+    s = summarise(read_trials(csv))
+    assert s.voltage_V.tolist() == [85.0, 90.0] and s.n.tolist() == [3, 1]
+    mean, _ = s.at(85)
+    assert mean[0] == pytest.approx(0.41)
+
+
+def test_fit_given_a_netcdf_file_points_to_the_trials_csv(tmp_path, capsys):
+    from flutterswim.cli import main
+
+    run = fs.simulate(fs.PAPER, 0.05, n_segments=8)
+    nc = tmp_path / "run.nc"
+    run.save(nc)
+    assert main(["fit", str(nc), "--out", str(tmp_path / "f.json")]) == 2
+    err = capsys.readouterr().err
+    assert "is a NetCDF file" in err and "track-batch" in err

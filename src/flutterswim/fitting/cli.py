@@ -93,8 +93,16 @@ def _cmd_fit(args) -> int:
                              "the SEM needs at least two (or use --paper-cost)")
     from .model import OutsideModel
 
+    usable = bool(np.all(np.isfinite(sem) & (sem > 0)))
+    if args.paper_cost and not usable:
+        import sys
+
+        # (a descriptor without spread, e.g. periods quantised by the frame rate: the paper's cost
+        # takes no SEM, and was handed a zero one, refused as an API argument)
+        print(f"flutterswim fit: note: voltage {v:g} V has no standard error for every descriptor (a single trial, or "
+              "trials that agree exactly): the paper's cost is fitted without standard errors", file=sys.stderr)
     try:
-        res = fit(mean, sem if np.all(np.isfinite(sem)) else None, base=base,
+        res = fit(mean, sem if usable else None, base=base,
                   cost="paper" if args.paper_cost else "sem", tip=args.tip, profiles=args.profiles,
                   bootstrap=args.bootstrap, n_segments=args.segments, extrapolate=not args.no_extrapolate,
                   backend=args.backend, workers=args.workers, starts=args.starts)

@@ -64,6 +64,12 @@ def read_trials(path: str | Path) -> Trials:
             rows = list(reader)
             header = [str(h) for h in (reader.fieldnames or [])]
     except (UnicodeDecodeError, csv.Error) as exc:
+        with open(p, "rb") as f:
+            netcdf = f.read(8) in (b"\x89HDF\r\n\x1a\n",) or p.suffix.lower() in (".nc", ".zarr")
+        if netcdf:  # a track or a run: the trials' descriptors are what fit reads
+            raise ParameterError(f"trials={str(p)!r} is a NetCDF file (a track or a run), not a CSV of trials: make one "
+                                 "with 'flutterswim track-batch FOLDER' (one row per trial), or describe the track "
+                                 "('flutterswim describe') and fit its figures with the API's fit()") from None
         raise ParameterError(f"trials={str(p)!r} is not a readable CSV file ({exc})") from None
     if not rows:
         raise ParameterError(f"trials={str(p)!r} has no data rows")
@@ -141,15 +147,21 @@ def check_spread(trials: Trials, summary: "Summary", voltages=None) -> None:
 def summarise(trials: Trials) -> Summary:
     """Mean and standard error of the mean per voltage (SEM = std(ddof=1) / sqrt(n); with
     one trial the SEM is unknown: NaN)."""
-    vs = np.unique(trials.voltage_V)
-    n = np.array([np.count_nonzero(trials.voltage_V == v) for v in vs])
-    mean = np.array([trials.values[trials.voltage_V == v].mean(axis=0) for v in vs])
-    sem = np.array([trials.values[trials.voltage_V == v].std(axis=0, ddof=1) / math.sqrt(k) if k > 1
-                    else np.full(3, np.nan) for v, k in zip(vs, n)])
+    # voltages that agree within Summary.at's tolerance are one voltage (85 and 85.0000001 had
+    # been two, and --voltage 85 fitted the first alone)
+    vs: list[float] = []
+    for v in np.unique(trials.voltage_V):
+        if not (vs and np.isclose(v, vs[-1])):
+            vs.append(float(v))
+    group = [np.isclose(trials.voltage_V, v) for v in vs]
+    n = np.array([np.count_nonzero(g) for g in group])
+    mean = np.array([trials.values[g].mean(axis=0) for g in group])
+    sem = np.array([trials.values[g].std(axis=0, ddof=1) / math.sqrt(k) if k > 1
+                    else np.full(3, np.nan) for g, k in zip(group, n)])
     # identical trials have no spread: exactly 0 (not the round-off of their mean)
-    for i, v in enumerate(vs):
-        sem[i, np.ptp(trials.values[trials.voltage_V == v], axis=0) == 0] = 0.0 if n[i] > 1 else np.nan
-    return Summary(vs, n, mean, sem)
+    for i, g in enumerate(group):
+        sem[i, np.ptp(trials.values[g], axis=0) == 0] = 0.0 if n[i] > 1 else np.nan
+    return Summary(np.array(vs), n, mean, sem)
 
 
 LABELS = ("period [s]", "advance per cycle [mm]", "lateral peak-to-peak [mm]")
