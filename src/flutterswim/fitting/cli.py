@@ -37,6 +37,8 @@ def register(subparsers) -> None:
     p.add_argument("--starts", type=int, default=0,
                    help="also fit from this many starts over the paper's box and report every other parameter set "
                         "that fits as well (each start is a fit of 10-40 s; default 0)")
+    p.add_argument("--seed", type=int, default=0,
+                   help="seed of the bootstrap's draws and of the --starts points (default 0: a rerun repeats them)")
     p.add_argument("--segments", type=int, default=24,
                    help="segments of the model filament (default 24): the descriptors are extrapolated to the "
                         "continuum from N and 2N segments (within 0.05 %% of it at the paper's point)")
@@ -105,7 +107,7 @@ def _cmd_fit(args) -> int:
         res = fit(mean, sem if usable else None, base=base,
                   cost="paper" if args.paper_cost else "sem", tip=args.tip, profiles=args.profiles,
                   bootstrap=args.bootstrap, n_segments=args.segments, extrapolate=not args.no_extrapolate,
-                  backend=args.backend, workers=args.workers, starts=args.starts)
+                  backend=args.backend, workers=args.workers, starts=args.starts, seed=args.seed)
     except OutsideModel as exc:  # a failure of the fit, not bad input: one line, exit 1
         print(f"flutterswim fit: failed: {' '.join(str(exc).split())}", file=sys.stderr)
         return 1

@@ -262,6 +262,7 @@ def fit(measured, sem=None, *, base: Parameters | None = None, guess=PAPER_GUESS
     # (before any orbit is computed; each draw is a refit of seconds)
     bootstrap = positive_int("bootstrap", bootstrap, 0, MAX_BOOTSTRAP, "each draw is a refit: 10^4 take hours")
     starts = positive_int("starts", starts, 0, MAX_STARTS, "each start is a fit of 10-40 s")
+    seed = positive_int("seed", seed, 0)
     if starts and cost != "sem":
         raise ParameterError(f"starts={starts} searches with the SEM-weighted cost; cost={cost!r} (the paper's) "
                              "takes none")
