@@ -146,3 +146,25 @@ def test_fit_given_a_netcdf_file_points_to_the_trials_csv(tmp_path, capsys):
     assert main(["fit", str(nc), "--out", str(tmp_path / "f.json")]) == 2
     err = capsys.readouterr().err
     assert "is a NetCDF file" in err and "track-batch" in err
+
+
+def test_fit_cli_passes_its_seed_and_refuses_a_negative_one(tmp_path, monkeypatch, capsys):
+    import importlib
+
+    from flutterswim.cli import main
+
+    csv = tmp_path / "t.csv"
+    csv.write_text("voltage_V,sample,period_s,advance_mm,lateral_mm\n85,a,0.40,0.30,1.0\n85,b,0.42,0.32,1.1\n"
+                   "85,c,0.41,0.31,1.2\n")
+    out = str(tmp_path / "f.json")
+    assert main(["fit", str(csv), "--seed", "-1", "--out", out]) == 2
+    assert "--seed=-1" in capsys.readouterr().err
+    seen = {}
+
+    def fake(*a, **kw):
+        seen.update(kw)
+        raise fs.ParameterError("stop here")
+
+    monkeypatch.setattr(importlib.import_module("flutterswim.fitting.fit"), "fit", fake)
+    main(["fit", str(csv), "--seed", "7", "--bootstrap", "3", "--out", out])
+    assert seen["seed"] == 7 and seen["bootstrap"] == 3
