@@ -30,3 +30,15 @@ def test_no_field_leaves_the_passive_relaxation(n):
     cut had dropped it and returned -1000."""
     lm = leading_mode(Groups(eta_par=41.49, eta_perp=0.5, chi=0.0), n)
     assert math.isclose(lm.real, -1.0, rel_tol=1e-6) and lm.imag == 0.0
+
+
+def test_the_zero_mode_moved_by_round_off_is_still_left_out():
+    """eta_perp = 0.1, chi = 100, N = 256: round-off moved the bent-equilibrium zero mode to
+    +2.81 (its bound 0.28), and a cut at 10 times the bound kept it as an unstable mode, where
+    the continuum's leading pair is -0.991 + 11.13i: stable. Whatever round-off leaves, the
+    straight state must not read unstable, and the result must warn."""
+    from flutterswim.orbits.linear import RoundoffWarning
+
+    with pytest.warns(RoundoffWarning):
+        lm = leading_mode(Groups(eta_par=0.1 / 1.5, eta_perp=0.1, chi=100.0), 256)
+    assert lm.real < 0
