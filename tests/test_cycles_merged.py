@@ -17,9 +17,12 @@ cycles = importlib.import_module("flutterswim.analysis.cycles")
 
 
 def _subset(tr, keep):
-    fa = tr.field_angle
-    return dataclasses.replace(tr, t=tr.t[keep], x=tr.x[keep], y=tr.y[keep],
-                               field_angle=np.asarray(fa)[keep] if np.ndim(fa) else fa)
+    def part(a):
+        return a if a is None or not np.ndim(a) else np.asarray(a)[keep]
+
+    return dataclasses.replace(tr, t=tr.t[keep], x=tr.x[keep], y=tr.y[keep], field_angle=part(tr.field_angle),
+                               theta=part(tr.theta), kappa=part(tr.kappa),
+                               field_strength=part(getattr(tr, "field_strength", None)))
 
 
 def _sine_record(period: float, n_per: int, n_strokes: int):
@@ -90,3 +93,46 @@ def test_the_refusal_names_the_cause():
         assert np.count_nonzero(c.merged) * 2 >= c.n_cycles
         with pytest.raises(ParameterError, match="hold two or more strokes"):
             describe(tr)
+
+
+@pytest.fixture(scope="module")
+def onset_run():
+    import flutterswim as fs
+    from flutterswim.analysis.track import as_track
+
+    return as_track(fs.simulate(fs.PAPER, 12.0, n_segments=24))
+
+
+@pytest.mark.parametrize("fps, drop, seed", [(10, 0.2, 2), (12, 0.2, 1)])
+def test_a_merged_cycle_ends_the_window(onset_run, fps, drop, seed):
+    """10-12 fps with a fifth of the frames dropped, from the field's start: a merged cycle that
+    the window passed let it run back into the onset (advance 0.08 mm for 0.40); it must end the
+    window as a skipped stroke does."""
+    tr0 = onset_run
+    grid = np.arange(tr0.t[0] + 0.0037 * seed, tr0.t[-1], 1 / fps)
+    idx = np.unique(np.searchsorted(tr0.t, grid))
+    keep = np.zeros(tr0.t.size, bool)
+    keep[idx[idx < tr0.t.size]] = True
+    keep &= np.random.default_rng(seed).random(tr0.t.size) >= drop
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        want = describe(tr0)
+        got = describe(_subset(tr0, np.flatnonzero(keep)))
+    assert got.advance_per_cycle_mm == pytest.approx(want.advance_per_cycle_mm, rel=0.05)
+    assert got.period_s == pytest.approx(want.period_s, rel=0.05)
+
+
+def test_a_window_far_from_the_records_end_says_so(onset_run):
+    """10 fps, a fifth dropped, seed 19: every later cycle misses frames and the window falls on
+    the onset (advance 0.06 mm for 0.40). Without a limit cycle that must be said."""
+    tr0 = onset_run
+    grid = np.arange(tr0.t[0] + 0.0037 * 19, tr0.t[-1], 0.1)
+    idx = np.unique(np.searchsorted(tr0.t, grid))
+    keep = np.zeros(tr0.t.size, bool)
+    keep[idx[idx < tr0.t.size]] = True
+    keep &= np.random.default_rng(19).random(tr0.t.size) >= 0.2
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        d = describe(_subset(tr0, np.flatnonzero(keep)))
+    assert tr0.t[-1] - d.window_end_s > 2 * d.period_s
+    assert "before the record's last" in d.note and "may describe an earlier stroke" in d.note
