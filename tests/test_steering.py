@@ -726,3 +726,17 @@ def test_joined_runs_say_their_field_changed():
     said = concatenate([a, b]).settings["field"]
     assert said.startswith("changes between the 2 joined runs") and a.settings["field"] in said
     assert b.settings["field"] in said
+
+
+def test_passing_the_end_far_off_is_not_arriving(reduced):
+    """Open loop on a path straight back: the planned schedule turns the swimmer about on a wide
+    arc, so it passes the end's perpendicular 2.9 body lengths off. That had counted as the end
+    reached (completed, exit 0); arriving needs passing within ARRIVAL_BL of the end point."""
+    from flutterswim.steering.steer import ARRIVAL_BL
+
+    make = lambda p, h: _polyline(np.array([p, p - np.array([3 * L, 0.0])]), False, "back", 1e-5)  # noqa: E731
+    with pytest.warns(UserWarning, match="end was not reached"):
+        res = steer(P, make, reduced, closed_loop=False, n_segments=12, seed=0)
+    q = np.column_stack([res.run.x.mean(axis=1), res.run.y.mean(axis=1)])
+    closest = np.hypot(*(q - res.path.points[-1]).T).min() / L
+    assert closest > ARRIVAL_BL and not res.metrics["completed"]

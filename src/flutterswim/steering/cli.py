@@ -154,7 +154,7 @@ def _cmd_steer(args) -> int:
     import warnings
 
     with warnings.catch_warnings():  # (said below, as the run's failure)
-        warnings.filterwarnings("ignore", message=r".*(were not swum|end was not reached) in")
+        warnings.filterwarnings("ignore", message=r".*(were not swum|end was not reached)")
         res = steer(params, factory, reduced, closed_loop=not args.open_loop, noise_px=args.noise_px,
                     um_per_px=args.um_per_px, n_segments=args.segments, seed=args.seed, progress=not args.quiet)
     from .._cf import cf_dataset

@@ -209,11 +209,12 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     if not done and not math.isfinite(trapped_at):
         done, covered = _completed(true_t, true_x, true_y, path, reduced.period, onset, params.l, laps)
         if not done:
-            what = f"{laps:g} lap(s) of the path were not swum" if path.closed else "the path's end was not reached"
-            warnings.warn(f"{what} in {t - onset:.3g} s of control, {_CAP_FACTOR:g} times the {duration:.3g} s its "
-                          f"length takes ({100 * covered:.0f} % covered): the swimmer cannot follow it (a path starting "
-                          "behind it or across its heading, bends tighter than it turns, or too much tracking noise)",
-                          stacklevel=2)
+            what = (f"{laps:g} lap(s) of the path were not swum" if path.closed else
+                    f"the path's end was not reached (passed within {ARRIVAL_BL:g} body length)")
+            warnings.warn(f"{what} in {t - onset:.3g} s of control, {cap / duration:.3g} times the {duration:.3g} s its "
+                          f"length takes ({100 * covered:.0f} % of {'the laps' if path.closed else 'it'} covered): the "
+                          "swimmer cannot follow it (a path starting behind it or across its heading, bends tighter "
+                          "than it turns, or too much tracking noise)", stacklevel=2)
     run = concatenate(parts)
     run = replace(run, settings={**run.settings, "field": (
         f"{'closed' if closed_loop else 'open'}-loop steering from t = {onset:.6g} s: the direction set every frame "
@@ -333,15 +334,17 @@ def _averaged_progress(t: np.ndarray, cx: np.ndarray, cy: np.ndarray, path: RefP
 
 def _completed(t: list, cx: list, cy: list, path: RefPath, period: float, t0: float, bl: float,
                laps: float) -> tuple[bool, float]:
-    """Whether the swimmer has reached an open path's end or swum ``laps`` of a closed one, and
-    the fraction of the path (of the laps) covered."""
-    ts, _, prog = _averaged_progress(np.asarray(t), np.asarray(cx), np.asarray(cy), path, period, t0, bl)
+    """Whether the swimmer has reached an open path's end (passed it, within ``ARRIVAL_BL`` body
+    lengths of the end point: passing its perpendicular 2.9 body lengths off had counted) or
+    swum ``laps`` of a closed one, and the fraction of the path (of the laps) covered."""
+    ts, q, prog = _averaged_progress(np.asarray(t), np.asarray(cx), np.asarray(cy), path, period, t0, bl)
     if prog.size == 0:
         return False, 0.0
     if path.closed:
         covered = float(prog.max() - prog[0]) / (laps * path.length)
         return covered >= 1.0, covered
-    return bool(prog.max() >= path.s[-1]), float(prog.max() - prog[0]) / path.length
+    near_end = float(np.min(np.hypot(*(q - path.points[-1]).T))) < ARRIVAL_BL * bl
+    return bool(prog.max() >= path.s[-1] and near_end), float(prog.max() - prog[0]) / path.length
 
 
 def _progress(path: RefPath, q: np.ndarray, back: float, ahead: float, slack: float) -> np.ndarray:
