@@ -168,3 +168,45 @@ def test_fit_cli_passes_its_seed_and_refuses_a_negative_one(tmp_path, monkeypatc
     monkeypatch.setattr(importlib.import_module("flutterswim.fitting.fit"), "fit", fake)
     main(["fit", str(csv), "--seed", "7", "--bootstrap", "3", "--out", out])
     assert seen["seed"] == 7 and seen["bootstrap"] == 3
+
+
+def _branches(x, up, down, pu=None, pd=None):
+    import numpy as np
+    import xarray as xr
+
+    ds = xr.Dataset({"limit_cycle": (("chi", "branch"), np.column_stack([up, down]))},
+                    coords={"chi": np.asarray(x, float), "branch": ["up", "down"]})
+    if pu is not None:
+        ds["period_s"] = (("chi", "branch"), np.column_stack([pu, pd]))
+    return ds
+
+
+def test_hysteresis_of_a_subcritical_onset_and_of_a_fold():
+    """The down branch swimming below the up branch's onset (a subcritical Hopf point, bistable at
+    49.8 and 50.4) had read 'no hysteresis' (its bracket NaN), and so had a fold where both swim
+    on different strokes."""
+    from flutterswim.sweep import hysteresis
+
+    nan = float("nan")
+    sub = hysteresis(_branches([49.8, 50.4, 50.9, 51.5, 53.0], [0, 0, 1, 1, 1], [1, 1, 1, 1, 1]))
+    assert sub["hysteresis"] and sub["bistable"] == [49.8, 50.4] and sub["up"] == (50.4, 50.9)
+    fold = hysteresis(_branches([1.85, 1.95, 2.05, 2.15, 2.3], [1] * 5, [1] * 5,
+                                [0.27, 0.2589, 0.2561, 0.36, 0.35], [0.27, 0.3439, 0.3514, 0.36, 0.35]))
+    assert fold["hysteresis"] and fold["bistable"] == [1.95, 2.05] and fold["width"] == pytest.approx(0.1)
+    same = hysteresis(_branches([0.6, 0.7, 0.8], [0, 1, 1], [0, 1, 1], [nan, 0.45, 0.42], [nan, 0.45, 0.42]))
+    assert not same["hysteresis"] and same["width"] == 0.0 and same["up"] == same["down"] == (0.6, 0.7)
+
+
+def test_a_sweep_row_gives_a_direction_in_the_half_open_range():
+    """A stroke swimming against the field read -180 at one point and 180 at the next."""
+    import math
+    from types import SimpleNamespace
+
+    from flutterswim.settle import Settled
+
+    for angle in (-math.pi, math.pi, -math.pi + 1e-12):
+        o = SimpleNamespace(period=1.0, advance=0.1, speed=0.1, lateral_leading=0.1, lateral_trailing=0.2,
+                            nonreciprocity=0.0, self_intersecting=False, stable=True, max_multiplier=0.5,
+                            swim_direction=angle)
+        st = Settled("limit_cycle", "", None, o, True, 1.0, 0.1, 1.0, 0.1, 10.0, units="dimensionless")
+        assert st.values()["swim_direction_deg"] == pytest.approx(180.0)

@@ -44,6 +44,13 @@ def test_grid_and_list_and_continuation_order():
     s = SweepSpec.build(["kappa_E_ratio=0:1:3"], continuation=True)
     seq = [s.point(k)[:2] for k in range(s.n_points)]
     assert seq == [("up", 0), ("up", 1), ("up", 2), ("down", 2), ("down", 1), ("down", 0)]
+    # a descending (or unordered) axis: "up" still runs in increasing value (it had run from the
+    # largest, so the branches' labels read backwards)
+    s = SweepSpec.build(["kappa_E_ratio=2.3,2.05,1.95,1.85"], continuation=True)
+    up = [s.point(k)[2]["kappa_E_ratio"] for k in range(s.n_values)]
+    down = [s.point(k)[2]["kappa_E_ratio"] for k in range(s.n_values, s.n_points)]
+    assert up == sorted(up) and down == sorted(down, reverse=True) and up[-1] == down[0]
+    assert [s.point(k)[1] for k in range(s.n_values)] == [3, 2, 1, 0]  # stored at the values' own places
     with pytest.raises(ParameterError, match="repeat"):
         SweepSpec.build(["chi=1,2", "chi=3"])
 

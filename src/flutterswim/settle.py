@@ -91,12 +91,16 @@ class Settled:
         out.update({k: math.nan for k in keys})
         o = self.orbit
         if o is not None:
+            from .orbits.dataset import _half_open_degrees
+
             out.update(period_s=o.period, frequency_hz=1.0 / o.period, advance_per_cycle_mm=o.advance * mm,
                        advance_per_cycle_bl=o.advance / length, speed_mm_s=o.speed * mm,
                        speed_bl_s=o.speed / length, lateral_leading_mm=o.lateral_leading * mm,
                        lateral_trailing_mm=o.lateral_trailing * mm, nonreciprocity=o.nonreciprocity,
                        self_intersecting=float(o.self_intersecting), stable=float(o.stable),
-                       max_multiplier=o.max_multiplier, swim_direction_deg=math.degrees(o.swim_direction))
+                       max_multiplier=o.max_multiplier,
+                       # in (-180, 180] as the branch files (a sweep had read -180 and 180 for one direction)
+                       swim_direction_deg=float(_half_open_degrees(np.asarray(o.swim_direction))))
         return out
 
 
@@ -257,7 +261,8 @@ def settle(params: Parameters | Groups, *, initial=None, n_cycles: int = default
         if bar is not None:
             bar.update(round((t1 - t0) / tau, 3))
         if not part.ok:
-            outcome, reason = "failed", f"the solver failed at t={part.t_final:.6g} s: {part.message}"
+            # (in tau for groups: a sweep's point run as groups had said "t=3.88 s" with a cap of 5 tau)
+            outcome, reason = "failed", f"the solver failed at t={part.t_final:.6g} {'s' if si else 'tau'}: {part.message}"
             break
         sl = slice(1, None) if k else slice(None)
         amp = watch.add(k, part.t[sl] / tau, part.theta[sl, 0], skipped=sl.start or 0)

@@ -37,20 +37,42 @@ def transition(x: np.ndarray, unstable: np.ndarray) -> tuple[float, float]:
     return float(x[k - 1]), float(x[k])
 
 
-def hysteresis(ds, dim: str | None = None, flag: str = "limit_cycle") -> dict[str, Any]:
+#: two swimming strokes at one axis value whose periods differ by more than this (relative) are
+#: two strokes (coexisting across a fold), not the same one reached from either side
+COEXIST_PERIOD = 0.02
+
+
+def hysteresis(ds, dim: str | None = None, flag: str = "limit_cycle", period: str = "period_s") -> dict[str, Any]:
     """Onset brackets on the up and down branches of a continuation sweep and whether they differ.
 
-    Returns {"up": (lo, hi), "down": (lo, hi), "hysteresis": bool, "width": float} where the
-    brackets are the last non-swimming and first swimming axis values (``flag``)."""
+    Returns {"up": (lo, hi), "down": (lo, hi), "hysteresis": bool, "width": float, "range":
+    (lo, hi), "bistable": [axis values]}. The brackets are the last non-swimming and first
+    swimming axis values (``flag``; NaN where the branch does not cross, e.g. a down branch that
+    swims down to the sweep's lowest value). Hysteresis is where the two branches differ at one
+    axis value: one swims and the other not (a subcritical onset), or both swim with periods
+    (``period``, if present) more than :data:`COEXIST_PERIOD` apart (two strokes across a fold).
+    Those values are ``bistable``; ``range`` their span and ``width`` its length (a lower bound:
+    the sampled values). A down branch swimming below the up branch's onset had been missed
+    (its bracket NaN), and so had a fold where both branches swim."""
     if "branch" not in ds.dims:
         raise ParameterError("hysteresis needs a continuation sweep (a 'branch' dimension)")
     dim = dim or [d for d in ds[flag].dims if d != "branch"][0]
-    x = ds[dim].values
-    up = transition(x, ds[flag].sel(branch="up").values)
-    down = transition(x, ds[flag].sel(branch="down").values)
-    hyst = bool(np.isfinite(up[1]) and np.isfinite(down[1]) and (down[1] < up[0] or up[1] < down[0]))
-    width = float(up[1] - down[1]) if hyst else 0.0
-    return {"up": up, "down": down, "hysteresis": hyst, "width": width}
+    x = np.asarray(ds[dim].values, float)
+    fu = np.asarray(ds[flag].sel(branch="up").values, bool)
+    fd = np.asarray(ds[flag].sel(branch="down").values, bool)
+    up, down = transition(x, fu), transition(x, fd)
+    differ = fu != fd
+    if period in ds:
+        pu = np.asarray(ds[period].sel(branch="up").values, float)
+        pd = np.asarray(ds[period].sel(branch="down").values, float)
+        with np.errstate(invalid="ignore"):
+            differ |= fu & fd & (np.abs(pu - pd) > COEXIST_PERIOD * np.minimum(np.abs(pu), np.abs(pd)))
+    both = np.sort(x[differ])
+    hyst = bool(both.size)
+    rng = (float(both[0]), float(both[-1])) if hyst else (math.nan, math.nan)
+    width = float(both[-1] - both[0]) if hyst else 0.0
+    return {"up": up, "down": down, "hysteresis": hyst, "width": width, "range": rng,
+            "bistable": [float(v) for v in both]}
 
 
 @dataclass(frozen=True)

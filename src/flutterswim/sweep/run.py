@@ -129,7 +129,8 @@ def sweep(
         raise ParameterError(
             f"point_fn={getattr(fn, '__name__', fn)!r} is defined in the main script; the worker processes "
             "never run your script (so that scripts without an if __name__ == '__main__' guard work), so "
-            "they cannot import it. Move it into a module, or use backend='serial' or 'dask-local'")
+            "they cannot import it. Move it into a module, or use backend='serial' (or 'dask-local' from a script "
+            "guarded by if __name__ == '__main__': dask's workers run the script again)")
     check_backend(backend, workers=workers, scheduler=scheduler)  # before the store is touched
     if max_points is not None:
         from .._validate import positive_int

@@ -290,13 +290,17 @@ class SweepSpec:
 
     def point(self, k: int) -> tuple[str, int, dict[str, float]]:
         """Point k of the store -> (branch, value index, swept values). With continuation,
-        points 0..n-1 go up the axis and n..2n-1 come back down."""
+        points 0..n-1 go up the axis (in increasing value, whatever the order given) and
+        n..2n-1 come back down (a descending axis had run "up" from its largest value: the
+        branches' labels, "increasing" and "decreasing", read backwards)."""
         n = self.n_values
         if not self.continuation:
             return "single", k, self.values(k)
+        order = np.argsort(np.asarray(self.axes[0].values, float), kind="stable")
         if k < n:
-            return "up", k, self.values(k)
-        i = 2 * n - 1 - k
+            i = int(order[k])
+            return "up", i, self.values(i)
+        i = int(order[2 * n - 1 - k])
         return "down", i, self.values(i)
 
     def params(self, k: int) -> Parameters | Groups:
