@@ -58,9 +58,30 @@ def test_a_truncated_avi_says_so(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert len(open_frames(full)) == n
-    with pytest.warns(UserWarning, match=rf"header lists {n} frames, (\d+) can be read") as rec:
+    with pytest.warns(UserWarning, match=r"the file is truncated \((\d+) of the (\d+) bytes") as rec:
         m = len(open_frames(cut))
-    assert 0 < m < n and f"{m} can be read" in str(rec[0].message)
+    said = str(rec[0].message)
+    assert 0 < m < n and f"the {m} frames" in said and f"{cut.stat().st_size} of the {len(data)} bytes" in said
+
+
+def test_an_avi_with_dropped_frame_chunks_is_not_called_truncated(tmp_path):
+    """Capture software writes a dropped frame as an empty chunk: the header counts it, the
+    decoder gives nothing for it. Such a complete file had been called truncated."""
+    import subprocess
+    import warnings
+
+    import imageio_ffmpeg
+
+    from flutterswim.tracking.io import open_frames
+
+    ff = imageio_ffmpeg.get_ffmpeg_exe()
+    out = tmp_path / "gap.avi"
+    subprocess.run([ff, "-v", "error", "-f", "lavfi", "-i", "testsrc=size=160x120:rate=50", "-frames:v", "100",
+                    "-vf", r"select='not(between(n\,40\,44))'", "-fps_mode", "passthrough", "-c:v", "mjpeg",
+                    str(out)], check=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert len(open_frames(out)) == 100  # (100 written after the 5 dropped: the header lists 105)
 
 
 def test_field_start_after_the_run_is_refused(tmp_path, capsys):
@@ -210,3 +231,14 @@ def test_a_sweep_row_gives_a_direction_in_the_half_open_range():
                             swim_direction=angle)
         st = Settled("limit_cycle", "", None, o, True, 1.0, 0.1, 1.0, 0.1, 10.0, units="dimensionless")
         assert st.values()["swim_direction_deg"] == pytest.approx(180.0)
+
+
+def test_a_chain_of_close_voltages_counts_each_trial_once(tmp_path):
+    from flutterswim.fitting.data import read_trials, summarise
+
+    csv = tmp_path / "t.csv"
+    rows = ["85,a,0.40,0.30,1.0", "85.0008,b,0.41,0.31,1.1", "85.0016,c,0.42,0.32,1.2", "85.0016,d,0.43,0.33,1.3",
+            "90,e,0.38,0.35,1.3", "90,f,0.39,0.36,1.4"]
+    csv.write_text("voltage_V,sample,period_s,advance_mm,lateral_mm\n" + "\n".join(rows) + "\n")
+    s = summarise(read_trials(csv))
+    assert int(s.n.sum()) == 6

@@ -153,7 +153,10 @@ def summarise(trials: Trials) -> Summary:
     for v in np.unique(trials.voltage_V):
         if not (vs and np.isclose(v, vs[-1])):
             vs.append(float(v))
-    group = [np.isclose(trials.voltage_V, v) for v in vs]
+    # each trial in the group of its nearest voltage (a chain 85, 85.0008, 85.0016 had put the
+    # middle one in two groups)
+    near = np.argmin(np.abs(np.asarray(trials.voltage_V, float)[:, None] - np.array(vs)[None, :]), axis=1)
+    group = [near == g for g in range(len(vs))]
     n = np.array([np.count_nonzero(g) for g in group])
     mean = np.array([trials.values[g].mean(axis=0) for g in group])
     sem = np.array([trials.values[g].std(axis=0, ddof=1) / math.sqrt(k) if k > 1

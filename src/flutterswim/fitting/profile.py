@@ -71,15 +71,15 @@ def profile_likelihood(model, base, x_best: np.ndarray, mean: np.ndarray, sem: n
 
         # within +-span sigma, at most a factor e either way (sigma may be huge if unidentifiable)
         offs = np.linspace(-span, span, n) * min(max(sigma_rel[i], 1e-6), 1.0 / span)
-        centre = int(np.argmin(np.abs(offs)))
         pts: dict[float, tuple[float, np.ndarray]] = {}  # offset -> (chi2, the free parameters there)
-        # outwards from the best fit, each value started from its inner neighbour's minimum (a
-        # start far out along the scan with the other parameters at their best can have no
-        # stroke: the Jacobian there failed and the whole fit was lost)
-        pts[offs[centre]] = solve(y_best[i] + offs[centre], y_best[free].copy())
-        sides = (list(range(centre + 1, n)), list(range(centre - 1, -1, -1)))
+        # outwards from the best fit (always evaluated: an even n has no grid value there, and the
+        # minimum taken on the grid put the bounds 6-170 % wide), each value started from its
+        # inner neighbour's minimum (a start far out along the scan with the other parameters at
+        # their best can have no stroke: the Jacobian there failed and the whole fit was lost)
+        pts[0.0] = solve(y_best[i], y_best[free].copy())
+        sides = (list(np.flatnonzero(offs > 0)), list(np.flatnonzero(offs < 0)[::-1]))
         for side in sides:
-            prev = offs[centre]
+            prev = 0.0
             for j in side:
                 pts[offs[j]] = solve(y_best[i] + offs[j], pts[prev][1])
                 prev = offs[j]
@@ -94,7 +94,7 @@ def profile_likelihood(model, base, x_best: np.ndarray, mean: np.ndarray, sem: n
         bounds = []
         for sign in (-1.0, 1.0):
             on = sorted((o for o in pts if o * sign > 0), key=abs)
-            inner = offs[centre]
+            inner = 0.0
             outer = None
             for o in on:
                 if pts[o][0] - chi2_min >= 1.0:
@@ -130,6 +130,6 @@ def profile_likelihood(model, base, x_best: np.ndarray, mean: np.ndarray, sem: n
             y = y_best.copy()
             y[i] = y_best[i] + o
             phys.append(to_physical(base, minv @ y)[i])
-        chi2 = np.array([pts[o][0] for o in offs])
+        chi2 = np.array([pts[0.0 if o == 0 else o][0] for o in offs])
         out[name] = {"values": np.array(phys), "chi2": chi2, "sigma_rel": sig, "lower": lo, "upper": hi}
     return out

@@ -308,25 +308,28 @@ def _ffmpeg_said(exc: BaseException) -> str:
     return said if len(said) <= 200 else said[:197] + "..."
 
 
-def _avi_frames(p: Path) -> int | None:
-    """The frame count an AVI's header records (OpenDML's dmlh, else the main header's avih),
-    None for another container or a header that says nothing."""
+def _avi_truncated(p: Path) -> tuple[int, int] | None:
+    """(bytes the AVI's RIFF chunks declare, bytes the file has) when the file is shorter than
+    its chunks say (cut), else None (complete, or not an AVI). The chunk sizes, not the frame
+    count: capture software lists dropped frames as empty chunks, which decode to nothing."""
     import struct
 
     try:
+        size = p.stat().st_size
         with open(p, "rb") as fh:
-            head = fh.read(1 << 16)
+            head = fh.read(12)
+            if len(head) < 12 or head[:4] != b"RIFF" or head[8:12] != b"AVI ":
+                return None
+            at = 0
+            while at + 8 <= size:  # RIFF 'AVI ' then, in an OpenDML file, RIFF 'AVIX' chunks
+                fh.seek(at)
+                tag, n = struct.unpack("<4sI", fh.read(8))
+                if tag != b"RIFF":
+                    return None
+                at += 8 + n + (n & 1)
+            return (at, size) if at > size + 1 else None  # (+1: a last odd chunk's pad byte)
     except OSError:
         return None
-    if head[:4] != b"RIFF" or head[8:12] != b"AVI ":
-        return None
-    for tag, at in ((b"dmlh", 8), (b"avih", 24)):
-        i = head.find(tag)
-        if i >= 0 and i + at + 4 <= len(head):
-            n = struct.unpack_from("<I", head, i + at)[0]
-            if n > 0:
-                return int(n)
-    return None
 
 
 def _movie(p: Path) -> Frames:
@@ -347,13 +350,13 @@ def _movie(p: Path) -> Frames:
         raise
     except Exception as exc:  # an empty, truncated or foreign file: ffmpeg's log is in the message
         raise ParameterError(f"input={str(p)!r} cannot be read as a movie ({_ffmpeg_said(exc)})") from None
-    listed = _avi_frames(p)
-    if listed is not None and n < listed:
-        # (ffmpeg estimates a cut file's length from its size: only the header knows)
+    cut = _avi_truncated(p)
+    if cut is not None:
+        # (ffmpeg estimates a cut file's length from its size: only the chunks' sizes tell)
         import warnings
 
-        warnings.warn(f"input={str(p)!r}: its header lists {listed} frames, {n} can be read: the file is "
-                      f"truncated; the first {n} are tracked", stacklevel=3)
+        warnings.warn(f"input={str(p)!r}: the file is truncated ({cut[1]} of the {cut[0]} bytes its chunks "
+                      f"declare); the {n} frames that can be read are tracked", stacklevel=3)
 
     def it() -> Iterator[np.ndarray]:
         g = imageio_ffmpeg.read_frames(str(p), pix_fmt=fmt, bpp=bpp)
