@@ -381,8 +381,9 @@ def _at_cap(params, groups, orbit, watch: _Watch, lam: complex, n_segments: int,
         rate = watch.growth_rate()
         what = ("bent_equilibrium", "towards a bent equilibrium") if dev > STRAIGHT_ANGLE else ("straight", "")
         how = "down to the integrator's noise" if at_noise and not amps[-1] < amps[-2] else "still decaying"
+        measured = f"{rate:.3g}/tau" if math.isfinite(rate) else "not measured"  # (it read "nan/tau")
         return (what[0], f"{how} {what[1]} at t_max={t_cap_tau:g} tau (half-range {amps[-1]:.2g} rad, measured rate "
-                f"{rate:.3g}/tau, linear theory {lam.real:.3g}/tau): the straight state is stable".replace("  ", " "),
+                f"{measured}, linear theory {lam.real:.3g}/tau): the straight state is stable".replace("  ", " "),
                 None)
     if orbit is not None:
         return ("limit_cycle", f"stable periodic orbit found, but the run had not come within "

@@ -62,7 +62,8 @@ def check_backend(name: str, *, workers: int | None = None, scheduler: str | Non
                                 or int(workers) != workers or workers < 1):
         raise ParameterError(f"workers={workers!r} must be an integer >= 1")
     if name == "dask" and scheduler is None:
-        raise ParameterError("backend='dask' needs scheduler='tcp://host:port' (or use backend='dask-local')")
+        raise ParameterError("backend='dask' needs a scheduler's address (scheduler=), e.g. 'tcp://host:8786'; "
+                             "or use backend='dask-local'")
     if scheduler is not None and not isinstance(scheduler, str):
         raise ParameterError(f"scheduler={scheduler!r} must be an address such as 'tcp://host:8786'")
 
