@@ -136,3 +136,19 @@ def test_a_window_far_from_the_records_end_says_so(onset_run):
         d = describe(_subset(tr0, np.flatnonzero(keep)))
     assert tr0.t[-1] - d.window_end_s > 2 * d.period_s
     assert "before the record's last" in d.note and "may describe an earlier stroke" in d.note
+
+
+def test_a_window_spread_thin_over_gaps_says_so(onset_run):
+    """12 fps, a fifth dropped, seed 9: three described cycles spread over 8 s, the cycles between
+    missing frames, the earliest in the onset (advance 0.14 mm for 0.40): said."""
+    tr0 = onset_run
+    grid = np.arange(tr0.t[0] + 0.0037 * 9, tr0.t[-1], 1 / 12)
+    idx = np.unique(np.searchsorted(tr0.t, grid))
+    keep = np.zeros(tr0.t.size, bool)
+    keep[idx[idx < tr0.t.size]] = True
+    keep &= np.random.default_rng(9).random(tr0.t.size) >= 0.2
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        d = describe(_subset(tr0, np.flatnonzero(keep)))
+    assert d.window_end_s - d.window_start_s > (d.n_cycles_used + 2) * d.period_s
+    assert "spread over" in d.note and "may be an earlier stroke" in d.note

@@ -852,6 +852,13 @@ def describe(
             f"described over {idx.size} cycle{'s' if idx.size != 1 else ''}, fewer than the {n_last} asked for "
             f"(n_last, --last): {'; '.join(why)}")
     behind = float(cyc.starts[-1] - sub.starts[-1])
+    span = float(sub.starts[-1] - sub.starts[0])
+    if not settled and span > (idx.size + 2) * float(np.median(cyc.periods)):
+        # (the window passes cycles missing frames: spread thin, it reached back into the onset)
+        note = (note + "; " if note else "") + (
+            f"the {idx.size} cycle{'s' if idx.size != 1 else ''} described {'are' if idx.size != 1 else 'is'} spread "
+            f"over {span:.3g} s from t = {float(sub.starts[0]):.4g} s (those between miss frames): without a limit "
+            "cycle the earliest may be an earlier stroke (the onset)")
     if not settled and behind > 2.0 * float(np.median(cyc.periods)):
         # (a sparse record whose later cycles all miss frames was described over its onset: the
         # advance 60-80 % low, with the period right)
