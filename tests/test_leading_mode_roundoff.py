@@ -13,13 +13,14 @@ from flutterswim.params import Groups
 
 def test_the_flutter_pair_is_kept_where_the_spectrum_is_wide():
     """eta_perp = 8 at N = 256: leading_mode had returned -63.3 (a real bending mode). It must
-    agree with leading_pair and with the converged value at N = 96."""
+    agree with leading_pair within round-off (||A|| is 1e10 here) and with the converged value
+    at N = 96."""
     g = Groups(eta_par=41.49, eta_perp=8.0, chi=70.67)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         lp = leading_pair(g, 256)
     lm = leading_mode(g, 256)
-    assert abs(lm - lp) < 1e-6 * abs(lp)
+    assert abs(lm - lp) < 1e-4 * abs(lp)  # (within the round-off that leading_pair would warn of)
     assert abs(lm - leading_mode(g, 96)) < 1e-3 * abs(lp)
 
 
@@ -42,3 +43,15 @@ def test_the_zero_mode_moved_by_round_off_is_still_left_out():
     with pytest.warns(RoundoffWarning):
         lm = leading_mode(Groups(eta_par=0.1 / 1.5, eta_perp=0.1, chi=100.0), 256)
     assert lm.real < 0
+
+
+@pytest.mark.parametrize("eta_perp, chi, n, want", [(0.3, 100.0, 384, -0.973 + 11.13j),
+                                                    (0.3, 1000.0, 512, 1.655 + 111.1j)])
+def test_the_zero_mode_is_deflated_not_searched_for(eta_perp, chi, n, want):
+    """Round-off split the zero mode into 2.2 +- 3.4i (N = 384), or moved it to +33.7 while a -1
+    mode lay closer to the null vector (N = 512): removing one computed eigenvalue kept it, a
+    false unstable verdict. Deflated, the leader is the continuum's (its reference to 0.2 %)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        lm = leading_mode(Groups(eta_par=41.49, eta_perp=eta_perp, chi=chi), n)
+    assert abs(lm - want) < 2e-3 * abs(want)

@@ -206,6 +206,8 @@ def test_hysteresis_of_a_subcritical_onset_and_of_a_fold():
     """The down branch swimming below the up branch's onset (a subcritical Hopf point, bistable at
     49.8 and 50.4) had read 'no hysteresis' (its bracket NaN), and so had a fold where both swim
     on different strokes."""
+    import numpy as np
+
     from flutterswim.sweep import hysteresis
 
     nan = float("nan")
@@ -214,6 +216,14 @@ def test_hysteresis_of_a_subcritical_onset_and_of_a_fold():
     fold = hysteresis(_branches([1.85, 1.95, 2.05, 2.15, 2.3], [1] * 5, [1] * 5,
                                 [0.27, 0.2589, 0.2561, 0.36, 0.35], [0.27, 0.3439, 0.3514, 0.36, 0.35]))
     assert fold["hysteresis"] and fold["bistable"] == [1.95, 2.05] and fold["width"] == pytest.approx(0.1)
+    # a failed or undone point's flag reads False: no hysteresis from it
+    failed = _branches([1.0, 2.0, 3.0, 3.5], [0, 0, 1, 1], [0, 0, 0, 1])
+    failed["failed"] = (("chi", "branch"), np.array([[0, 0], [0, 0], [0, 1], [0, 0]], bool))
+    failed["done"] = (("chi", "branch"), np.array([[1, 1], [1, 1], [1, 1], [1, 1]], bool))
+    assert not hysteresis(failed)["hysteresis"]
+    failed["failed"] = failed["failed"] * False
+    failed["done"] = (("chi", "branch"), np.array([[1, 0], [1, 0], [1, 0], [1, 1]], bool))
+    assert not hysteresis(failed)["hysteresis"]
     same = hysteresis(_branches([0.6, 0.7, 0.8], [0, 1, 1], [0, 1, 1], [nan, 0.45, 0.42], [nan, 0.45, 0.42]))
     assert not same["hysteresis"] and same["width"] == 0.0 and same["up"] == same["down"] == (0.6, 0.7)
 
@@ -242,3 +252,24 @@ def test_a_chain_of_close_voltages_counts_each_trial_once(tmp_path):
     csv.write_text("voltage_V,sample,period_s,advance_mm,lateral_mm\n" + "\n".join(rows) + "\n")
     s = summarise(read_trials(csv))
     assert int(s.n.sum()) == 6
+
+
+def test_an_avi_written_to_a_pipe_is_not_called_truncated(tmp_path):
+    """Written to a pipe, ffmpeg cannot seek back: the RIFF size stays 0xFFFFFFFF, which says
+    nothing of the file's length (it had been called truncated, 91 kB of 4 GB)."""
+    import subprocess
+    import warnings
+
+    import imageio_ffmpeg
+
+    from flutterswim.tracking.io import open_frames
+
+    out = tmp_path / "pipe.avi"
+    with open(out, "wb") as fh:
+        subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-f", "lavfi", "-i",
+                        "testsrc=size=64x48:rate=25", "-t", "2", "-c:v", "mjpeg", "-f", "avi", "pipe:1"],
+                       stdout=fh, check=True)
+    assert out.read_bytes()[4:8] == b"\xff\xff\xff\xff"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert len(open_frames(out)) == 50

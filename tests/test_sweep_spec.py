@@ -104,3 +104,55 @@ def test_a_grid_axis_with_a_repeated_value_is_refused():
         SweepSpec.build(["tau=0.3,0.4,0.3", "chi=1,2"])
     s = SweepSpec.build({"chi": [1, 1], "tau": [0.1, 0.2]}, mode="list")
     assert s.n_points == 2
+
+
+def _toy(task):
+    """A chain that records the value it continued from (prev) and fails at (down, 3.0)."""
+    import math
+
+    v = task["values"]["chi"]
+    prev = float(task["initial"][0]) if task["initial"] is not None else math.nan
+    if v == 3.0 and task["branch"] == "down":
+        raise RuntimeError("boom")
+    swim = v >= 3 or (v >= 2 and not math.isnan(prev) and prev >= 2)
+    return {"values": {"limit_cycle": float(swim), "prev": prev, "tag": v},
+            "final_state": np.full(2 * task["settings"]["n_segments"] + 3, v)}
+
+
+_toy.variables = ["limit_cycle", "prev", "tag"]
+_toy.required = ["limit_cycle", "tag"]
+
+
+def test_a_descending_continuation_resumes_and_reports_the_right_points(tmp_path, capsys):
+    """The store's point positions had kept "up" in the order given while the points ran in
+    increasing value: a descending axis resumed into undone points forever, and its failure was
+    reported at chi = 2.0 for the one at 3.0 (a review)."""
+    from flutterswim.params import Groups
+
+    args = dict(base=Groups(41.5, 71.5, 70.0), continuation=True, point_fn=_toy, backend="serial",
+                out=str(tmp_path / "a.zarr"), progress=False)
+    sweep({"chi": [4.0, 3.0, 2.5, 2.0, 1.0]}, max_points=3, **args)
+    ds = sweep({"chi": [4.0, 3.0, 2.5, 2.0, 1.0]}, **args)
+    assert bool(ds["done"].all())
+    up = ds["prev"].sel(branch="up").to_series()
+    assert np.isnan(up[1.0]) and up[2.0] == 1.0 and up[2.5] == 2.0 and up[3.0] == 2.5 and up[4.0] == 3.0
+    down = ds["prev"].sel(branch="down").to_series()
+    assert down[4.0] == 4.0  # the down branch continues from the up branch's last point
+    failed = ds["failed"].sel(branch="down").to_series()
+    assert failed[3.0] and not failed.drop(3.0).any()
+    assert "{'chi': 3.0}" in capsys.readouterr().err
+
+
+def test_a_store_made_before_keeps_its_order_and_is_not_resumed_as_a_new_one():
+    """A descending continuation made before stop 46 ran "up" in the order given: read so; a new
+    sweep of the same axis is a different definition (refused on resume, not mis-assigned)."""
+    import json
+
+    new = SweepSpec.build(["kappa_E_ratio=2.3,2.05,1.95,1.85"], continuation=True)
+    d = json.loads(new.to_json())
+    assert d["up"] == "increasing"
+    old = SweepSpec.from_dict({k: v for k, v in d.items() if k != "up"})
+    assert [old.point(k)[1] for k in range(old.n_values)] == [0, 1, 2, 3]
+    assert old.diff(new) and SweepSpec.from_dict(d).diff(new) == []
+    asc = SweepSpec.build(["kappa_E_ratio=1.85,1.95"], continuation=True)
+    assert "up" not in json.loads(asc.to_json())  # ascending stores keep their definition

@@ -56,9 +56,9 @@ def _roundoff_warning(n_segments: int, a: np.ndarray, what: str) -> None:
                   "continuum's flutterswim.stability.leading_eigenvalue", RoundoffWarning, stacklevel=3)
 
 
-def _spectrum_bounds(params, n_segments: int, vectors: bool = False):
+def _spectrum_bounds(params, n_segments: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The straight state's eigenvalues, each one's round-off bound (its condition number times
-    eps ||A||_F) and the Jacobian A (and, with ``vectors``, the right eigenvectors)."""
+    eps ||A||_F) and the Jacobian A."""
     import scipy.linalg as sl
 
     sysm = ShapeSystem.of(params, n_segments)
@@ -66,8 +66,7 @@ def _spectrum_bounds(params, n_segments: int, vectors: bool = False):
     lam, vl, vr = sl.eig(a, left=True, right=True)
     cond = (np.linalg.norm(vl, axis=0) * np.linalg.norm(vr, axis=0)
             / np.maximum(np.abs(np.einsum("ij,ij->j", vl.conj(), vr)), np.finfo(float).tiny))
-    bound = cond * np.finfo(float).eps * np.linalg.norm(a)
-    return (lam, bound, a, vr) if vectors else (lam, bound, a)
+    return lam, cond * np.finfo(float).eps * np.linalg.norm(a), a
 
 
 def leading_pair(params, n_segments: int) -> complex:
@@ -140,27 +139,31 @@ def leading_mode(params, n_segments: int) -> complex:
     """The eigenvalue of largest real part [1/tau] (Im >= 0), leaving out the zero mode of the
     bent-equilibrium family: the growth rate and angular frequency of the straight state.
 
-    The zero mode is the eigenvalue whose eigenvector lies along the Jacobian's null vector (the
-    right singular vector of its smallest singular value): round-off can move it far from 0
-    (+2.81 at eta_perp = 0.1, N = 256, where a cut at 10 times its bound kept it as an unstable
-    mode; a cut at 1e-9 of the largest |lambda| dropped the flutter pair itself from N = 256 at
-    eta_perp = 8), and a cut by the bound drops the relaxation's modes at -1, ill-conditioned,
-    with it. Of the others the leader is taken among those resolved from 0 (beyond 10 times their
-    bound), and it warns (RoundoffWarning) when an unresolved one lies to its right or its own
-    bound exceeds :data:`ROUNDOFF_WARN` of |lambda|. A pair within its round-off of the real axis
-    counts as real."""
-    lam, bound, a, vr = _spectrum_bounds(params, n_segments, vectors=True)
-    null = np.linalg.svd(a)[2][-1]
-    align = np.abs(vr.conj().T @ null) / np.linalg.norm(vr, axis=0)
-    cand = np.ones(lam.size, bool)
-    cand[int(np.argmax(align))] = False
-    # of the others, those resolved from 0 (beyond 10 times their bound); round-off's spurious
-    # eigenvalues near 0 at high N (-0.31 at eta_perp = 0.1, N = 128) are not, and warn if they
-    # would lead
-    resolved = cand & (np.abs(lam) > 10.0 * bound)
-    pool = resolved if resolved.any() else cand
+    The zero mode is deflated, not looked for among the computed eigenvalues: A maps every vector
+    into its range, the complement of its left null vector m (the left singular vector of its
+    smallest singular value), so with Q an orthonormal basis of that complement A Q = Q (Q^T A Q),
+    whose eigenvalues are A's but the zero one. Round-off had moved the zero mode far from 0
+    (+2.81 at eta_perp = 0.1, N = 256; split into 2.2 +- 3.4i at N = 384), where a cut at 1e-9 of
+    the largest |lambda| had dropped the flutter pair itself (eta_perp = 8 from N = 256) and one
+    relative to each eigenvalue's bound the relaxation's modes at -1. The leader is taken among
+    eigenvalues resolved from 0 (beyond 10 times their round-off bound), with a RoundoffWarning
+    when an unresolved one lies to its right or its own bound exceeds :data:`ROUNDOFF_WARN` of
+    |lambda|. A pair within its round-off of the real axis counts as real."""
+    import scipy.linalg as sl
+
+    sysm = ShapeSystem.of(params, n_segments)
+    a = sysm.jac(sysm.straight())
+    u = np.linalg.svd(a)[0]
+    q = u[:, :-1]  # the range of A: orthogonal to its left null vector u[:, -1]
+    b = q.T @ a @ q
+    lam, vl, vr = sl.eig(b, left=True, right=True)
+    cond = (np.linalg.norm(vl, axis=0) * np.linalg.norm(vr, axis=0)
+            / np.maximum(np.abs(np.einsum("ij,ij->j", vl.conj(), vr)), np.finfo(float).tiny))
+    bound = cond * np.finfo(float).eps * np.linalg.norm(a)
+    resolved = np.abs(lam) > 10.0 * bound
+    pool = resolved if resolved.any() else np.ones(lam.size, bool)
     k = np.flatnonzero(pool)[np.argmax(lam.real[pool])]
-    if bound[k] > ROUNDOFF_WARN * abs(lam[k]) or np.any(cand & ~pool & (lam.real > lam.real[k])):
+    if bound[k] > ROUNDOFF_WARN * abs(lam[k]) or np.any(~pool & (lam.real > lam.real[k])):
         _roundoff_warning(n_segments, a, "limits the leading eigenvalue")
     im = abs(lam[k].imag) if abs(lam[k].imag) > 10.0 * bound[k] else 0.0
     return complex(lam[k].real, im)

@@ -189,7 +189,7 @@ def _cmd_steer(args) -> int:
         return 1
     if not m["completed"]:
         print(f"failed: the swimmer did not {'swim the laps of' if res.path.closed else 'reach the end of'} the path "
-              f"({100 * m['path_covered_fraction']:.0f} % covered) in three times the time its length takes; a path "
+              f"({100 * m['path_covered_fraction']:.0f} % covered) in up to three times the time its length takes; a path "
               "starting behind the swimmer or across its heading, bends tighter than it turns (path_feasible) "
               "or too much tracking noise can do this", file=sys.stderr)
         return 1

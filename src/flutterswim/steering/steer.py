@@ -210,7 +210,7 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
         done, covered = _completed(true_t, true_x, true_y, path, reduced.period, onset, params.l, laps)
         if not done:
             what = (f"{laps:g} lap(s) of the path were not swum" if path.closed else
-                    f"the path's end was not reached (passed within {ARRIVAL_BL:g} body length)")
+                    f"the path's end was not reached (the swimmer never came within {ARRIVAL_BL:g} body length of it)")
             warnings.warn(f"{what} in {t - onset:.3g} s of control, {cap / duration:.3g} times the {duration:.3g} s its "
                           f"length takes ({100 * covered:.0f} % of {'the laps' if path.closed else 'it'} covered): the "
                           "swimmer cannot follow it (a path starting behind it or across its heading, bends tighter "

@@ -50,7 +50,8 @@ def hysteresis(ds, dim: str | None = None, flag: str = "limit_cycle", period: st
     swimming axis values (``flag``; NaN where the branch does not cross, e.g. a down branch that
     swims down to the sweep's lowest value). Hysteresis is where the two branches differ at one
     axis value: one swims and the other not (a subcritical onset), or both swim with periods
-    (``period``, if present) more than :data:`COEXIST_PERIOD` apart (two strokes across a fold).
+    (``period``, if present) more than :data:`COEXIST_PERIOD` apart (two strokes across a fold),
+    where both points are done and not failed (``done``, ``failed``, if present).
     Those values are ``bistable``; ``range`` their span and ``width`` its length (a lower bound:
     the sampled values). A down branch swimming below the up branch's onset had been missed
     (its bracket NaN), and so had a fold where both branches swim."""
@@ -62,6 +63,11 @@ def hysteresis(ds, dim: str | None = None, flag: str = "limit_cycle", period: st
     fd = np.asarray(ds[flag].sel(branch="down").values, bool)
     up, down = transition(x, fu), transition(x, fd)
     differ = fu != fd
+    # only where both points were computed (a failed or undone point's flag reads False: a single
+    # failed point on the down branch had made its value "bistable")
+    for name, good in (("done", True), ("failed", False)):
+        if name in ds:
+            differ &= np.all([np.asarray(ds[name].sel(branch=b).values, bool) == good for b in ("up", "down")], axis=0)
     if period in ds:
         pu = np.asarray(ds[period].sel(branch="up").values, float)
         pd = np.asarray(ds[period].sel(branch="down").values, float)

@@ -192,6 +192,9 @@ class SweepSpec:
     settings: PointSettings = field(default_factory=PointSettings)
     continuation: bool = False
     preset_name: str | None = None
+    #: a continuation store made before stop 46 with an axis not in increasing order: its "up"
+    #: branch ran in the order given (read and resumed so; new sweeps run up in increasing value)
+    legacy_up_order: bool = False
 
     def __post_init__(self) -> None:
         _base_dict(self.base)
@@ -296,7 +299,8 @@ class SweepSpec:
         n = self.n_values
         if not self.continuation:
             return "single", k, self.values(k)
-        order = np.argsort(np.asarray(self.axes[0].values, float), kind="stable")
+        order = (np.arange(n) if self.legacy_up_order else
+                 np.argsort(np.asarray(self.axes[0].values, float), kind="stable"))
         if k < n:
             i = int(order[k])
             return "up", i, self.values(i)
@@ -308,13 +312,19 @@ class SweepSpec:
 
     # ------------------------------------------------------------------ identity
     def to_dict(self) -> dict[str, Any]:
-        return {
+        d = {
             "base": _base_dict(self.base),
             "axes": [{"name": a.name, "values": list(a.values)} for a in self.axes],
             "mode": self.mode,
             "settings": self.settings.to_dict(),
             "continuation": bool(self.continuation),
         }
+        if self.continuation and not self.legacy_up_order and np.any(np.diff(np.asarray(self.axes[0].values, float)) < 0):
+            # (an axis not given in increasing order: "up" runs in increasing value since stop 46,
+            # where a store made before ran it in the order given; this key makes such a store a
+            # different sweep, refused on resume, not mis-assigned)
+            d["up"] = "increasing"
+        return d
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> "SweepSpec":
@@ -323,6 +333,8 @@ class SweepSpec:
             axes=tuple(Axis(a["name"], tuple(a["values"])) for a in d["axes"]),
             mode=d["mode"], settings=PointSettings(**d["settings"]),
             continuation=bool(d["continuation"]),
+            legacy_up_order=bool(d["continuation"]) and "up" not in d
+            and bool(np.any(np.diff(np.asarray(d["axes"][0]["values"], float)) < 0)),
         )
 
     def to_json(self) -> str:

@@ -297,9 +297,10 @@ class SweepStore:
         self._dims, self._shape, _ = store_dims(spec)
         # flat position of point k in the row-major dataset (continuation: the down branch
         # runs back along the axis)
-        n = spec.n_values
-        k = np.arange(spec.n_points)
-        self._pos = np.where(k < n, k, n + (2 * n - 1 - k)) if spec.continuation else k
+        # (from spec.point, as index() is: the positions had assumed "up" in the order given, and a
+        # descending axis resumed, reported and retried the wrong points)
+        self._pos = (np.array([np.ravel_multi_index(self.index(k), self._shape) for k in range(spec.n_points)])
+                     if spec.continuation else np.arange(spec.n_points))
         self._arr = {k: group[k] for k in (*self.variables, *BOOKKEEPING)}
 
     # ------------------------------------------------------------------ open/create

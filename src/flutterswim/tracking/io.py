@@ -324,7 +324,9 @@ def _avi_truncated(p: Path) -> tuple[int, int] | None:
             while at + 8 <= size:  # RIFF 'AVI ' then, in an OpenDML file, RIFF 'AVIX' chunks
                 fh.seek(at)
                 tag, n = struct.unpack("<4sI", fh.read(8))
-                if tag != b"RIFF":
+                if tag != b"RIFF" or n in (0, 0xFFFFFFFF):
+                    # (0 or all ones: a writer that could not seek back, to a pipe, or a crashed
+                    # capture: the size says nothing)
                     return None
                 at += 8 + n + (n & 1)
             return (at, size) if at > size + 1 else None  # (+1: a last odd chunk's pad byte)
