@@ -55,3 +55,14 @@ def test_the_zero_mode_is_deflated_not_searched_for(eta_perp, chi, n, want):
         warnings.simplefilter("ignore")
         lm = leading_mode(Groups(eta_par=41.49, eta_perp=eta_perp, chi=chi), n)
     assert abs(lm - want) < 2e-3 * abs(want)
+
+
+@pytest.mark.parametrize("chi", [1.0, -1.0])
+def test_far_below_threshold_the_pair_is_not_lost_to_the_deflations_round_off(chi):
+    """eta_perp = 1, chi = +-1, N = 24: deflating split the relaxation's defective cluster at -1
+    into a real -0.99998, taken, silently, for the pair -0.99999093 + 0.1115i that A's own
+    spectrum gives (to 1e-8): the frequency read 0, and chi and -chi disagreed."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        lm = leading_mode(Groups(eta_par=41.49, eta_perp=1.0, chi=chi), 24)
+    assert lm.imag == pytest.approx(0.11145353, rel=1e-4) and lm.real == pytest.approx(-0.99999093, abs=1e-7)

@@ -220,7 +220,8 @@ def test_hysteresis_of_a_subcritical_onset_and_of_a_fold():
     failed = _branches([1.0, 2.0, 3.0, 3.5], [0, 0, 1, 1], [0, 0, 0, 1])
     failed["failed"] = (("chi", "branch"), np.array([[0, 0], [0, 0], [0, 1], [0, 0]], bool))
     failed["done"] = (("chi", "branch"), np.array([[1, 1], [1, 1], [1, 1], [1, 1]], bool))
-    assert not hysteresis(failed)["hysteresis"]
+    h = hysteresis(failed)
+    assert not h["hysteresis"] and h["up"] == (2.0, 3.0) and h["down"] == (2.0, 3.5)  # (skips the failed point)
     failed["failed"] = failed["failed"] * False
     failed["done"] = (("chi", "branch"), np.array([[1, 0], [1, 0], [1, 0], [1, 1]], bool))
     assert not hysteresis(failed)["hysteresis"]

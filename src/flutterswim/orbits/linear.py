@@ -135,38 +135,64 @@ def hopf_bracket(axis: Axis, n: int, base: float, to: float, *, prefer: float | 
     return min(found, key=lambda b: abs(0.5 * (b[0] + b[1]) - prefer))
 
 
+def _eig_bounds(m: np.ndarray, norm: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Eigenvalues of m, each one's round-off bound (condition number times eps ``norm``) and
+    the right eigenvectors."""
+    import scipy.linalg as sl
+
+    lam, vl, vr = sl.eig(m, left=True, right=True)
+    cond = (np.linalg.norm(vl, axis=0) * np.linalg.norm(vr, axis=0)
+            / np.maximum(np.abs(np.einsum("ij,ij->j", vl.conj(), vr)), np.finfo(float).tiny))
+    return lam, cond * np.finfo(float).eps * norm, vr
+
+
+def _leader(lam: np.ndarray, bound: np.ndarray, keep: np.ndarray) -> tuple[int, bool]:
+    """The eigenvalue of largest real part among ``keep`` and resolved from 0 (beyond 10 times
+    its bound), and whether an unresolved one lies to its right."""
+    resolved = keep & (np.abs(lam) > 10.0 * bound)
+    pool = resolved if resolved.any() else keep
+    k = int(np.flatnonzero(pool)[np.argmax(lam.real[pool])])
+    return k, bool(np.any(keep & ~pool & (lam.real > lam.real[k])))
+
+
 def leading_mode(params, n_segments: int) -> complex:
     """The eigenvalue of largest real part [1/tau] (Im >= 0), leaving out the zero mode of the
     bent-equilibrium family: the growth rate and angular frequency of the straight state.
 
-    The zero mode is deflated, not looked for among the computed eigenvalues: A maps every vector
-    into its range, the complement of its left null vector m (the left singular vector of its
-    smallest singular value), so with Q an orthonormal basis of that complement A Q = Q (Q^T A Q),
-    whose eigenvalues are A's but the zero one. Round-off had moved the zero mode far from 0
-    (+2.81 at eta_perp = 0.1, N = 256; split into 2.2 +- 3.4i at N = 384), where a cut at 1e-9 of
-    the largest |lambda| had dropped the flutter pair itself (eta_perp = 8 from N = 256) and one
-    relative to each eigenvalue's bound the relaxation's modes at -1. The leader is taken among
-    eigenvalues resolved from 0 (beyond 10 times their round-off bound), with a RoundoffWarning
-    when an unresolved one lies to its right or its own bound exceeds :data:`ROUNDOFF_WARN` of
-    |lambda|. A pair within its round-off of the real axis counts as real."""
-    import scipy.linalg as sl
-
+    Two ways, checked against each other. (a) A's own spectrum less the eigenvalue along its
+    null vector (the right singular vector of its smallest singular value): accurate, but
+    round-off can move the zero mode far from 0 at high N (+2.81 at eta_perp = 0.1, N = 256;
+    split into 2.2 +- 3.4i at N = 384, where another eigenvalue then lies nearer the null vector).
+    (b) The zero mode deflated: A maps into its range, the complement of its left null vector,
+    so with Q an orthonormal basis of it A Q = Q (Q^T A Q), whose eigenvalues are A's but the
+    zero one; but Q^T A Q splits the defective cluster of the relaxation's modes at -1 further
+    (a real -0.99998 beside the pair -0.99999 + 0.111i at eta_perp = 1, chi = 1, N = 24). Where
+    their leaders' real parts agree within 10 times (b)'s bound, the one with the smaller bound is
+    returned; else (b)'s, with a RoundoffWarning. Each takes its leader among eigenvalues resolved from 0 (beyond 10
+    times their bound), and warns when an unresolved one lies to its right or the leader's
+    bound exceeds :data:`ROUNDOFF_WARN` of |lambda|. (A cut at 1e-9 of the largest |lambda|,
+    which grows like N^4 / eta_perp, had dropped the flutter pair itself at eta_perp = 8 from
+    N = 256.) A pair within its round-off of the real axis counts as real."""
     sysm = ShapeSystem.of(params, n_segments)
     a = sysm.jac(sysm.straight())
-    u = np.linalg.svd(a)[0]
-    q = u[:, :-1]  # the range of A: orthogonal to its left null vector u[:, -1]
-    b = q.T @ a @ q
-    lam, vl, vr = sl.eig(b, left=True, right=True)
-    cond = (np.linalg.norm(vl, axis=0) * np.linalg.norm(vr, axis=0)
-            / np.maximum(np.abs(np.einsum("ij,ij->j", vl.conj(), vr)), np.finfo(float).tiny))
-    bound = cond * np.finfo(float).eps * np.linalg.norm(a)
-    resolved = np.abs(lam) > 10.0 * bound
-    pool = resolved if resolved.any() else np.ones(lam.size, bool)
-    k = np.flatnonzero(pool)[np.argmax(lam.real[pool])]
-    if bound[k] > ROUNDOFF_WARN * abs(lam[k]) or np.any(~pool & (lam.real > lam.real[k])):
+    norm = float(np.linalg.norm(a))
+    u, _, vt = np.linalg.svd(a)
+    lam_a, b_a, vr = _eig_bounds(a, norm)
+    keep = np.ones(lam_a.size, bool)
+    keep[int(np.argmax(np.abs(vr.conj().T @ vt[-1]) / np.linalg.norm(vr, axis=0)))] = False
+    ka, hidden_a = _leader(lam_a, b_a, keep)
+    q = u[:, :-1]
+    lam_b, b_b, _ = _eig_bounds(q.T @ a @ q, norm)
+    kb, hidden_b = _leader(lam_b, b_b, np.ones(lam_b.size, bool))
+    agree = abs(lam_a[ka].real - lam_b[kb].real) <= 10.0 * b_b[kb] + 1e-12 * abs(lam_b[kb])
+    if agree and b_a[ka] <= b_b[kb]:  # (a) the sharper
+        lam, bound, hidden, warn = lam_a[ka], b_a[ka], hidden_a, False
+    else:  # (b): as sharp, or (a) kept round-off's zero mode, or lost the leader to it
+        lam, bound, hidden, warn = lam_b[kb], b_b[kb], hidden_b, not agree
+    if warn or hidden or bound > ROUNDOFF_WARN * abs(lam):
         _roundoff_warning(n_segments, a, "limits the leading eigenvalue")
-    im = abs(lam[k].imag) if abs(lam[k].imag) > 10.0 * bound[k] else 0.0
-    return complex(lam[k].real, im)
+    im = abs(lam.imag) if abs(lam.imag) > 10.0 * bound else 0.0
+    return complex(lam.real, im)
 
 
 @dataclass(frozen=True)

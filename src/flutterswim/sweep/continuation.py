@@ -61,13 +61,15 @@ def hysteresis(ds, dim: str | None = None, flag: str = "limit_cycle", period: st
     x = np.asarray(ds[dim].values, float)
     fu = np.asarray(ds[flag].sel(branch="up").values, bool)
     fd = np.asarray(ds[flag].sel(branch="down").values, bool)
-    up, down = transition(x, fu), transition(x, fd)
-    differ = fu != fd
-    # only where both points were computed (a failed or undone point's flag reads False: a single
-    # failed point on the down branch had made its value "bistable")
+    # only points computed count (a failed or undone point's flag reads False: a single failed
+    # point on the down branch had made its value "bistable", and moved its branch's bracket)
+    ok = {b: np.ones(x.size, bool) for b in ("up", "down")}
     for name, good in (("done", True), ("failed", False)):
         if name in ds:
-            differ &= np.all([np.asarray(ds[name].sel(branch=b).values, bool) == good for b in ("up", "down")], axis=0)
+            for b in ok:
+                ok[b] &= np.asarray(ds[name].sel(branch=b).values, bool) == good
+    up, down = transition(x[ok["up"]], fu[ok["up"]]), transition(x[ok["down"]], fd[ok["down"]])
+    differ = (fu != fd) & ok["up"] & ok["down"]
     if period in ds:
         pu = np.asarray(ds[period].sel(branch="up").values, float)
         pd = np.asarray(ds[period].sel(branch="down").values, float)

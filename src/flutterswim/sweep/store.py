@@ -366,10 +366,14 @@ class SweepStore:
             diffs = spec.diff(stored_spec)
             if stored_vars != variables:
                 diffs.append("variables: the point function returns a different set of variables")
+            legacy = any(d.startswith("up:") for d in diffs)
             raise SweepDefinitionError(
                 f"the store {str(path)!r} holds a different sweep (definition {attrs.get('fingerprint')}, "
-                f"requested {spec.fingerprint}); differences: " + "; ".join(diffs[:8]) + ". Use another "
-                "--out path, or overwrite=True (--overwrite) to discard the stored points."
+                f"requested {spec.fingerprint}); differences: " + "; ".join(diffs[:8]) + ". "
+                + ("(It was made by an earlier flutterswim, whose continuation ran 'up' in the axis's order as "
+                   "given, not in increasing value: open_sweep reads it as it ran, but it cannot be resumed.) "
+                   if legacy else "")
+                + "Use another --out path, or overwrite=True (--overwrite) to discard the stored points."
             )
         if attrs["fingerprint"] != spec.fingerprint:
             raise SweepStoreError(f"the store {str(path)!r} is inconsistent: its fingerprint "
