@@ -156,3 +156,23 @@ def test_a_store_made_before_keeps_its_order_and_is_not_resumed_as_a_new_one():
     assert old.diff(new) and SweepSpec.from_dict(d).diff(new) == []
     asc = SweepSpec.build(["kappa_E_ratio=1.85,1.95"], continuation=True)
     assert "up" not in json.loads(asc.to_json())  # ascending stores keep their definition
+
+
+def test_resuming_an_old_descending_store_says_why_it_is_refused(tmp_path):
+    """A continuation store made before, with a descending axis, has no "up" key: refused on
+    resume with the reason, not only 'up: stored <absent>'."""
+    import json
+
+    import zarr
+
+    from flutterswim.params import Groups
+
+    args = dict(base=Groups(41.5, 71.5, 70.0), continuation=True, point_fn=_toy, backend="serial",
+                out=str(tmp_path / "a.zarr"), progress=False)
+    sweep({"chi": [4.0, 3.0]}, max_points=1, **args)
+    g = zarr.open_group(str(tmp_path / "a.zarr"), mode="r+")
+    d = json.loads(g.attrs["sweep_spec"])
+    d.pop("up")
+    g.attrs["sweep_spec"] = json.dumps(d, sort_keys=True, separators=(",", ":"))
+    with pytest.raises(SweepDefinitionError, match="made by an earlier flutterswim"):
+        sweep({"chi": [4.0, 3.0]}, **args)

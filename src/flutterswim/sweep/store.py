@@ -366,7 +366,8 @@ class SweepStore:
             diffs = spec.diff(stored_spec)
             if stored_vars != variables:
                 diffs.append("variables: the point function returns a different set of variables")
-            legacy = any(d.startswith("up:") for d in diffs)
+            asked = json.loads(spec.to_json())
+            legacy = "up" in asked and "up" not in stored_spec and asked.get("axes") == stored_spec.get("axes")
             raise SweepDefinitionError(
                 f"the store {str(path)!r} holds a different sweep (definition {attrs.get('fingerprint')}, "
                 f"requested {spec.fingerprint}); differences: " + "; ".join(diffs[:8]) + ". "
