@@ -56,17 +56,15 @@ def _roundoff_warning(n_segments: int, a: np.ndarray, what: str) -> None:
                   "continuum's flutterswim.stability.leading_eigenvalue", RoundoffWarning, stacklevel=3)
 
 
-def _spectrum_bounds(params, n_segments: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The straight state's eigenvalues, each one's round-off bound (its condition number times
-    eps ||A||_F) and the Jacobian A."""
+def _eig_bounds(m: np.ndarray, norm: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Eigenvalues of m, each one's round-off bound (condition number times eps ``norm``) and
+    the right eigenvectors."""
     import scipy.linalg as sl
 
-    sysm = ShapeSystem.of(params, n_segments)
-    a = sysm.jac(sysm.straight())
-    lam, vl, vr = sl.eig(a, left=True, right=True)
+    lam, vl, vr = sl.eig(m, left=True, right=True)
     cond = (np.linalg.norm(vl, axis=0) * np.linalg.norm(vr, axis=0)
             / np.maximum(np.abs(np.einsum("ij,ij->j", vl.conj(), vr)), np.finfo(float).tiny))
-    return lam, cond * np.finfo(float).eps * np.linalg.norm(a), a
+    return lam, cond * np.finfo(float).eps * norm, vr
 
 
 def leading_pair(params, n_segments: int) -> complex:
@@ -80,7 +78,9 @@ def leading_pair(params, n_segments: int) -> complex:
     Hopf point search found 104 for 121. A leading pair whose bound exceeds :data:`ROUNDOFF_WARN`
     of |lambda| or :data:`ROUNDOFF_WARN_IM` of its Im warns (RoundoffWarning), and so does a
     straight state whose only pairs are within round-off of the real axis."""
-    lam, bound, a = _spectrum_bounds(params, n_segments)
+    sysm = ShapeSystem.of(params, n_segments)
+    a = sysm.jac(sysm.straight())
+    lam, bound, _ = _eig_bounds(a, float(np.linalg.norm(a)))
     # complex: Im beyond round-off relative to the eigenvalue itself (a cut relative to the
     # largest |lambda|, which grows like N^4, dropped the flutter pair 0.60 +- 7.2i at N = 256)
     cplx = lam.imag > 1e-6 * np.abs(lam)
@@ -133,17 +133,6 @@ def hopf_bracket(axis: Axis, n: int, base: float, to: float, *, prefer: float | 
     if prefer is None:
         return found[0]
     return min(found, key=lambda b: abs(0.5 * (b[0] + b[1]) - prefer))
-
-
-def _eig_bounds(m: np.ndarray, norm: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Eigenvalues of m, each one's round-off bound (condition number times eps ``norm``) and
-    the right eigenvectors."""
-    import scipy.linalg as sl
-
-    lam, vl, vr = sl.eig(m, left=True, right=True)
-    cond = (np.linalg.norm(vl, axis=0) * np.linalg.norm(vr, axis=0)
-            / np.maximum(np.abs(np.einsum("ij,ij->j", vl.conj(), vr)), np.finfo(float).tiny))
-    return lam, cond * np.finfo(float).eps * norm, vr
 
 
 def _leader(lam: np.ndarray, bound: np.ndarray, keep: np.ndarray) -> tuple[int, bool]:
