@@ -95,6 +95,17 @@ def test_the_refusal_names_the_cause():
             describe(tr)
 
 
+def _thinned(tr0, fps: float, drop: float, seed: int):
+    """tr0 seen by a camera at ``fps`` (the frame nearest each grid time, the grid offset by
+    0.0037 seed s), with a fraction ``drop`` of those frames dropped at random."""
+    grid = np.arange(tr0.t[0] + 0.0037 * seed, tr0.t[-1], 1 / fps)
+    idx = np.unique(np.searchsorted(tr0.t, grid))
+    keep = np.zeros(tr0.t.size, bool)
+    keep[idx[idx < tr0.t.size]] = True
+    keep &= np.random.default_rng(seed).random(tr0.t.size) >= drop
+    return _subset(tr0, np.flatnonzero(keep))
+
+
 @pytest.fixture(scope="module")
 def onset_run():
     import flutterswim as fs
@@ -108,16 +119,11 @@ def test_a_merged_cycle_ends_the_window(onset_run, fps, drop, seed):
     """10-12 fps with a fifth of the frames dropped, from the field's start: a merged cycle that
     the window passed let it run back into the onset (advance 0.08 mm for 0.40); it must end the
     window as a skipped stroke does."""
-    tr0 = onset_run
-    grid = np.arange(tr0.t[0] + 0.0037 * seed, tr0.t[-1], 1 / fps)
-    idx = np.unique(np.searchsorted(tr0.t, grid))
-    keep = np.zeros(tr0.t.size, bool)
-    keep[idx[idx < tr0.t.size]] = True
-    keep &= np.random.default_rng(seed).random(tr0.t.size) >= drop
+    thinned = _thinned(onset_run, fps, drop, seed)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        want = describe(tr0)
-        got = describe(_subset(tr0, np.flatnonzero(keep)))
+        want = describe(onset_run)
+        got = describe(thinned)
     assert got.advance_per_cycle_mm == pytest.approx(want.advance_per_cycle_mm, rel=0.05)
     assert got.period_s == pytest.approx(want.period_s, rel=0.05)
 
@@ -125,30 +131,20 @@ def test_a_merged_cycle_ends_the_window(onset_run, fps, drop, seed):
 def test_a_window_far_from_the_records_end_says_so(onset_run):
     """10 fps, a fifth dropped, seed 19: every later cycle misses frames and the window falls on
     the onset (advance 0.06 mm for 0.40). Without a limit cycle that must be said."""
-    tr0 = onset_run
-    grid = np.arange(tr0.t[0] + 0.0037 * 19, tr0.t[-1], 0.1)
-    idx = np.unique(np.searchsorted(tr0.t, grid))
-    keep = np.zeros(tr0.t.size, bool)
-    keep[idx[idx < tr0.t.size]] = True
-    keep &= np.random.default_rng(19).random(tr0.t.size) >= 0.2
+    thinned = _thinned(onset_run, 10, 0.2, 19)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        d = describe(_subset(tr0, np.flatnonzero(keep)))
-    assert tr0.t[-1] - d.window_end_s > 2 * d.period_s
+        d = describe(thinned)
+    assert onset_run.t[-1] - d.window_end_s > 2 * d.period_s
     assert "before the record's last" in d.note and "may describe an earlier stroke" in d.note
 
 
 def test_a_window_spread_thin_over_gaps_says_so(onset_run):
     """12 fps, a fifth dropped, seed 9: three described cycles spread over 8 s, the cycles between
     missing frames, the earliest in the onset (advance 0.14 mm for 0.40): said."""
-    tr0 = onset_run
-    grid = np.arange(tr0.t[0] + 0.0037 * 9, tr0.t[-1], 1 / 12)
-    idx = np.unique(np.searchsorted(tr0.t, grid))
-    keep = np.zeros(tr0.t.size, bool)
-    keep[idx[idx < tr0.t.size]] = True
-    keep &= np.random.default_rng(9).random(tr0.t.size) >= 0.2
+    thinned = _thinned(onset_run, 12, 0.2, 9)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        d = describe(_subset(tr0, np.flatnonzero(keep)))
+        d = describe(thinned)
     assert d.window_end_s - d.window_start_s > (d.n_cycles_used + 2) * d.period_s
     assert "spread over" in d.note and "may be an earlier stroke" in d.note
