@@ -711,6 +711,7 @@ def test_a_path_starting_behind_the_swimmer_is_followed_to_its_end(reduced):
     make = lambda p, h: _polyline(np.array([p, p - np.array([4 * L, 0.0])]), False, "back", 1e-5)  # noqa: E731
     m = steer(P, make, reduced, seed=0).metrics
     assert m["completed"] and math.isfinite(m["end_arrival_s"]) and not m["trapped"]
+    assert m["end_miss_bl"] < 1.0
     assert m["path_covered_fraction"] > 0.95
 
 
@@ -735,8 +736,48 @@ def test_passing_the_end_far_off_is_not_arriving(reduced):
     from flutterswim.steering.steer import ARRIVAL_BL
 
     make = lambda p, h: _polyline(np.array([p, p - np.array([3 * L, 0.0])]), False, "back", 1e-5)  # noqa: E731
+    # (control asked to start between two frames: it starts on the next one, and the frames keep
+    # their spacing; 7.44 s had been followed by 7.475 s at 50 fps)
     with pytest.warns(UserWarning, match="end was not reached"):
-        res = steer(P, make, reduced, closed_loop=False, n_segments=12, seed=0)
+        res = steer(P, make, reduced, closed_loop=False, n_segments=12, seed=0, onset=reduced.onset_time + 0.0123)
+    assert np.allclose(np.diff(res.run.t), 1 / 50, rtol=1e-6)
+    t0 = res.control_start
+    assert t0 >= reduced.onset_time + 0.0123 and t0 - (reduced.onset_time + 0.0123) < 1 / 50
     q = np.column_stack([res.run.x.mean(axis=1), res.run.y.mean(axis=1)])
     closest = np.hypot(*(q - res.path.points[-1]).T).min() / L
     assert closest > ARRIVAL_BL and not res.metrics["completed"]
+    # the metrics say by how much: the closest approach of the stroke-averaged centroid after
+    # control starts, here from the steering package's own stroke average
+    avg = cycle_average(res.run.t, res.run.x.mean(axis=1), res.run.y.mean(axis=1), res.run.field_angle,
+                        reduced.period)
+    after = avg.t >= t0
+    own = np.hypot(avg.x[after] - res.path.points[-1][0], avg.y[after] - res.path.points[-1][1]).min() / L
+    assert res.metrics["end_miss_bl"] == pytest.approx(own, abs=0.05)
+    assert res.metrics["end_miss_bl"] > ARRIVAL_BL
+
+
+@pytest.mark.parametrize("closed", [True, False])
+def test_steer_cli_says_how_far_a_failed_run_got(tmp_path, fast_steer, closed, capsys, monkeypatch):
+    """A run that did not finish its path said only "N % covered": an open path's failure now
+    gives the closest approach to its end against the arrival distance, a closed one's the laps
+    swum of those asked for (its covered fraction counts laps)."""
+    import importlib
+
+    from flutterswim.cli import main
+
+    st = importlib.import_module("flutterswim.steering.steer")
+    done = st.steer
+
+    def short(*a, **kw):
+        res = done(*a, **kw)
+        extra = {"completed": False, "path_covered_fraction": 0.6, "laps": 1.0,
+                 "end_miss_bl": math.nan if closed else 2.9}
+        return st.SteerResult(res.run, res.path, {**res.metrics, **extra}, True, 0.0)
+
+    monkeypatch.setattr(st, "steer", short)
+    (tmp_path / "w.csv").write_text("0,0\n5,0\n5,5\n")
+    path = ["--path", "circle"] if closed else ["--path", "waypoints", "--waypoints", str(tmp_path / "w.csv")]
+    status = main(["steer", *path, "--out", str(tmp_path / "s.nc"), "--metrics", str(tmp_path / "s.json"), "--quiet"])
+    err = capsys.readouterr().err.strip()
+    assert status == 1 and err.startswith("failed:") and len(err.splitlines()) == 1
+    assert ("swam 0.60 of its 1 laps" in err) if closed else ("2.90 body lengths from its end at the closest" in err)

@@ -176,3 +176,40 @@ def test_resuming_an_old_descending_store_says_why_it_is_refused(tmp_path):
     g.attrs["sweep_spec"] = json.dumps(d, sort_keys=True, separators=(",", ":"))
     with pytest.raises(SweepDefinitionError, match="made by an earlier flutterswim"):
         sweep({"chi": [4.0, 3.0]}, **args)
+
+
+def test_an_old_descending_stores_figure_says_the_order_it_ran_in(tmp_path):
+    """A store made before stop 46 with a descending axis ran "up" in the order given; its figure
+    labelled that branch "increasing" (helper-110). A new store's label is unchanged."""
+    import json
+
+    import zarr
+
+    from flutterswim.params import Groups
+    from flutterswim.sweep import open_sweep
+    from flutterswim.sweep.plot import plot_sweep
+
+    args = dict(base=Groups(41.5, 71.5, 70.0), continuation=True, point_fn=_stroke, backend="serial", progress=False)
+    for name, legacy in (("old.zarr", True), ("new.zarr", False)):
+        sweep({"chi": [4.0, 3.0, 2.0]}, out=str(tmp_path / name), **args)
+        if legacy:
+            g = zarr.open_group(str(tmp_path / name), mode="r+")
+            d = json.loads(g.attrs["sweep_spec"])
+            d.pop("up")
+            g.attrs["sweep_spec"] = json.dumps(d, sort_keys=True, separators=(",", ":"))
+        ds = open_sweep(str(tmp_path / name))
+        labels = [t.get_text() for t in plot_sweep(ds).axes[0].get_legend().get_texts()]
+        up = next(lb for lb in labels if lb.startswith("up:"))
+        assert ("in the order given" in up) == legacy and ("increasing" in up) == (not legacy), labels
+
+
+def _stroke(task):
+    """A stroke at every point (what the sweep figure draws)."""
+    v = task["values"]["chi"]
+    return {"values": {"limit_cycle": 1.0, "straight": 0.0, "self_intersecting": 0.0, "advance_per_cycle_bl": 0.1 * v,
+                       "period_s": 0.3, "reached_limit_cycle": 1.0},
+            "final_state": np.full(2 * task["settings"]["n_segments"] + 3, v)}
+
+
+_stroke.variables = ["limit_cycle", "straight", "self_intersecting", "advance_per_cycle_bl", "period_s",
+                     "reached_limit_cycle"]

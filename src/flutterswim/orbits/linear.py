@@ -280,8 +280,10 @@ def _bracket(growth, v0: float, name: str = "the parameter") -> tuple[float, flo
             return None
 
     g0 = growth(v0)
-    below = v0 * np.array([0.8, 0.6, 0.45, 0.3, 0.2, 0.1, 0.05, 0.02])
-    above = v0 * np.array([1.25, 1.6, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0])
+    # three decades each way: a point far past onset (kappa_E_ratio 60, chi = 4242) has its Hopf
+    # point at chi = 48.3, a sixtieth of it (two decades had missed it and said there was none)
+    below = v0 * np.array([0.8, 0.6, 0.45, 0.3, 0.2, 0.1, 0.05, 0.02, 0.01, 0.005, 0.002, 0.001])
+    above = v0 * np.array([1.25, 1.6, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0])
     last = {"below": v0, "above": v0}  # the last valid value scanned on each side
     open_ = {"below": True, "above": True}
     for vb, va in zip(below, above):

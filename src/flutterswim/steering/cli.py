@@ -108,7 +108,7 @@ def _cmd_steer(args) -> int:
     from ..params import preset
     from . import path as paths
     from .reduced import identify
-    from .steer import steer
+    from .steer import ARRIVAL_BL, steer
 
     _check_path_options(args)
     from .steer import STEER_TITLE
@@ -188,8 +188,11 @@ def _cmd_steer(args) -> int:
         print(trapped_reason(m), file=sys.stderr)
         return 1
     if not m["completed"]:
+        short = (f"swam {m['path_covered_fraction']:.2f} of its {m['laps']:g} laps" if res.path.closed else
+                 f"{100 * m['path_covered_fraction']:.0f} % covered, {m['end_miss_bl']:.2f} body lengths from its end at "
+                 f"the closest, {ARRIVAL_BL:g} needed")
         print(f"failed: the swimmer did not {'swim the laps of' if res.path.closed else 'reach the end of'} the path "
-              f"({100 * m['path_covered_fraction']:.0f} % covered) in up to three times the time its length takes; a path "
+              f"({short}) in up to three times the time its length takes; a path "
               "starting behind the swimmer or across its heading, bends tighter than it turns (path_feasible) "
               "or too much tracking noise can do this", file=sys.stderr)
         return 1

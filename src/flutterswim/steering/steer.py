@@ -119,6 +119,9 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     seed = positive_int("seed", seed, minimum=0)  # numpy's generator takes seeds >= 0
     onset = positive("onset", reduced.onset_time if onset is None else onset)
     dt = 1.0 / fps
+    # control starts on a camera frame: the onset run's last frame is then the moment control
+    # starts (off the grid, 7.44 s was followed by 7.475 s at 50 fps, a frame's step skipped)
+    onset = math.ceil(onset * fps - 1e-9) / fps
     rng = np.random.default_rng(seed)
     sigma = noise_px * um_per_px * 1e-6
     # the path's length does not depend on where it starts: too long a path is refused first
@@ -229,6 +232,7 @@ def steer(params: Parameters, path_factory, reduced: ReducedModel, *, closed_loo
     met["trapped"] = bool(math.isfinite(trapped_at)) or met["trapped"]
     met["trapped_at_s"] = trapped_at  # when the run was stopped for it (NaN: not stopped)
     met["completed"] = bool(done)  # the open path's end reached, or the laps swum
+    met["laps"] = float(laps) if path.closed else 1.0
     met.update(closed_loop=closed_loop, noise_px=noise_px, um_per_px=um_per_px, fps=fps, delay_frames=delay_frames,
                path=path.name, lookahead_bl=lookahead_bl, correction_bl=correction_bl)
     return SteerResult(run, path, met, closed_loop, onset)
@@ -428,6 +432,10 @@ def metrics(run, path: RefPath, reduced: ReducedModel, t0: float, body_length: f
     # the whole run's speed: trapped is whether the run ended stalled
     speed_all = np.hypot(np.gradient(ax, ts), np.gradient(ay, ts)) if ts.size > 1 else np.zeros(ts.size)
     end_arrival = math.nan
+    # the closest the averaged centroid came to an open path's end, over the whole run (what a
+    # run that did not reach it missed by)
+    end_miss = (math.nan if path.closed or not prog.size else
+                float(np.min(np.hypot(*(q - path.points[-1]).T))) / bl)
     if not path.closed:
         # an open path is scored up to where the swimmer reaches its end (then swims on past it)
         done = np.nonzero(prog >= path.s[-1])[0]
@@ -490,5 +498,6 @@ def metrics(run, path: RefPath, reduced: ReducedModel, t0: float, body_length: f
         "path_covered_fraction": covered / Ls,
         "mean_speed_mm_s": float(np.mean(speed) * 1e3),
         "end_arrival_s": end_arrival,
+        "end_miss_bl": end_miss,
         "trapped": bool(np.mean(speed_all[-max(1, speed_all.size // 10):]) < 0.2 * reduced.U),
     }

@@ -115,6 +115,17 @@ def _axis_label(ds, x: str) -> str:
     return f"{x} [{units}]" if units and units != "1" else x
 
 
+def _branch_orders(ds) -> tuple[str, str]:
+    """How a continuation's branches ran: "up" in increasing value, "down" back; a store made
+    before stop 46 with its axis not in increasing order ran "up" in the order given (its
+    figure had said "increasing")."""
+    try:
+        legacy = _spec(ds).legacy_up_order
+    except (KeyError, TypeError, ValueError):  # (a Dataset not read from a store)
+        legacy = False
+    return ("in the order given", "in reverse order") if legacy else ("increasing", "decreasing")
+
+
 def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str | None = None,
                advance: str = "advance_per_cycle_bl", period: str = "period_s") -> Any:
     """Two panels (advancement per cycle, period) against the swept axis (default
@@ -141,6 +152,7 @@ def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str
             f"plot_sweep(ds.isel({dims[0]}=0)), or read the store with xarray.open_zarr for a map")
     x = x or dims[0]
     xv = np.asarray(ds[x].values, float)
+    rising, falling = _branch_orders(ds)
     fig = new_figure((5.5, 5.2), shown=path is None)
     axs = fig.subplots(2, 1, sharex=True)
     styles = {None: ("k", "-", "o"), "up": ("k", "-", "o"), "down": ("tab:blue", "--", "s")}
@@ -158,8 +170,8 @@ def plot_sweep(ds, path: str | None = None, *, x: str | None = None, branch: str
         kw = dict(color=color, ls=ls, marker=marker, jumps=jumps, red_lines=len(branches) == 1)
         _coloured(axs[0], xv, adv, red, gaps=straight[:-1] != straight[1:], **kw)
         _coloured(axs[1], xv, per, red, **kw)
-        label = {None: "swimming stroke", "up": f"up: {x} increasing, each point from the one before",
-                 "down": f"down: {x} decreasing"}.get(name, str(name))
+        label = {None: "swimming stroke", "up": f"up: {x} {rising}, each point from the one before",
+                 "down": f"down: {x} {falling}"}.get(name, str(name))
         proxies.append(Line2D([], [], marker=marker, color=color, ms=3, lw=1.8, ls=ls, label=label))
         if jumps is not None and jumps.any() and not any(h.get_label().startswith("jump") for h in proxies):
             proxies.append(Line2D([], [], color="0.3", lw=0.8, ls=":", label="jump to another stroke"))

@@ -231,7 +231,7 @@ def _run(store: SweepStore, spec: SweepSpec, fn, variables, *, backend, workers,
     finally:
         if bar is not None:
             bar.close()
-    _summary(store, file=sys.stderr, lost=counts["lost"])
+    _summary(store, file=sys.stderr)
 
 
 def _continue_from(store: SweepStore, k: int) -> np.ndarray | None:
@@ -246,18 +246,26 @@ def _continue_from(store: SweepStore, k: int) -> np.ndarray | None:
     return store.state(k - 1)
 
 
-def _summary(store: SweepStore, file=None, lost: int = 0) -> None:
+def _summary(store: SweepStore, file=None) -> None:
     """Failure reasons on ``file`` (always, progress bar or not)."""
     data = store.read()
-    bad = np.nonzero(data["failed"])[0]
-    if bad.size:
-        print(f"sweep: {bad.size} of {store.spec.n_points} points failed (a rerun keeps them; "
-              "retry_failed / --retry-failed computes them again):", file=file)
+    # a point lost with its worker is not a failed one: it is not saved, and a plain rerun
+    # computes it (it had been counted among the failed, which a rerun keeps)
+    failed = np.nonzero(data["failed"] & data["done"])[0]
+    gone = np.nonzero(data["failed"] & ~data["done"])[0]
+    n = store.spec.n_points
+    for bad, head in ((failed, f"sweep: {failed.size} of {n} points failed (a rerun keeps them; retry_failed / "
+                               "--retry-failed computes them again):"),
+                      (gone, f"sweep: {gone.size} of {n} points not saved, lost with their worker (a rerun of the "
+                             "same command computes them):")):
+        if not bad.size:
+            continue
+        print(head, file=file)
         for k in bad[:20]:
-            tag = "" if data["done"][k] else " (not saved; rerun to recompute)"
-            print(f"  point {k} {store.spec.point(int(k))[2]}: {data['message'][k]}{tag}", file=file)
+            print(f"  point {k} {store.spec.point(int(k))[2]}: {data['message'][k]}", file=file)
         if bad.size > 20:
-            print(f"  ... and {bad.size - 20} more (see the 'reason' variable)", file=file)
+            print(f"  ... and {bad.size - 20} more" + (" (see the 'reason' variable)" if bad is failed else ""),
+                  file=file)
 
 
 def open_sweep(path: str):
