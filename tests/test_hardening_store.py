@@ -298,6 +298,18 @@ def test_an_unreachable_scheduler_leaves_no_store_behind(tmp_path, monkeypatch):
         sweep({"chi": [1.0, 2.0, 3.0]}, out=str(out), backend="dask", scheduler="tcp://127.0.0.1:1",
               point_fn=point, progress=False)
     assert _tree(out) == before
+    # overwrite=True with a mistyped address had deleted the store and left nothing: the store is
+    # set aside, and put back when the new run does not start
+    for to in ({"chi": [1.0, 2.0, 3.0]}, {"chi": [5.0, 6.0]}):
+        with pytest.raises(SchedulerUnreachable):
+            sweep(to, out=str(out), backend="dask", scheduler="tcp://127.0.0.1:1", point_fn=point, progress=False,
+                  overwrite=True)
+        assert _tree(out) == before
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["s.zarr"]  # no remnant, no lock
+    # a run that does start replaces it, and leaves no remnant of the old one
+    ds = sweep({"chi": [5.0, 6.0]}, out=str(out), backend="serial", point_fn=point, progress=False, overwrite=True)
+    assert list(ds["chi"].values) == [5.0, 6.0] and bool(ds["done"].all())
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.zarr"]
 
 
 def test_a_killed_sweeps_lock_file_is_removed_by_the_next_run(tmp_path):

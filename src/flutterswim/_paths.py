@@ -510,18 +510,28 @@ def check_store_path(path: str | os.PathLike, *, overwrite: bool, what: str = "o
     return p
 
 
-def remove_own_store(path: str | os.PathLike, kind: str | None = None) -> None:
-    """Delete a store that carries our marker (checked again here, with its ``kind`` if
-    given); anything else raises."""
+def set_aside_own_store(path: str | os.PathLike, kind: str | None = None, tag: str = "replaced") -> Path | None:
+    """Rename a store that carries our marker (checked again here, with its ``kind`` if given)
+    to a hidden name beside it, returned (None: nothing there); anything else raises."""
     p = Path(os.fspath(path))
     if p.is_symlink():
         raise ParameterError(f"{str(p)!r} is a symbolic link; a store is never deleted through a link")
     if not p.exists():
-        return
+        return None
     if not (p.is_dir() and has_marker(p)) or _is_cwd_or_parent(p):
         raise ParameterError(f"{str(p)!r} is not a flutterswim store; it is never deleted")
     _check_kind(p, kind, "store")
+    aside = p.parent / f".{p.name}.{tag}-{os.getpid()}"
+    if aside.exists():  # (a remnant of a run with this process id: ours, by its name)
+        shutil.rmtree(aside)
+    os.replace(p, aside)
+    return aside
+
+
+def remove_own_store(path: str | os.PathLike, kind: str | None = None) -> None:
+    """Delete a store that carries our marker (checked again here, with its ``kind`` if
+    given); anything else raises."""
     # rename first: a crash mid-delete leaves a hidden remnant, never a half store at the path
-    trash = p.parent / f".{p.name}.deleting-{os.getpid()}"
-    os.replace(p, trash)
-    shutil.rmtree(trash)
+    trash = set_aside_own_store(path, kind, tag="deleting")
+    if trash is not None:
+        shutil.rmtree(trash)

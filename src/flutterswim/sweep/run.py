@@ -147,17 +147,17 @@ def sweep(
             _run(store, spec, fn, variables, backend=backend, workers=workers, scheduler=scheduler,
                  progress=progress, max_points=max_points, temporary=tmp is not None, retry_failed=retry_failed)
             ds = to_dataset(store)
-        except Exception:
+        except BaseException:
             # the backend did not start (no scheduler answered, ...) before any point was saved:
-            # the store this run created holds nothing, and is not left behind (under the lock)
-            if store.created and not store.done_mask().any():
-                from .._paths import remove_own_store
-
-                try:
-                    remove_own_store(store.path, kind="sweep")
-                except (OSError, ParameterError):
-                    pass
+            # the store this run created holds nothing, and is not left behind; a store
+            # overwrite=True set aside is put back (under the lock)
+            try:
+                store.settle_replaced(keep_new=not (store.created and not store.done_mask().any()))
+            except (OSError, ParameterError):
+                pass
             raise
+        else:
+            store.settle_replaced(keep_new=True)
         finally:
             store.close()
         if tmp is not None:

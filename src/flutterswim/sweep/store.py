@@ -35,7 +35,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from .._cf import cf_attrs
-from .._paths import MARKER, check_store_path, has_marker, remove_own_store, write_marker
+from .._paths import MARKER, check_store_path, has_marker, remove_own_store, set_aside_own_store, write_marker
 from .._validate import ParameterError
 from ..params import LONG_NAMES, UNITS
 from .spec import SweepSpec
@@ -294,6 +294,7 @@ class SweepStore:
         self.path, self.group, self.spec, self.variables = Path(path), group, spec, list(variables)
         self._lock = None
         self.created = False  # True: this run created (or replaced) the store at path
+        self.replaced: Path | None = None  # the store overwrite set aside (until the new one holds a point)
         self._dims, self._shape, _ = store_dims(spec)
         # flat position of point k in the row-major dataset (continuation: the down branch
         # runs back along the axis)
@@ -334,12 +335,34 @@ class SweepStore:
         if path.exists() and has_marker(path):
             if overwrite:
                 _refuse_foreign(path)  # again, under the lock
-                remove_own_store(path, kind="sweep")
+                # set aside, not deleted: the new store's run may not start (a scheduler's address
+                # mistyped deleted a finished store and left nothing); deleted once it holds a point
+                replaced = set_aside_own_store(path, kind="sweep")
+                try:
+                    store = cls._create(path, spec, variables, n_state)
+                except BaseException:
+                    os.replace(replaced, path)
+                    raise
+                store.replaced = replaced
+                return store
             else:
                 return cls._resume(path, spec, variables)
         elif path.is_dir():  # empty directory (checked): replaced by the new store
             path.rmdir()
         return cls._create(path, spec, variables, n_state)
+
+    def settle_replaced(self, keep_new: bool) -> None:
+        """The store ``overwrite`` set aside: deleted if the new one is kept (it holds points),
+        else put back in place of the new, empty one (under the lock)."""
+        old, self.replaced = self.replaced, None
+        if not keep_new and self.created:
+            remove_own_store(self.path, kind="sweep")
+        if old is None:
+            return
+        if keep_new:
+            remove_own_store(old, kind="sweep")
+        else:
+            os.replace(old, self.path)
 
     @classmethod
     def _resume(cls, path: Path, spec: SweepSpec, variables: list[str]) -> "SweepStore":
