@@ -45,12 +45,14 @@ def test_interrupted_save_leaves_the_old_file(run, tmp_path, monkeypatch):
     p = run.save(tmp_path / "r.nc")
     before = p.read_bytes()
 
-    def boom(self, path, *a, **k):
+    def boom(path, data):
         with open(path, "wb") as f:
-            f.write(b"\x89HDF\r\n\x1a\n" + b"\0" * 88)  # a truncated start, then the "crash"
+            f.write(bytes(data[:96]))  # a truncated start, then the "crash"
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(xr.Dataset, "to_netcdf", boom)
+    import importlib
+
+    monkeypatch.setattr(importlib.import_module("flutterswim._paths"), "_write_bytes", boom)
     with pytest.raises(KeyboardInterrupt):
         run.save(p)
     assert p.read_bytes() == before

@@ -101,14 +101,25 @@ def write_netcdf(ds, path: str | os.PathLike, **kwargs) -> Path:
     """Write the xarray Dataset ``ds`` to NetCDF-4 (h5netcdf engine) atomically, with the
     fingerprint of its variables as written (:data:`FINGERPRINT`), so that only this file, not
     one derived from it, is taken for ours. ``kwargs`` go to ``to_netcdf`` (encoding ...)."""
+    import io
+
     import h5py
 
     p = Path(os.fspath(path))
+    # built in memory, written by Python: HDF5 writing a file onto a full disk (or past a file
+    # size limit) crashed the interpreter (a segmentation fault, a notebook's kernel lost) after
+    # the OSError; Python's own write raises it and the temporary file is removed
+    buf = io.BytesIO(ds.to_netcdf(engine="h5netcdf", **kwargs))
+    with h5py.File(buf, "r+") as h:
+        h.attrs[FINGERPRINT] = _h5_fingerprint(h)
     with atomic_path(p) as tmp:
-        ds.to_netcdf(tmp, engine="h5netcdf", **kwargs)
-        with h5py.File(tmp, "r+") as h:
-            h.attrs[FINGERPRINT] = _h5_fingerprint(h)
+        _write_bytes(tmp, buf.getbuffer())
     return p
+
+
+def _write_bytes(path: Path, data) -> None:
+    with open(path, "wb") as f:
+        f.write(data)
 
 
 def _json_ours(p: Path) -> bool:
