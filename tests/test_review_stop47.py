@@ -39,3 +39,33 @@ def test_a_file_size_limit_while_saving_is_a_failure_not_a_crash(tmp_path):
     assert r.returncode == 1, (r.returncode, r.stderr)
     assert len(r.stderr.strip().splitlines()) == 1 and "File too large" in r.stderr
     assert list((tmp_path / "limited").iterdir()) == []
+
+
+@pytest.mark.parametrize("lost", [45, 70])
+def test_tracking_picks_the_body_up_after_a_long_loss(lost):
+    """After about 0.9 s of lost frames (blank, or contrast faded away) every later frame was
+    refused as "jump: the body moved 78 px since the last good frame": the swimmer had only
+    swum on. The tolerance is per frame since the last good one; every frame that is not blank
+    is tracked, with its ends in place (a swap puts a tip a body length, 71 px, off)."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from flutterswim.tracking import render, track
+
+    r = fs.simulate(fs.PAPER, 12.0, n_segments=24, frame_dt=1.0 / 50)
+    sl = slice(r.t.size - 150, r.t.size)
+    sim = SimpleNamespace(t=r.t[sl], x=r.x[sl], y=r.y[sl])
+    mv = render(sim, um_per_px=14.0, snr=5.0, seed=9)
+    frames = mv.frames.copy()
+    bg = float(np.median(frames[0]))
+    blank = np.zeros(frames.shape[0], bool)
+    blank[40:40 + lost] = True
+    frames[blank] = np.random.default_rng(lost).normal(bg, 3.0, frames[blank].shape)
+    tr = track(frames, px_per_mm=mv.px_per_mm, fps=50.0)
+    ok = np.asarray(tr.meta["frames"]["ok"])
+    assert np.array_equal(ok, ~blank), [m for m in tr.meta["frames"]["reason"] if m][:3]
+    from flutterswim.tracking.evaluate import pixel_errors
+
+    _, E, _ = pixel_errors(tr, mv)  # a swap shows as a body length
+    assert E.max() < 1.0

@@ -781,3 +781,27 @@ def test_steer_cli_says_how_far_a_failed_run_got(tmp_path, fast_steer, closed, c
     err = capsys.readouterr().err.strip()
     assert status == 1 and err.startswith("failed:") and len(err.splitlines()) == 1
     assert ("swam 0.60 of its 1 laps" in err) if closed else ("2.90 body lengths from its end at the closest" in err)
+
+
+def test_steer_does_not_replace_another_commands_json(tmp_path, fast_steer, capsys):
+    """A fit's JSON (hours of profiles) was silently replaced by steer's metrics: NetCDF
+    results were refused by kind, JSON ones were not. Now each JSON names its kind; steer's
+    own metrics are still replaced by a rerun, and a fit refuses steer's metrics as well."""
+    import json
+
+    from flutterswim import __version__
+    from flutterswim._paths import check_output_file
+    from flutterswim.cli import main
+
+    fit = tmp_path / "fit.json"
+    fit.write_text(json.dumps({"generator": f"flutterswim {__version__} fit", "B": 1.0}))
+    before = fit.read_bytes()
+    args = ["steer", "--path", "circle", "--out", str(tmp_path / "s.nc"), "--quiet"]
+    assert main([*args, "--metrics", str(fit)]) == 2
+    err = capsys.readouterr().err
+    assert fit.read_bytes() == before and "'fit'" in err and len(err.strip().splitlines()) == 1
+    assert fast_steer == []  # refused before computing
+    assert main([*args, "--metrics", str(tmp_path / "m.json")]) == 0
+    assert main([*args, "--metrics", str(tmp_path / "m.json")]) == 0  # its own: replaced
+    with pytest.raises(fs.ParameterError, match="steer metrics"):
+        check_output_file(tmp_path / "m.json", (".json",), kind="fit")

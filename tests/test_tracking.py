@@ -213,14 +213,14 @@ def test_head_and_tail_across_a_stroke_of_lost_frames_in_which_the_body_turned(s
     X[g1:], Y[g1:] = X[g1:, ::-1], Y[g1:, ::-1]
     good = np.ones(X.shape[0], bool)
     good[g0:g1] = False
-    flips, unsure = _unlinked([(g1, float(g1 - g0 + 1))], X, Y, good, 18.9)
+    flips, unsure = _unlinked([(g1, float(g1 - g0 + 1), False)], X, Y, good, 18.9)
     assert flips == [g1] and unsure is None
     Xs = X.copy()
     Xs[g1:] = 0.5 * (X[g1:] + X[g1:, ::-1])
     Ys = 0.5 * (Y[g1:] + Y[g1:, ::-1])
     Y2 = Y.copy()
     Y2[g1:] = Ys
-    flips, unsure = _unlinked([(g1, float(g1 - g0 + 1))], Xs, Y2, good, 18.9)
+    flips, unsure = _unlinked([(g1, float(g1 - g0 + 1), False)], Xs, Y2, good, 18.9)
     assert not flips and unsure is not None and unsure[0] == g1 and unsure[1].startswith("jump: head and tail")
 
 

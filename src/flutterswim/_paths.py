@@ -122,6 +122,20 @@ def _write_bytes(path: Path, data) -> None:
         f.write(data)
 
 
+def json_kind(p: Path) -> str | None:
+    """The kind of result a JSON flutterswim wrote names after its version in ``generator``
+    ("fit", "steer metrics"; "" for one that names none, as before stop 47), None for a file
+    that is not one of ours."""
+    try:
+        if not _json_ours(p):
+            return None
+        tag = json.loads(p.read_text(encoding="utf-8")).get("generator", "")
+    except (OSError, ValueError):
+        return None
+    words = str(tag).split(" ", 2)
+    return words[2] if len(words) > 2 else ""
+
+
 def _json_ours(p: Path) -> bool:
     if p.stat().st_size > _SCAN:
         return False
@@ -334,7 +348,8 @@ def check_output_file(path: str | os.PathLike, suffixes: Sequence[str], *, what:
     target's, so the file is replaced there and the link kept. ``kind``: the NetCDF title the
     command writes; a flutterswim NetCDF of another title (a simulated run under a track's
     name) is refused, not replaced; "<kind> in <anything>" is of the kind (a branch's title names
-    its parameter)."""
+    its parameter). For a JSON, the kind its ``generator`` names after the version (one that
+    names none is replaced)."""
     try:
         p = Path(os.fspath(path))
     except TypeError:
@@ -362,7 +377,13 @@ def check_output_file(path: str | os.PathLike, suffixes: Sequence[str], *, what:
     if p.is_file() and p.stat().st_size > 0 and not is_ours(p):
         raise ParameterError(f"{what}={str(p)!r} exists and was not written by flutterswim; it is never "
                              "overwritten. Choose another name, or move the file away first")
-    if kind is not None and p.is_file() and p.stat().st_size > 0:
+    if kind is not None and p.is_file() and p.stat().st_size > 0 and p.suffix.lower() == ".json":
+        # (a fit's JSON, maybe hours of profiles, was replaced by steer's metrics without a word)
+        held = json_kind(p)
+        if held and held != kind:
+            raise ParameterError(f"{what}={str(p)!r} holds another kind of flutterswim result ({held!r}); it is "
+                                 f"not replaced by {kind!r}. Choose another name, or move the file away first")
+    elif kind is not None and p.is_file() and p.stat().st_size > 0:
         title = netcdf_title(p)
         if title and title != kind and not title.startswith(f"{kind} in "):  # (a branch: "... in <parameter>")
             raise ParameterError(f"{what}={str(p)!r} holds another kind of flutterswim result ({title!r}); it is "

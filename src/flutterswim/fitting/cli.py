@@ -65,7 +65,7 @@ def _cmd_fit(args) -> int:
     from .data import check_spread, read_trials, summarise
     from .fit import fit
 
-    out = check_output_file(args.out, (".json",))
+    out = check_output_file(args.out, (".json",), kind="fit")
     if args.plot:
         check_output_file(args.plot, (".png", ".pdf", ".svg"), what="--plot")
     base = preset(args.preset)

@@ -184,7 +184,7 @@ class FitResult:
     def save(self, path) -> None:
         from .._paths import atomic_write_text, check_output_file
 
-        p = check_output_file(path, (".json",))
+        p = check_output_file(path, (".json",), kind="fit")
         from .. import __version__
 
         # ("generator", as every other JSON flutterswim writes; it was "software": "flutterswim fit")

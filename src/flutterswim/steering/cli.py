@@ -100,6 +100,10 @@ def _old_steered(path) -> bool:
     return p.is_file() and is_ours(p) and netcdf_title(p) == RUN_TITLE and "steering_path" in netcdf_attrs(p)
 
 
+#: the kind of result steer's metrics JSON names in its ``generator`` (not replaced by another's)
+METRICS_KIND = "steer metrics"
+
+
 def _cmd_steer(args) -> int:
 
     from .. import __version__
@@ -114,7 +118,7 @@ def _cmd_steer(args) -> int:
     from .steer import STEER_TITLE
 
     out = check_output_file(args.out, (".nc",), kind=STEER_TITLE if not _old_steered(args.out) else None)
-    met = check_output_file(args.metrics, (".json",), what="--metrics")
+    met = check_output_file(args.metrics, (".json",), what="--metrics", kind=METRICS_KIND)
     if args.plot:
         check_output_file(args.plot, (".png", ".pdf", ".svg"), what="--plot")
     if args.animate:
@@ -162,7 +166,7 @@ def _cmd_steer(args) -> int:
     from .steer import steer_dataset
 
     write_netcdf(cf_dataset(steer_dataset(res, reduced)), out)  # the run, with its path and control settings
-    m = {"generator": f"flutterswim {__version__}", **res.metrics}  # signed: a rerun may replace it
+    m = {"generator": f"flutterswim {__version__} {METRICS_KIND}", **res.metrics}  # signed: a rerun may replace it
     m["reduced_model"] = {"U_mm_s": reduced.U * 1e3, "period_s": reduced.period, "k_per_s": reduced.k,
                           "omega_max_rad_s": reduced.omega_max, "r_min_mm": reduced.r_min * 1e3}
     atomic_write_text(met, dumps(m, indent=2))

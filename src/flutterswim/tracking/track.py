@@ -22,7 +22,7 @@ the raw pixels). A frame is flagged, never kept, when:
 - tips not found: the ridge's intensity along the curve and its extension does not fall to
   half its plateau at both ends, or the half-maximum tips lie closer than the shortest body;
 - tip not found: the line-end fit failed at an end;
-- jump: the centreline moved more than ``jump_tol`` body lengths since the last good frame,
+- jump: the centreline moved more than ``jump_tol`` body lengths per frame since the last good frame,
   or head and tail cannot be told apart (both assignments about equally close, by the whole
   curves and by the two ends alone: after lost frames a strongly bending body can change too
   much for the curves, while its ends have moved far less than their distance apart), or,
@@ -387,16 +387,23 @@ def _unlinked(links: list, X: np.ndarray, Y: np.ndarray, good: np.ndarray, per_s
     after the run (up to a stroke of them, to the next run) are compared, rigid motion removed,
     with every good frame before it, in both orders (a frame at its phase of an earlier stroke
     matches its shape): their best matches in one order must be at least twice as close (RMS
-    over them) as in the other. links: (frame, frames since the last good one); X, Y, good: the
+    over them) as in the other. A shorter run is checked so too where the last good frame did
+    not tell the order. links: (frame, frames since the last good one, whether that frame did not
+    tell the order); X, Y, good: the
     frames as tracked before the later checks (X, Y reversed in place from a frame found
     reversed). Returns the frames from which every later frame is reversed, and the first frame
     from which head and tail cannot be told apart with the reason (or None)."""
     flips: list[int] = []
     if not (math.isfinite(per_stroke) and per_stroke > 0):
+        untold = [(i, gap) for i, gap, u in links if u]
+        if untold:  # (no stroke to compare shapes over)
+            i, gap = untold[0]
+            return flips, (i, f"jump: head and tail cannot be told apart after {gap - 1:g} lost frames before "
+                              f"frame {i} (no stroke period found to compare the shapes over)")
         return flips, None
-    starts = [i for i, _ in links]
-    for n, (i, gap) in enumerate(links):
-        if gap <= 0.5 * per_stroke:
+    starts = [i for i, *_ in links]
+    for n, (i, gap, untold) in enumerate(links):
+        if gap <= 0.5 * per_stroke and not untold:
             continue
         before = np.nonzero(good[:i])[0]
         end = min(starts[n + 1] if n + 1 < len(starts) else good.size, i + int(math.ceil(per_stroke)))
@@ -631,7 +638,8 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
     tic = time.perf_counter()
     ref: tuple[np.ndarray, np.ndarray] | None = None
     ref_i = -1
-    links: list[tuple[int, float]] = []  # (frame, frames since the last good one): checked after the loop
+    # (frame, frames since the last good one, whether the last good frame told its order): checked after the loop
+    links: list[tuple[int, float, bool]] = []
     blur_known = sigma is not None
     n_clipped = 0
     static = static_objects(frames, negate=dark_line)
@@ -679,15 +687,23 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
                             d_best = float(np.mean(np.hypot(x - ref[0], y - ref[1])))
                             d_other = math.inf
                     match[i] = d_best
-                    if d_best > jump_tol * Lr:
+                    # per frame since the last good one: over a run of lost frames the swimmer
+                    # swims on (after 45 lost frames every later frame was refused as a jump from
+                    # the frame before them, 78 px back, and the movie was lost from there on);
+                    # head and tail across such a run are checked after the loop (_unlinked)
+                    since = (i - ref_i) if pos is None else max(float(pos[i] - pos[ref_i]), 1.0)
+                    if d_best > jump_tol * Lr * since:
                         r["ok"], r["reason"] = False, (f"jump: the body moved {d_best:.1f} px since the last good "
-                                                       f"frame (> {jump_tol:g} body lengths)")
-                    elif d_other < 2.0 * d_best:
+                                                       f"frame (> {jump_tol:g} body lengths per frame)")
+                    elif d_other < 2.0 * d_best and since <= 1.5:
                         r["ok"], r["reason"] = False, "jump: head and tail cannot be told apart from the last good frame"
                 if r["ok"] and ref is not None:
                     gap = (i - ref_i) if pos is None else float(pos[i] - pos[ref_i])
                     if gap > 1.5:  # across lost frames: checked once the stroke's period is known
-                        links.append((i, gap))
+                        # (an order the last good frame does not tell is checked whatever the
+                        # run's length: after 70 lost frames the swimmer had swum 1.5 body
+                        # lengths on, and every later frame was refused as not told apart)
+                        links.append((i, gap, d_other < 2.0 * d_best))
                 if r["ok"]:
                     X[i], Y[i], length[i] = x, y, r["length"]
                     ref, ref_i = (x, y), i
