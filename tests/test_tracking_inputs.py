@@ -434,3 +434,29 @@ def test_a_sidecar_of_options_only_leaves_voltage_and_sample_to_the_name(tmp_pat
     assert (one.voltage_V, one.sample, one.problem) == (85.0, "1", ""), one
     assert one.options["field_angle_deg"] == 225
     assert (two.voltage_V, two.sample) == (72.5, "B") and (three.voltage_V, three.sample) == (90.0, "3")
+
+
+def test_batch_fps_does_not_override_a_movies_recorded_rate(movie, tmp_path):
+    """track-batch --fps 50 had overridden an AVI recording 40 fps: the period came out 20 %
+    short, without a word, though --fps is documented as the rate of trials recording none.
+    A movie's recorded rate is used (a warning names the difference); a single track given a
+    rate other than the recorded one uses it, and warns."""
+    imageio_ffmpeg = pytest.importorskip("imageio_ffmpeg")
+    folder = tmp_path / "t"
+    folder.mkdir()
+    lo, hi = np.percentile(movie.frames, [0.1, 99.99])
+    f8 = np.clip((movie.frames - lo) / (hi - lo) * 255, 0, 255).astype(np.uint8)
+    H, W = f8.shape[1] // 2 * 2, f8.shape[2] // 2 * 2
+    w = imageio_ffmpeg.write_frames(str(folder / "80V_sample1.avi"), (W, H), fps=40, codec="ffv1",
+                                    pix_fmt_in="gray", pix_fmt_out="gray", macro_block_size=1)
+    w.send(None)
+    for f in f8:
+        w.send(np.ascontiguousarray(f[:H, :W]))
+    w.close()
+    per_frame = FPS / 5.0  # the wave's stroke in frames (5 Hz rendered at 50 frames per second)
+    with pytest.warns(UserWarning, match="records 40 fps, used"):
+        _, rows, failed = track_batch(folder, tmp_path / "o.csv", px_per_mm=movie.px_per_mm, fps=FPS, n_last=3)
+    assert not failed and rows[0]["period_s"] == pytest.approx(per_frame / 40.0, rel=0.01)
+    with pytest.warns(UserWarning, match="records 40 fps"):
+        tr = track(folder / "80V_sample1.avi", px_per_mm=movie.px_per_mm, fps=FPS)
+    assert tr.meta["fps"] == FPS

@@ -137,6 +137,12 @@ def test_raw_kymographs_follow_the_simulated_crossings(movie, tracked, tmp_path)
     assert lo <= np.nanpercentile(k.body, 5) and hi >= np.nanpercentile(k.body, 95)
     lo, hi = bars["curvature [1/mm]"].get_ylim()
     assert lo == pytest.approx(-hi) and hi > 0
+    # each line's legend names the component it draws, and the speed (a swimmer at 37 degrees
+    # read "average velocity 0.835 mm/s", its x component, for 1.045)
+    texts = [t.get_text() for ax in fig.axes if ax.get_legend() for t in ax.get_legend().get_texts()]
+    speed = f"(speed {math.hypot(*k.velocity):.3g})"
+    assert any(t.startswith(f"average velocity, x: {k.velocity[0]:.3g}") and speed in t for t in texts), texts
+    assert any(t.startswith(f"average velocity, y: {k.velocity[1]:.3g}") and speed in t for t in texts), texts
     import matplotlib.image as mpimg
 
     img = mpimg.imread(p)

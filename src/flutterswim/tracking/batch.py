@@ -216,6 +216,17 @@ def failures_path(out: str | os.PathLike) -> Path:
     return out.with_name(out.stem + "_failed.csv")
 
 
+def _recorded_fps(path: Path) -> float | None:
+    """The frame rate a trial's file records (None: none, or the file cannot be read: track
+    says why)."""
+    from .io import open_frames
+
+    try:
+        return open_frames(path).fps
+    except (ParameterError, OSError):
+        return None
+
+
 def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm: float | None = None,
                 fps: float | None = None, pattern: str = DEFAULT_PATTERN, n_last: int = 5, plot: str | None = None,
                 progress: bool = False, as_typed: Callable[[str], str] | None = None,
@@ -257,8 +268,17 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
     for tr_ in it:
         o = dict(tr_.options)
         ppm = o.pop("px_per_mm", px_per_mm)
-        # a trial's own times set its frame rate (the batch's fps is for trials without them)
+        # a trial's own times set its frame rate, and so does its movie's recorded rate (the
+        # batch's fps is for trials without them: it had overridden a 40 fps AVI, period 20 % off)
         f = o.pop("fps", None if "times" in o else fps)
+        if f is not None and "fps" not in tr_.options:
+            rec = _recorded_fps(tr_.path)
+            if rec is not None:
+                if abs(f / rec - 1.0) > 0.01:
+                    warnings.warn(f"trial {str(tr_.path)!r} records {rec:g} fps, used; the batch's fps={f:g} is for "
+                                  "trials that record none (a high-speed camera's playback rate? put fps in the "
+                                  "trial's sidecar)", stacklevel=2)
+                f = None
         kw = dict(track_kwargs)
         if "field_angle_deg" in o:
             kw["field_angle"] = direction_deg("field_angle_deg", o.pop("field_angle_deg"))

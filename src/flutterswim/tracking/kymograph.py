@@ -8,6 +8,8 @@ Pixel coordinates: x = column, y = row; the lines are a row (horizontal) and a c
 
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -123,14 +125,14 @@ def plot_raw_kymographs(k: RawKymographs, path: str | Path | None = None, *, tr:
     # horizontal line: x across, time downwards
     ax1 = fig.add_subplot(gs[1, 0], sharex=ax0)
     ax1.imshow(k.horizontal, cmap="gray", aspect="auto", extent=(*ext_x, t1, t0))
-    ax1.plot(x0 + vx * (tt - t0), tt, "y-", lw=1.2, label=f"average velocity {vx:.3g} mm/s")
+    ax1.plot(x0 + vx * (tt - t0), tt, "y-", lw=1.2, label=f"average velocity, x: {vx:.3g} mm/s (speed {math.hypot(vx, vy):.3g})")
     ax1.set(xlabel="x [mm]", ylabel="t [s]", title=f"along the horizontal line (row {k.row})")
     ax1.set_ylim(t1, t0)
     ax1.legend(fontsize=7, loc="lower right")
     # vertical line: time across, y as in the frame
     ax2 = fig.add_subplot(gs[0, 1:], sharey=ax0)
     ax2.imshow(k.vertical.T, cmap="gray", aspect="auto", extent=(t0, t1, ext_y[1], ext_y[0]))
-    ax2.plot(tt, y0 + vy * (tt - t0), "y-", lw=1.2, label=f"average velocity {vy:.3g} mm/s")
+    ax2.plot(tt, y0 + vy * (tt - t0), "y-", lw=1.2, label=f"average velocity, y: {vy:.3g} mm/s (speed {math.hypot(vx, vy):.3g})")
     ax2.set(xlabel="t [s]", title=f"along the vertical line (column {k.col})")
     ax2.legend(fontsize=7, loc="lower right")
     ax3 = fig.add_subplot(gs[1, 1])

@@ -620,6 +620,11 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         if fps is None:
             raise ParameterError(f"fps was not given and input={frames.source!r} does not record a frame rate; "
                                  + NO_FRAME_RATE)
+    elif frames.fps is not None and abs(positive("fps", fps) / frames.fps - 1.0) > 0.01:
+        # (given, it is used: a high-speed camera's movie records its playback rate; but a
+        # mistyped rate scaled the period without a word)
+        warnings.warn(f"fps={fps:g} is used, while input={frames.source!r} records {frames.fps:g} fps (the period "
+                      "and the speeds scale with it): leave fps out to use the recorded rate", stacklevel=2)
     fps = positive("fps", fps)
     # the frames' times in frame intervals, for the checks and fits in time (None: the indices)
     pos = None if times is None else (times - times[0]) * fps
