@@ -359,3 +359,24 @@ def test_a_port_that_is_no_dask_scheduler_is_refused_in_time(server, monkeypatch
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=None) as cluster:
         backends._reachable(cluster.scheduler_address, 5.0)  # no error
+
+
+def test_a_store_is_locked_through_a_symbolic_link_too(tmp_path):
+    """The lock file was named after the path as given: a run through a link to a store took
+    another lock, and two processes wrote one store at once. The lock is the store's own."""
+    from flutterswim.sweep.store import SweepLockedError, _acquire
+
+    real = tmp_path / "c.zarr"
+    sweep({"chi": [1.0, 2.0]}, out=str(real), backend="serial", point_fn=point, progress=False, max_points=1)
+    link = tmp_path / "link.zarr"
+    link.symlink_to(real)
+    held = _acquire(real)
+    try:
+        with pytest.raises(SweepLockedError):
+            _acquire(link)
+        with pytest.raises(SweepLockedError):
+            sweep({"chi": [1.0, 2.0]}, out=str(link), backend="serial", point_fn=point, progress=False)
+    finally:
+        held.close()
+    sweep({"chi": [1.0, 2.0]}, out=str(link), backend="serial", point_fn=point, progress=False)  # resumed through it
+    assert not (tmp_path / ".link.zarr.lock").exists() and not (tmp_path / ".c.zarr.lock").exists()

@@ -257,7 +257,10 @@ def _acquire(path: Path) -> _Lock:
     """Exclusive advisory lock next to the store: one writer at a time (close-on-exec)."""
     import fcntl
 
-    lock_path = path.parent / f".{path.name}.lock"  # (its folder exists: check_store_path)
+    # next to the store itself: a run through a symbolic link to it took another lock, and two
+    # processes wrote one store at once
+    real = Path(os.path.realpath(path))
+    lock_path = real.parent / f".{real.name}.lock"  # (its folder exists: check_store_path)
     for _ in range(100):
         created = True
         try:
