@@ -69,3 +69,30 @@ def test_tracking_picks_the_body_up_after_a_long_loss(lost):
 
     _, E, _ = pixel_errors(tr, mv)  # a swap shows as a body length
     assert E.max() < 1.0
+
+
+def test_a_time_beyond_a_float_in_units_of_tau_is_bad_input(tmp_path, capsys):
+    """--t-end 1.7e308 (infinite in units of tau) crashed with an OverflowError (exit 1), and
+    the API called 1e308 "within round-off of t_start"."""
+    from flutterswim.cli import main
+
+    assert main(["simulate", "--t-end", "1.7e308", "--out", str(tmp_path / "x.nc")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--t-end" in err and "at most" in err
+    with pytest.raises(fs.ParameterError, match="span more than a float holds"):
+        fs.simulate(fs.PAPER, 1e308)
+    assert not list(tmp_path.iterdir())
+
+
+def test_a_bad_matplotlib_backend_in_the_environment_is_bad_input(tmp_path):
+    """MPLBACKEND=nosuch failed as "ValueError: Key backend ..." with exit 1: it is a bad
+    environment value, named, exit 2."""
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "MPLBACKEND": "nosuch"}
+    r = subprocess.run([sys.executable, "-m", "flutterswim", "plot", str(tmp_path / "none.nc"), "--out",
+                        str(tmp_path / "f.png")], capture_output=True, text=True, env=env, timeout=120)
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "MPLBACKEND='nosuch'" in r.stderr

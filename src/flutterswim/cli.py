@@ -359,6 +359,23 @@ _NEEDS = {"simulate": ("xarray", "h5netcdf"), "branch": ("xarray", "h5netcdf"), 
           "reproduce": ("jinja2", "matplotlib", "xarray", "h5netcdf")}
 
 
+def _check_environment() -> None:
+    """A matplotlib backend named in the environment that matplotlib refuses is bad input
+    (exit 2, naming the variable); it failed as "ValueError: Key backend ..." (exit 1)."""
+    import os
+
+    name = os.environ.get("MPLBACKEND")
+    if not name:
+        return
+    try:
+        import matplotlib  # noqa: F401  (it checks MPLBACKEND on import)
+    except ValueError:
+        from ._validate import ParameterError
+
+        raise ParameterError(f"MPLBACKEND={name!r} (environment) is not a matplotlib backend; unset it, or set one "
+                             "such as Agg (the commands write their figures to files)") from None
+
+
 def _check_optional(args: argparse.Namespace) -> None:
     """Raise ModuleNotFoundError (one line, naming the extra: :func:`_describe_error`) for an
     optional package the command ``args`` will need, before it does any work."""
@@ -508,6 +525,7 @@ def main(argv: list[str] | None = None) -> int:
 
     first_write = write_mark()
     try:
+        _check_environment()
         _check_optional(args)
         return int(args.func(args) or 0)
     except KeyboardInterrupt as exc:

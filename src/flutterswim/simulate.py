@@ -90,6 +90,11 @@ def simulate(
 
     # --- dimensionless problem ------------------------------------------------
     t0, t1 = t_start / tau, t_end / tau
+    if not (math.isfinite(t1 - t0) and math.isfinite(t1) and math.isfinite(t0)):
+        # (1.7e308 s: infinite in units of tau, called "within round-off of t_start", and the CLI
+        # crashed on an OverflowError)
+        raise ParameterError(f"t_end={t_end!r} and t_start={t_start!r} span more than a float holds in units of "
+                             f"tau={tau!r} s; give a finite span (and at most {defaults.MAX_FRAMES} saved frames)")
     if t1 - t0 <= 1e-12 * max(1.0, abs(t1)):  # (the steppers stop within this of the end: no step was taken)
         raise ParameterError(f"t_end={t_end!r} is within round-off of t_start={t_start!r}: the run must span more than "
                              f"1e-12 of max(1, |t_end|) in units of tau ({tau:.6g} s here)")
@@ -158,6 +163,8 @@ def frame_count(t_span: float, n_frames: int | None = None, dt: float | None = N
     :data:`defaults.FRAMES_PER_TAU` per tau (a float: it may be far beyond any array)."""
     if n_frames is not None:
         return float(n_frames)
+    if not math.isfinite(t_span):  # (beyond a float in units of tau: more frames than any limit)
+        return math.inf
     if dt is not None:
         return max(2.0, math.floor(t_span / dt + 1e-9) + 1.0)
     return math.ceil(defaults.FRAMES_PER_TAU * t_span) + 1.0
