@@ -96,3 +96,27 @@ def test_a_bad_matplotlib_backend_in_the_environment_is_bad_input(tmp_path):
                         str(tmp_path / "f.png")], capture_output=True, text=True, env=env, timeout=120)
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert "MPLBACKEND='nosuch'" in r.stderr
+
+
+def test_the_kernel_cache_falls_back_to_a_temporary_folder(tmp_path, monkeypatch):
+    """With a home that cannot hold a cache (read-only on an HPC node or in a container) the
+    cache folder was left to numba, which on a read-only install had nowhere to write: every
+    run failed ("cannot cache function ...: no locator available"). It now falls back to a
+    temporary folder of the user's."""
+    pytest.importorskip("numba")
+    import tempfile
+
+    from numba.core import config
+
+    from flutterswim import _jit
+
+    home = tmp_path / "home"
+    home.write_text("not a folder")  # (mkdir under it fails, root or not)
+    monkeypatch.setenv("HOME", str(home))
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    monkeypatch.delenv("XDG_CACHE_HOME", raising=False)
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
+    (tmp_path / "tmp").mkdir()
+    monkeypatch.setattr(config, "CACHE_DIR", config.CACHE_DIR)  # (restored after the test)
+    _jit._set_cache_dir()
+    assert str(config.CACHE_DIR).startswith(str(tmp_path / "tmp")) and _jit._CACHE

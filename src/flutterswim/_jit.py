@@ -87,6 +87,10 @@ def prune_kernel_caches(base, keep, *, max_age_days: float = STALE_DAYS, now: fl
     return removed
 
 
+#: whether numba caches the compiled kernels (False: no writable folder for them was found)
+_CACHE = True
+
+
 def _set_cache_dir() -> None:
     """Point numba's cache at a directory keyed by :func:`_source_hash` (under the user's
     NUMBA_CACHE_DIR if set, else the user cache directory); left as it is if that cannot be
@@ -97,12 +101,25 @@ def _set_cache_dir() -> None:
 
     from numba.core import config
 
+    import tempfile
+
     base = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
         os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "flutterswim")
-    path = Path(base) / f"kernels-{_source_hash()}"
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-    except OSError:
+    # a read-only home and install (an HPC node, a container) left numba nowhere to write, and
+    # every run failed ("cannot cache function ...: no locator available"): a temporary folder
+    # then, else no cache (compiled anew in each process)
+    user = getattr(os, "getuid", lambda: "")()
+    for root in (Path(base), Path(tempfile.gettempdir()) / f"flutterswim-{user}"):
+        path = root / f"kernels-{_source_hash()}"
+        try:
+            path.mkdir(parents=True, exist_ok=True)
+        except OSError:
+            continue
+        if os.access(path, os.W_OK | os.X_OK):
+            break
+    else:
+        global _CACHE
+        _CACHE = False
         return
     config.CACHE_DIR = str(path)
     marker = path / CACHE_MARKER
@@ -133,6 +150,6 @@ def compile_module(module: ModuleType | str, names: tuple[str, ...]) -> bool:
                 _set_cache_dir()
 
             for name in names:
-                setattr(mod, name, njit(cache=True)(getattr(mod, name)))
+                setattr(mod, name, njit(cache=_CACHE)(getattr(mod, name)))
         _DONE[key] = ok
     return _DONE[key]
