@@ -380,3 +380,31 @@ def test_a_store_is_locked_through_a_symbolic_link_too(tmp_path):
         held.close()
     sweep({"chi": [1.0, 2.0]}, out=str(link), backend="serial", point_fn=point, progress=False)  # resumed through it
     assert not (tmp_path / ".link.zarr.lock").exists() and not (tmp_path / ".c.zarr.lock").exists()
+
+
+def _interrupting(task):
+    raise KeyboardInterrupt
+
+
+_interrupting.variables = ["a"]
+
+
+def test_an_interrupt_before_any_point_says_nothing_was_saved(tmp_path):
+    """Interrupted before a point finished, a sweep removes the empty store it created, but
+    said "0 of 2 points are saved in 's.zarr'; rerun the same command to resume"."""
+    from flutterswim.sweep import SweepInterrupted
+
+    out = tmp_path / "s.zarr"
+    with pytest.raises(SweepInterrupted, match="before any point was saved: nothing was written$"):
+        sweep({"chi": [1.0, 2.0]}, out=str(out), backend="serial", point_fn=_interrupting, progress=False)
+    assert list(tmp_path.iterdir()) == []
+    sweep({"chi": [1.0, 2.0]}, out=str(out), backend="serial", point_fn=point, progress=False)
+    with pytest.raises(SweepInterrupted, match="the store that was there is kept"):
+        sweep({"chi": [3.0]}, out=str(out), backend="serial", point_fn=_interrupting, progress=False, overwrite=True)
+    assert list(open_sweep_chi(out)) == [1.0, 2.0]
+
+
+def open_sweep_chi(out):
+    from flutterswim.sweep import open_sweep
+
+    return open_sweep(str(out))["chi"].values

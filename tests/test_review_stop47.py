@@ -120,3 +120,23 @@ def test_the_kernel_cache_falls_back_to_a_temporary_folder(tmp_path, monkeypatch
     monkeypatch.setattr(config, "CACHE_DIR", config.CACHE_DIR)  # (restored after the test)
     _jit._set_cache_dir()
     assert str(config.CACHE_DIR).startswith(str(tmp_path / "tmp")) and _jit._CACHE
+
+
+def test_sigterm_ends_a_command_as_an_interrupt_does(tmp_path):
+    """SIGTERM (kill, timeout, a batch system's time limit) killed the command at once: no
+    line, and hidden partial files left that no later run removed. It now ends as Ctrl-C does,
+    with one line, nothing left behind, and exit status 143."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    proc = subprocess.Popen([sys.executable, "-m", "flutterswim", "simulate", "--t-end", "600", "--segments", "12",
+                             "--quiet", "--out", str(tmp_path / "r.nc")], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+    time.sleep(4.0)  # (started and stepping)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 143, (proc.returncode, err)
+    assert len(err.strip().splitlines()) == 1 and "SIGTERM" in err, err
+    assert list(tmp_path.iterdir()) == []

@@ -500,8 +500,19 @@ def _quiet_unraisable() -> None:
     sys.unraisablehook = lambda unraisable: None
 
 
+def _interrupt_status() -> int:
+    """130 for Ctrl-C, 143 (128 + 15) for SIGTERM."""
+    from flutterswim_entry import TERMINATED
+
+    return 143 if TERMINATED else 130
+
+
 def main(argv: list[str] | None = None) -> int:
     program = argv is None  # (run as the command, not called in a process that goes on)
+    if program:
+        from flutterswim_entry import handle_sigterm
+
+        handle_sigterm()  # (python -m flutterswim too)
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
     if debug:
@@ -511,14 +522,14 @@ def main(argv: list[str] | None = None) -> int:
         args = ap.parse_args(argv)
     except KeyboardInterrupt:
         print("flutterswim: interrupted", file=sys.stderr)
-        return 130
+        return _interrupt_status()
     except ImportError as exc:
         # a Ctrl-C while a compiled module initialises (scipy's HiGHS) surfaces as its
         # "ImportError: initialization failed", the interrupt its cause: it printed a traceback
         if not interrupted(exc):
             raise
         print("flutterswim: interrupted", file=sys.stderr)
-        return 130
+        return _interrupt_status()
     if not debug:
         _quiet_warnings()
     from ._paths import write_mark, written_since
@@ -537,7 +548,7 @@ def main(argv: list[str] | None = None) -> int:
             _quiet_unraisable()
         msg = _one_line(exc) or "interrupted"
         print(f"flutterswim {args.command}: {msg}{_written_note(written_since(first_write))}", file=sys.stderr)
-        return 130
+        return _interrupt_status()
     except BrokenPipeError:
         return 1
     except Exception as exc:  # noqa: BLE001 - every error becomes one line (traceback with --debug)
@@ -545,7 +556,7 @@ def main(argv: list[str] | None = None) -> int:
             if not debug and program:
                 _quiet_unraisable()
             print(f"flutterswim {args.command}: interrupted", file=sys.stderr)
-            return 130
+            return _interrupt_status()
         if debug:
             import traceback
 

@@ -147,14 +147,19 @@ def sweep(
             _run(store, spec, fn, variables, backend=backend, workers=workers, scheduler=scheduler,
                  progress=progress, max_points=max_points, temporary=tmp is not None, retry_failed=retry_failed)
             ds = to_dataset(store)
-        except BaseException:
+        except BaseException as exc:
             # the backend did not start (no scheduler answered, ...) before any point was saved:
             # the store this run created holds nothing, and is not left behind; a store
             # overwrite=True set aside is put back (under the lock)
+            empty = store.created and not store.done_mask().any()
+            had_old = store.replaced is not None
             try:
-                store.settle_replaced(keep_new=not (store.created and not store.done_mask().any()))
+                store.settle_replaced(keep_new=not empty)
             except (OSError, ParameterError):
                 pass
+            if empty and isinstance(exc, SweepInterrupted):  # (it said "0 of 6 saved in ...; rerun to resume")
+                raise SweepInterrupted("interrupted before any point was saved: nothing was written"
+                                       + ("; the store that was there is kept" if had_old else "")) from None
             raise
         else:
             store.settle_replaced(keep_new=True)
