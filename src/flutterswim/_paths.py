@@ -393,10 +393,19 @@ def check_output_file(path: str | os.PathLike, suffixes: Sequence[str], *, what:
 
 
 def check_output_dir(path: str | os.PathLike, *, what: str = "out") -> Path:
-    """An output folder: an existing directory, or a new one whose parent exists; writable."""
+    """An output folder: an existing directory, or a new one whose parent exists; writable;
+    not one of our own stores or folders of a kind (a sweep store, a reproduce folder: figures
+    written into one made it refuse its own --overwrite later, as holding files it did not write)."""
     p = Path(os.fspath(path))
     if p.exists() and not p.is_dir():
         raise ParameterError(f"{what}={str(p)!r} exists and is not a directory; give a folder")
+    if p.is_dir() and has_marker(p):
+        try:
+            found = json.loads((p / MARKER).read_text()).get("kind") or "store"
+        except (OSError, ValueError, AttributeError):
+            found = "store"
+        raise ParameterError(f"{what}={str(p)!r} is a flutterswim {found} folder; it is written only by its own "
+                             "command. Give another folder")
     _writable_dir(p, what, p, may_create=True)
     return p
 

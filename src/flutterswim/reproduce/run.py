@@ -90,16 +90,21 @@ def reproduce(out: str | os.PathLike, *, mode: str = "quick", trials: str | os.P
 
             summarise(read_trials(trials))
     folder = check_out(out, todo)
-    folder.mkdir(parents=True, exist_ok=True)
-    write_marker(folder, STORE_KIND)
-    from ..simulate import single_blas_thread
+    from .._lock import acquire
 
-    from ..plotting._common import offscreen
+    # one run at a time in a folder: each keeps its manifest in memory, and two at once lost each
+    # other's records (a full build recorded as quick)
+    with acquire(folder, kind="reproduce", noun="folder"):
+        folder.mkdir(parents=True, exist_ok=True)
+        write_marker(folder, STORE_KIND)
+        from ..simulate import single_blas_thread
 
-    with single_blas_thread(), offscreen():  # (its figures are saved, never shown: no pyplot)
-        records = build_targets(todo, folder, settings, log=log, force=force)
-    from .catalog import TARGETS
-    from .targets import with_earlier
+        from ..plotting._common import offscreen
 
-    report = write_report(folder, with_earlier(list(TARGETS), folder, records), mode)
+        with single_blas_thread(), offscreen():  # (its figures are saved, never shown: no pyplot)
+            records = build_targets(todo, folder, settings, log=log, force=force)
+        from .catalog import TARGETS
+        from .targets import with_earlier
+
+        report = write_report(folder, with_earlier(list(TARGETS), folder, records), mode)
     return ReproduceResult(folder, report, records, time.perf_counter() - t0)

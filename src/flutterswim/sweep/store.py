@@ -220,76 +220,15 @@ def _time_unit(spec: SweepSpec) -> str:
     return "s" if isinstance(spec.base, Parameters) else "tau"
 
 
-class _Lock:
-    """The open lock file; :meth:`close` removes it if it is still the file this process
-    created, or one a killed sweep left (signed); another lock file there, or one replaced, is
-    left alone."""
-
-    def __init__(self, f, path: Path, created: bool):
-        self.f, self.path, self.created = f, path, created
-
-    def close(self) -> None:
-        if self.f.closed:
-            return
-        try:
-            # unlink while still holding the lock: a process that opened the old file meanwhile
-            # finds it unlinked after it gets the lock and retries on a new one (_acquire)
-            if self.created and _same_file(self.f, self.path):
-                self.path.unlink()
-        except OSError:
-            pass
-        finally:
-            self.f.close()
-
-
-def _same_file(f, path: Path) -> bool:
-    try:
-        a, b = os.fstat(f.fileno()), os.stat(path)
-    except OSError:
-        return False
-    return (a.st_dev, a.st_ino) == (b.st_dev, b.st_ino)
-
-
 _LOCK_SIGNATURE = "flutterswim sweep lock\n"
 
 
-def _acquire(path: Path) -> _Lock:
-    """Exclusive advisory lock next to the store: one writer at a time (close-on-exec)."""
-    import fcntl
+def _acquire(path: Path):
+    """Exclusive advisory lock next to the store: one writer at a time (:func:`.._lock.acquire`)."""
+    from .._lock import acquire
 
-    # next to the store itself: a run through a symbolic link to it took another lock, and two
-    # processes wrote one store at once
-    real = Path(os.path.realpath(path))
-    lock_path = real.parent / f".{real.name}.lock"  # (its folder exists: check_store_path)
-    for _ in range(100):
-        created = True
-        try:
-            f = open(lock_path, "x")  # Python opens files non-inheritable (O_CLOEXEC)
-        except FileExistsError:
-            created = False
-            try:
-                f = open(lock_path, "a+")
-            except FileNotFoundError:  # removed by its owner just now
-                continue
-        try:
-            fcntl.flock(f.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            f.close()
-            raise SweepLockedError(
-                f"the store {str(path)!r} is being written by another sweep process (lock {str(lock_path)!r} "
-                "is held); wait for it to finish or stop it, then rerun the same command to resume"
-            ) from None
-        if _same_file(f, lock_path):
-            if created:  # signed: a lock a killed run leaves is known as ours and removed by the next
-                f.write(_LOCK_SIGNATURE)
-                f.flush()
-            else:
-                f.seek(0)
-                created = f.read(len(_LOCK_SIGNATURE)) == _LOCK_SIGNATURE
-            return _Lock(f, lock_path, created)
-        f.close()  # the file was removed by the process that held it: lock the current one
-    raise SweepLockedError(f"the lock {str(lock_path)!r} of the store {str(path)!r} keeps being replaced; "
-                           "another process is creating and removing it")
+    return acquire(path, kind="sweep", noun="store", error=SweepLockedError,
+                   then="rerun the same command to resume")
 
 
 class SweepStore:
