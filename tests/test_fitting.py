@@ -698,3 +698,17 @@ def test_shape_data_from_a_track_is_continuous_whichever_end_leads():
         d = ShapeData.from_track(Track(t=tr.t, x=xs, y=ys, units=tr.units), sigma=0.03)
         assert np.max(np.abs(np.diff(d.theta, axis=0))) < 1.0  # a stroke's frame-to-frame change
         assert abs(d.theta.mean()) <= np.pi
+
+
+def test_the_card_calls_a_combination_poorly_determined_only_when_it_is():
+    """The card said "poorly determined" at every condition number, also at 2.9 with 1-sigmas
+    under 1 %."""
+    from flutterswim.fitting.model import LOG_MAP
+    from flutterswim.fitting.uncertainty import POORLY_CONDITIONED, identifiability_card
+
+    q = np.linalg.qr(np.random.default_rng(1).normal(size=(3, 3)))[0]
+    for scale, poor in ((np.array([1.0, 0.8, 0.5]), False), (np.array([1.0, 0.5, 1e-3]), True)):
+        card = identifiability_card(np.diag(scale) @ q @ LOG_MAP, np.eye(3))  # (its Jacobian in y: diag @ q)
+        assert card.condition_number == pytest.approx(scale[0] / scale[2])
+        assert (card.condition_number > POORLY_CONDITIONED) == poor
+        assert ("poorly determined" in card.describe()) == poor and ("least determined" in card.describe()) != poor

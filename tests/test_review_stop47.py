@@ -177,3 +177,77 @@ def test_two_reproduce_runs_do_not_write_one_folder_at_once(tmp_path):
     assert not out.exists()
     res = reproduce(out, targets=["table1"])  # (the lock is gone with its holder)
     assert res.report.is_file() and sorted(p.name for p in tmp_path.iterdir()) == ["rr"]
+
+
+def _trials_csv(path, body_mm, volts=(85.0,), rows=3):
+    lines = ["voltage_V,sample,period_s,advance_mm,lateral_mm,body_length_mm"]
+    for v in volts:
+        for k in range(rows):
+            f = 1 + 0.01 * k
+            lines.append(f"{v},{k},{0.377 * f},{0.394 * f},{1.13 * f},{body_mm}")
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_fit_checks_the_tracked_body_length_against_the_models(tmp_path, monkeypatch, capsys):
+    """fit always took the paper's geometry and dropped the CSV's tracked body length: a 3 mm
+    ribbon fitted as a 3.7 mm one gave B 187 % off, 7-160 sigma from the truth, exit 0. A body
+    length more than 10 % off the model's l is refused, naming both and the options; the
+    sample's geometry is given by --length-mm, --width-mm, --thickness-mm; 2-10 % is noted."""
+    import importlib
+
+    from flutterswim.cli import main
+    from flutterswim.fitting.model import OutsideModel
+
+    ff = importlib.import_module("flutterswim.fitting.fit")
+    seen = []
+
+    def stop(mean, sem, **kw):
+        seen.append(kw["base"])
+        raise OutsideModel("stopped by the test")
+
+    monkeypatch.setattr(ff, "fit", stop)
+    csv = _trials_csv(tmp_path / "t.csv", 3.0)
+    assert main(["fit", str(csv), "--out", str(tmp_path / "f.json")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "3 mm" in err and "3.7 mm" in err and "--length-mm" in err
+    assert seen == []
+    assert main(["fit", str(csv), "--out", str(tmp_path / "f.json"), "--length-mm", "3", "--width-mm", "0.15"]) == 1
+    assert seen[-1].l == pytest.approx(3e-3) and seen[-1].b == pytest.approx(0.075e-3)
+    assert seen[-1].a == fs.PAPER.a and seen[-1].mu == fs.PAPER.mu
+    capsys.readouterr()
+    _trials_csv(csv, 3.7 * 1.05)  # 5 % off: noted, fitted
+    assert main(["fit", str(csv), "--out", str(tmp_path / "f.json")]) == 1
+    assert "note: the trials' tracked body length" in capsys.readouterr().err and seen[-1].l == fs.PAPER.l
+
+
+def test_the_default_guess_is_the_papers_dimensionless_point_in_any_geometry():
+    """Fitting a ribbon of another geometry from the paper's guess started below onset (no
+    stroke at the start: "the data are outside what the model can reproduce"). The default
+    guess keeps the paper guess's chi and eta_perp in the base's geometry."""
+    from flutterswim.fitting.fit import PAPER_GUESS, default_guess
+
+    B0, tau0, k0 = PAPER_GUESS
+    ref = fs.PAPER.replace(B=B0, tau=tau0, kappa_E=k0).groups
+    for change in ({"l": 3e-3, "b": 0.075e-3}, {"l": 5e-3}, {"mu": 2e-3, "a": 1e-5}):
+        base = fs.PAPER.replace(**change)
+        B, tau, k = default_guess(base)
+        g = base.replace(B=B, tau=tau, kappa_E=k).groups
+        assert g.chi == pytest.approx(ref.chi, rel=1e-12) and g.eta_perp == pytest.approx(ref.eta_perp, rel=1e-12)
+    assert default_guess(fs.PAPER) == pytest.approx(PAPER_GUESS, rel=1e-15)
+
+
+@pytest.mark.parametrize("column, value, words", [("advance_mm", 394.0, "advance_mm in millimetres"),
+                                                  ("lateral_mm", 1130.0, "lateral_mm in millimetres"),
+                                                  ("voltage_V", 0.085, r"in volts \(not kV\)")])
+def test_descriptors_in_the_wrong_unit_are_warned_of(tmp_path, column, value, words):
+    """Only periods in ms were warned of; a lateral of 1170 mm for a 3.7 mm body, an advance of
+    376 mm, voltages of 0.08-0.1 went in without a word."""
+    from flutterswim.fitting import read_trials
+
+    row = {"voltage_V": 85.0, "sample": "a", "period_s": 0.377, "advance_mm": 0.394, "lateral_mm": 1.13}
+    row[column] = value
+    p = tmp_path / "t.csv"
+    p.write_text(",".join(row) + "\n" + ",".join(str(v) for v in row.values()) + "\n")
+    with pytest.warns(UserWarning, match=words):
+        read_trials(p)

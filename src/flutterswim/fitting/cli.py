@@ -23,6 +23,13 @@ def register(subparsers) -> None:
                                           "(voltage_V, sample, period_s, advance_mm, lateral_mm).")
     p.add_argument("trials")
     p.add_argument("--preset", default="paper", help="geometry and viscosity (default: paper)")
+    p.add_argument("--length-mm", type=float, default=None,
+                   help="the sample's length l [mm] (default: the preset's, 3.7); the paper measured l, width and "
+                        "thickness per sample and fitted B, tau and kappa_E")
+    p.add_argument("--width-mm", type=float, default=None, help="the sample's full width [mm] (default: the preset's, 0.396)")
+    p.add_argument("--thickness-mm", type=float, default=None,
+                   help="the sample's full thickness [mm] (default: the preset's, 0.0083)")
+    p.add_argument("--viscosity", type=float, default=None, help="the fluid's viscosity [Pa s] (default: the preset's, 8e-4)")
     p.add_argument("--voltage", type=float, default=None,
                    help="voltage to fit (default: the one with most trials); with --joint, the voltage at which "
                         "kappa_E is reported")
@@ -68,7 +75,7 @@ def _cmd_fit(args) -> int:
     out = check_output_file(args.out, (".json",), kind="fit")
     if args.plot:
         check_output_file(args.plot, (".png", ".pdf", ".svg"), what="--plot")
-    base = preset(args.preset)
+    base = _geometry(args, preset(args.preset))
     if args.workers is not None and args.backend is None:  # (it was ignored without a word)
         raise ParameterError(f"--workers={args.workers} needs --backend (processes, dask-local, ...): without one "
                              "the fit runs in this process")
@@ -83,6 +90,11 @@ def _cmd_fit(args) -> int:
     if args.starts and args.paper_cost:
         raise ParameterError(f"--starts={args.starts} searches with the SEM-weighted cost; --paper-cost takes none")
     trials = read_trials(args.trials)
+    from .data import check_geometry
+
+    geometry_note = check_geometry(trials, base)
+    if geometry_note:
+        print(f"flutterswim fit: note: {geometry_note}", file=sys.stderr)
     summary = summarise(trials)
     if args.joint:
         return _joint(args, base, trials, summary, out)
@@ -119,6 +131,13 @@ def _cmd_fit(args) -> int:
         # no values to speak of: the one line why (the JSON has the rest; a failed fit's values
         # printed as a result's read as one)
         return _verdict(res)
+    if res.at_fold and res.cost >= 1.0 and not args.profiles:
+        # (it exited 0, status "converged": a script took values 5-58 % off, with a 1-sigma of
+        # 1e5 %); within the standard errors (chi2 < 1) the data are consistent with it, and the
+        # status and the note say what the values are
+        print(f"flutterswim fit: failed: the fit stopped on a fold of the model, not at a solution, and misses the data "
+              f"by chi2 = {res.cost:.3g} (status at_fold in {out}): {res.fold_note}", file=sys.stderr)
+        return 1
     n = int(summary.n[np.isclose(summary.voltage_V, v)][0])
     if not args.paper_cost and n < FEW_TRIALS:
         print(f"flutterswim fit: note: the SEMs at {v:g} V come from {n} trials, so the reported 1-sigma is itself "
@@ -127,8 +146,9 @@ def _cmd_fit(args) -> int:
               + (", the model's resolution: --no-extrapolate" if args.no_extrapolate else "") + ")",
               file=sys.stderr)
     s = res.sigma_rel
-    print(f"{out}: B = {res.B * 1e6:.4g} N mm^2 (+-{100 * s[0]:.2g}%), tau = {res.tau:.4g} s (+-{100 * s[1]:.2g}%), "
-          f"kappa_E = {res.kappa_E * 1e-3:.4g} 1/mm (+-{100 * s[2]:.2g}%) at {v:g} V"
+    pm = (["1-sigma undetermined: at a fold"] * 3 if res.at_fold else [f"+-{100 * x:.2g}%" for x in s])
+    print(f"{out}: B = {res.B * 1e6:.4g} N mm^2 ({pm[0]}), tau = {res.tau:.4g} s ({pm[1]}), "
+          f"kappa_E = {res.kappa_E * 1e-3:.4g} 1/mm ({pm[2]}) at {v:g} V"
           + ("" if res.settings.get("uncertainty_weights") == "sem" else
              " (1-sigma from an assumed 5 % error per descriptor: no SEMs)")
           + f"; paper cost C = {res.paper_cost:.3g}; {res.card.describe()}")
@@ -159,6 +179,19 @@ def _cmd_fit(args) -> int:
               "(without --paper-cost the fit is unbounded)", file=sys.stderr)
     _plot(args, res, summary, trials, v)
     return _verdict(res)
+
+
+def _geometry(args, base):
+    """The preset with the sample's geometry and viscosity given on the command line."""
+    from .._validate import positive
+
+    change = {}
+    for opt, name, factor in (("length_mm", "l", 1e-3), ("width_mm", "b", 0.5e-3), ("thickness_mm", "a", 0.5e-3),
+                              ("viscosity", "mu", 1.0)):
+        v = getattr(args, opt)
+        if v is not None:
+            change[name] = positive(f"--{opt.replace('_', '-')}", v) * factor
+    return base.replace(**change) if change else base
 
 
 def _verdict(res) -> int:

@@ -29,6 +29,7 @@ class Trials:
     sample: np.ndarray
     values: np.ndarray  # (n, 3): period_s, advance_mm, lateral_mm
     source: str = ""  # the file read (for messages)
+    body_length_mm: np.ndarray | None = None  # (n,) the tracked body length, where the CSV has it (NaN: none)
 
 
 @dataclass(frozen=True)
@@ -51,6 +52,13 @@ class Summary:
 # a stroke slower than this is not a flutter of the paper's kind (0.3-0.5 s): most likely a
 # period column in ms; said, not refused
 _MAX_PLAUSIBLE_PERIOD_S = 60.0
+#: an advance or lateral excursion beyond this [mm] is not a millimetre-sized ribbon's (in um?)
+_MAX_PLAUSIBLE_LENGTH_MM = 50.0
+#: voltages all below this [V] are likely in kV (the paper's: 70-100 V)
+_MIN_PLAUSIBLE_VOLTAGE_V = 1.0
+#: a tracked body length this far from the model's l (relative) is noted; beyond the second,
+#: refused: the geometry is not the sample's, or the pixel scale is wrong
+BODY_LENGTH_NOTE, BODY_LENGTH_REFUSE = 0.02, 0.10
 
 
 def read_trials(path: str | Path) -> Trials:
@@ -106,12 +114,51 @@ def read_trials(path: str | Path) -> Trials:
                 raise ParameterError(f"trials={str(p)!r}, row {i + 2}: {c}={r[c]!r} is not allowed; periods must "
                                      "be finite and > 0, advances and lateral excursions finite and >= 0")
     _warn_repeated(p, rows)
-    if vals[:, 0].max() > _MAX_PLAUSIBLE_PERIOD_S:
-        import warnings
+    import warnings
 
+    if vals[:, 0].max() > _MAX_PLAUSIBLE_PERIOD_S:
         warnings.warn(f"trials={str(p)!r}: periods up to {vals[:, 0].max():g} s (the paper's strokes beat in "
                       f"0.3-0.5 s): is period_s in seconds (not ms)?", UserWarning, stacklevel=2)
-    return Trials(volt, np.array([r["sample"] for r in rows]), vals, str(p))
+    for k, c in ((1, "advance_mm"), (2, "lateral_mm")):  # (1170 mm for a 3.7 mm ribbon went in without a word)
+        if vals[:, k].max() > _MAX_PLAUSIBLE_LENGTH_MM:
+            warnings.warn(f"trials={str(p)!r}: {c} up to {vals[:, k].max():g} mm, for a millimetre-sized ribbon (the "
+                          f"paper's: 0.4-1.2 mm): is {c} in millimetres (not um)?", UserWarning, stacklevel=2)
+    if volt.max() < _MIN_PLAUSIBLE_VOLTAGE_V:
+        warnings.warn(f"trials={str(p)!r}: voltages up to {volt.max():g} V (the paper's: 70-100 V): is voltage_V in "
+                      "volts (not kV)?", UserWarning, stacklevel=2)
+    body = None
+    if "body_length_mm" in rows[0]:  # (track-batch writes it: the fit's geometry is checked against it)
+        def number(v) -> float:
+            try:
+                x = float(v)
+            except (TypeError, ValueError):
+                return math.nan
+            return x if math.isfinite(x) and x > 0 else math.nan
+
+        body = np.array([number(r["body_length_mm"]) for r in rows])
+    return Trials(volt, np.array([r["sample"] for r in rows]), vals, str(p), body)
+
+
+def check_geometry(trials: Trials, base) -> str:
+    """The tracked body length (the CSV's ``body_length_mm``, where given) against the model's
+    l: a ParameterError beyond :data:`BODY_LENGTH_REFUSE`, a note (returned, else "") beyond
+    :data:`BODY_LENGTH_NOTE`. A fit with the paper's geometry of a 3 mm ribbon returned B 187 %
+    off, 7-160 sigma from the truth, without a word."""
+    if trials.body_length_mm is None or not np.any(np.isfinite(trials.body_length_mm)):
+        return ""
+    measured = float(np.nanmedian(trials.body_length_mm))
+    l_mm = base.l * 1e3
+    off = measured / l_mm - 1.0
+    what = (f"the trials' tracked body length, {measured:.4g} mm (median of "
+            f"{int(np.count_nonzero(np.isfinite(trials.body_length_mm)))}), is {100 * abs(off):.2g} % "
+            f"{'longer' if off > 0 else 'shorter'} than the model's l = {l_mm:.4g} mm")
+    advice = ("give the sample's geometry (--length-mm, --width-mm, --thickness-mm), or check the movies' scale "
+              "(--px-per-mm)")
+    if abs(off) > BODY_LENGTH_REFUSE:
+        raise ParameterError(f"trials={trials.source!r}: {what}; the model would fit another ribbon: {advice}")
+    if abs(off) > BODY_LENGTH_NOTE:
+        return f"{what}: the fit holds the model's geometry; {advice}"
+    return ""
 
 
 def _warn_repeated(p: Path, rows: list[dict]) -> None:

@@ -96,6 +96,10 @@ def fit_voltages(voltages, means, sems, *, v_ref: float | None = None, n_trials=
     base = preset("paper") if base is None else base
     if not isinstance(base, Parameters):
         raise ParameterError(f"base={base!r} must be flutterswim.Parameters")
+    if guess is PAPER_GUESS:  # (carried to the base's geometry, as fit's)
+        from .fit import default_guess
+
+        guess = default_guess(base)
     B0, tau0, k0 = (positive(n, g) for n, g in zip(("guess B", "guess tau", "guess kappa_E"), guess))
     model = DescriptorModel(base, tip=tip, n_segments=n_segments, extrapolate=extrapolate) if model is None else model
     hit = np.nonzero(np.isclose(v, v_ref, rtol=0.0, atol=1e-9))[0]
