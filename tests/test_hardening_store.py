@@ -408,3 +408,43 @@ def open_sweep_chi(out):
     from flutterswim.sweep import open_sweep
 
     return open_sweep(str(out))["chi"].values
+
+
+def _twice(task):
+    return {"a": 2.0 * task["values"]["chi"]}
+
+
+_twice.variables = ["a"]
+
+
+def _once(task):
+    return {"a": task["values"]["chi"]}
+
+
+_once.variables = ["a"]
+
+
+def test_a_store_is_not_resumed_by_other_code(tmp_path):
+    """A resume with another point function (or another flutterswim version) mixed the points of
+    both in one store without a word (v = 10, 20, 30, 80, 100, 120). It is refused, naming what
+    differs; the same code resumes; a store that records no code (made before) resumes."""
+    import zarr
+
+    from flutterswim.sweep import SweepDefinitionError
+
+    out = str(tmp_path / "s.zarr")
+    axes = {"chi": [1.0, 2.0, 3.0, 4.0]}
+    sweep(axes, out=out, backend="serial", point_fn=_once, progress=False, max_points=2)
+    with pytest.raises(SweepDefinitionError, match="point function: stored 'test_hardening_store:_once'"):
+        sweep(axes, out=out, backend="serial", point_fn=_twice, progress=False)
+    g = zarr.open_group(out, mode="r+")
+    code = json.loads(g.attrs["code"])
+    g.attrs["code"] = json.dumps({**code, "flutterswim": "0.0.1"})
+    with pytest.raises(SweepDefinitionError, match="flutterswim version: stored '0.0.1'"):
+        sweep(axes, out=out, backend="serial", point_fn=_once, progress=False)
+    g.attrs["code"] = json.dumps({**code, "package_source": "0123456789abcdef"})
+    with pytest.warns(UserWarning, match="other sources"):
+        sweep(axes, out=out, backend="serial", point_fn=_once, progress=False, max_points=1)
+    del g.attrs["code"]
+    ds = sweep(axes, out=out, backend="serial", point_fn=_once, progress=False)
+    assert list(ds["a"].values) == [1.0, 2.0, 3.0, 4.0]

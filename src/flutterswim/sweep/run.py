@@ -142,7 +142,9 @@ def sweep(
         tmp = tempfile.TemporaryDirectory(prefix="flutterswim-sweep-")
         out = f"{tmp.name}/sweep.zarr"
     try:
-        store = SweepStore.open(out, spec, variables, n_state, overwrite=overwrite)
+        from .store import code_identity
+
+        store = SweepStore.open(out, spec, variables, n_state, overwrite=overwrite, code=code_identity(fn))
         try:
             _run(store, spec, fn, variables, backend=backend, workers=workers, scheduler=scheduler,
                  progress=progress, max_points=max_points, temporary=tmp is not None, retry_failed=retry_failed)

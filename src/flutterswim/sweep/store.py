@@ -231,6 +231,54 @@ def _acquire(path: Path):
                    then="rerun the same command to resume")
 
 
+def code_identity(fn) -> dict:
+    """What computes a sweep's points: the flutterswim version, the point function's name and a
+    hash of its source (None where it has none to read), and a hash of the package's sources."""
+    import hashlib
+    import inspect
+
+    from .. import __version__
+
+    try:
+        src = hashlib.sha256(inspect.getsource(fn).encode()).hexdigest()[:16]
+    except (OSError, TypeError):
+        src = None
+    h = hashlib.sha256()
+    root = Path(__file__).resolve().parents[1]
+    for f in sorted(root.rglob("*.py")):
+        h.update(str(f.relative_to(root)).encode())
+        h.update(f.read_bytes())
+    return {"flutterswim": __version__,
+            "point_fn": f"{getattr(fn, '__module__', '?')}:{getattr(fn, '__qualname__', type(fn).__name__)}",
+            "point_fn_source": src, "package_source": h.hexdigest()[:16]}
+
+
+def _same_code(path: Path, attrs: dict, code: dict | None) -> None:
+    """Refuse to resume a store whose points were computed by another version of flutterswim or
+    another point function (a resume had mixed both: the periods jumped 5 % at the point where
+    the new code took over, without a word); warn where only the package's sources differ (an
+    edit that may not touch the points). A store made before stop 47 records no code."""
+    if code is None or "code" not in attrs:
+        return
+    try:
+        stored = json.loads(attrs["code"])
+    except (TypeError, ValueError):
+        return
+    what = {"flutterswim": "flutterswim version", "point_fn": "point function",
+            "point_fn_source": "point function's source (hash)"}
+    diffs = [f"{what[k]}: stored {stored.get(k)!r}, now {code.get(k)!r}" for k in what if stored.get(k) != code.get(k)]
+    if diffs:
+        raise SweepDefinitionError(
+            f"the store {str(path)!r} was computed by other code ({'; '.join(diffs)}): resuming would mix points "
+            "of both in one store. Use another --out path, or overwrite=True (--overwrite) to compute every point "
+            "again")
+    if stored.get("package_source") != code.get("package_source"):
+        warnings.warn(f"the store {str(path)!r} was begun by flutterswim of other sources (hash "
+                      f"{stored.get('package_source')}, now {code.get('package_source')}; same version): if the "
+                      "edit changed what a point computes, its points before and after differ (overwrite=True, "
+                      "--overwrite, computes them all again)", UserWarning, stacklevel=4)
+
+
 class SweepStore:
     def __init__(self, path: str | Path, group, spec: SweepSpec, variables: list[str]):
         self.path, self.group, self.spec, self.variables = Path(path), group, spec, list(variables)
@@ -249,7 +297,7 @@ class SweepStore:
     # ------------------------------------------------------------------ open/create
     @classmethod
     def open(cls, path: str | Path, spec: SweepSpec, variables: Sequence[str], n_state: int,
-             *, overwrite: bool = False) -> "SweepStore":
+             *, overwrite: bool = False, code: dict | None = None) -> "SweepStore":
         """Open (resume) or create the store and take its writer lock (released by
         :meth:`close` or when the process ends, SIGKILL included)."""
         path = check_store_path(path, overwrite=overwrite, kind="sweep")
@@ -260,7 +308,7 @@ class SweepStore:
             _refuse_foreign(path)  # before anything is computed or deleted
         lock = _acquire(path)
         try:
-            store = cls._open(path, spec, list(variables), n_state, overwrite=overwrite)
+            store = cls._open(path, spec, list(variables), n_state, overwrite=overwrite, code=code)
         except BaseException:
             lock.close()
             raise
@@ -273,7 +321,7 @@ class SweepStore:
             self._lock = None
 
     @classmethod
-    def _open(cls, path: Path, spec, variables, n_state, *, overwrite):
+    def _open(cls, path: Path, spec, variables, n_state, *, overwrite, code=None):
         if path.exists() and has_marker(path):
             if overwrite:
                 _refuse_foreign(path)  # again, under the lock
@@ -281,17 +329,17 @@ class SweepStore:
                 # mistyped deleted a finished store and left nothing); deleted once it holds a point
                 replaced = set_aside_own_store(path, kind="sweep")
                 try:
-                    store = cls._create(path, spec, variables, n_state)
+                    store = cls._create(path, spec, variables, n_state, code)
                 except BaseException:
                     os.replace(replaced, path)
                     raise
                 store.replaced = replaced
                 return store
             else:
-                return cls._resume(path, spec, variables)
+                return cls._resume(path, spec, variables, code)
         elif path.is_dir():  # empty directory (checked): replaced by the new store
             path.rmdir()
-        return cls._create(path, spec, variables, n_state)
+        return cls._create(path, spec, variables, n_state, code)
 
     def settle_replaced(self, keep_new: bool) -> None:
         """The store ``overwrite`` set aside: deleted if the new one is kept (it holds points),
@@ -307,7 +355,7 @@ class SweepStore:
             os.replace(old, self.path)
 
     @classmethod
-    def _resume(cls, path: Path, spec: SweepSpec, variables: list[str]) -> "SweepStore":
+    def _resume(cls, path: Path, spec: SweepSpec, variables: list[str], code: dict | None = None) -> "SweepStore":
         import zarr
 
         hint = (" Nothing was recomputed. Rerun with --overwrite (overwrite=True) to discard it and start "
@@ -341,6 +389,7 @@ class SweepStore:
                    if legacy else "")
                 + "Use another --out path, or overwrite=True (--overwrite) to discard the stored points."
             )
+        _same_code(path, attrs, code)
         if attrs["fingerprint"] != spec.fingerprint:
             raise SweepStoreError(f"the store {str(path)!r} is inconsistent: its fingerprint "
                                   f"{attrs['fingerprint']} does not match its definition." + hint)
@@ -359,7 +408,8 @@ class SweepStore:
         return cls(path, g, spec, variables)
 
     @classmethod
-    def _create(cls, path: Path, spec: SweepSpec, variables: list[str], n_state: int) -> "SweepStore":
+    def _create(cls, path: Path, spec: SweepSpec, variables: list[str], n_state: int,
+                code: dict | None = None) -> "SweepStore":
         """Build the store under a temporary name next to ``path``, then rename it into place."""
         import shutil
 
@@ -393,6 +443,8 @@ class SweepStore:
             "time_unit": tu,
             "swept": json.dumps(list(spec.names)),
         })
+        if code is not None:  # what computed the points (a resume by other code is refused: _same_code)
+            ds.attrs["code"] = json.dumps(code, sort_keys=True)
         # the base point as numeric attributes with units (as a run's), beside the JSON
         for k, v in spec.base.to_dict().items():
             ds.attrs[f"base_{k}"] = float(v)
