@@ -118,3 +118,32 @@ def test_the_cli_says_a_fit_on_a_fold_failed_unless_profiles_give_the_range(tmp_
             assert len(failed) == 1 and "fold" in failed[0] and "at_fold" in failed[0]
         else:
             assert status == 0 and d["status"] == "converged" and not d["at_fold"]
+
+
+def test_a_strong_correlation_is_noted_without_profiles(tmp_path, monkeypatch, capsys):
+    """The +-20 % of a fit with tau-kappa_E correlated by 0.97 hid a second exact solution 60-73 %
+    away, with no note. A correlation beyond 0.95 is now noted (pointing to --profiles),
+    and only then."""
+    import importlib
+
+    from flutterswim import cli
+    from flutterswim.fitting.cli import STRONG_CORRELATION
+
+    ff = importlib.import_module("flutterswim.fitting.fit")
+    real_fit = ff.fit
+    monkeypatch.setattr(ff, "fit", lambda mean, sem, **kw: real_fit(mean, sem, model=SUR))
+    csv = tmp_path / "t.csv"
+    seen = set()
+    for rel in (0.002, 0.05):  # the trials' spread: small and large SEMs
+        y = Y0
+        csv.write_text("voltage_V,sample,period_s,advance_mm,lateral_mm\n" + "".join(
+            f"85,{k},{v[0]},{v[1]},{v[2]}\n" for k, v in enumerate((y * (1 + rel), y, y * (1 - rel)))))
+        out = tmp_path / "f.json"
+        assert cli.main(["fit", str(csv), "--out", str(out)]) == 0
+        err = capsys.readouterr().err
+        corr = max(abs(v) for v in json.loads(out.read_text())["correlation"].values())
+        noted = "are correlated by" in err
+        weak = "poorly (1-sigma up to" in err  # (that note already points to the profiles)
+        assert noted == (corr > STRONG_CORRELATION and not weak), (corr, err)
+        seen.add(noted)
+    assert True in seen

@@ -173,6 +173,12 @@ def _cmd_fit(args) -> int:
         print(f"flutterswim fit: note: {res.fold_note}", file=sys.stderr)
     elif res.weakly_determined:
         print(f"flutterswim fit: note: {res.weakly_determined}", file=sys.stderr)
+    elif not args.profiles and _strongest_correlation(res)[0] > STRONG_CORRELATION:
+        # (the +-20 % hid a second exact solution 60-73 % away, which the profiles showed)
+        r, pair = _strongest_correlation(res)
+        print(f"flutterswim fit: note: {pair} are correlated by {r:.2f}: the 1-sigma is the cost's curvature at the "
+              "fit, and along that direction the data may allow far more (or another exact solution); --profiles "
+              "gives the range, --starts searches for other solutions", file=sys.stderr)
     if res.at_bound:
         print(f"flutterswim fit: note: {', '.join(res.at_bound)} ended on the bound of the paper's box (factor 0.5 or "
               "1.5 of the guess): the data ask for a value beyond it, so that value is the bound's, not the fit's "
@@ -192,6 +198,22 @@ def _geometry(args, base):
         if v is not None:
             change[name] = positive(f"--{opt.replace('_', '-')}", v) * factor
     return base.replace(**change) if change else base
+
+
+#: a correlation beyond this, without profiles, is noted (the 1-sigma is local along it)
+STRONG_CORRELATION = 0.95
+
+
+def _strongest_correlation(res) -> tuple[float, str]:
+    """(|r|, "a and b") of the most correlated pair of the fit's parameters (0 when undefined)."""
+    import numpy as np
+
+    from .uncertainty import NAMES
+
+    c = np.abs(np.nan_to_num(np.asarray(res.correlation, float), nan=0.0))
+    np.fill_diagonal(c, 0.0)
+    i, j = np.unravel_index(int(np.argmax(c)), c.shape)
+    return float(c[i, j]), f"{NAMES[min(i, j)]} and {NAMES[max(i, j)]}"
 
 
 def _verdict(res) -> int:
