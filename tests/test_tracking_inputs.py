@@ -460,3 +460,22 @@ def test_batch_fps_does_not_override_a_movies_recorded_rate(movie, tmp_path):
     with pytest.warns(UserWarning, match="records 40 fps"):
         tr = track(folder / "80V_sample1.avi", px_per_mm=movie.px_per_mm, fps=FPS)
     assert tr.meta["fps"] == FPS
+
+
+def test_batch_warns_where_a_sidecar_overrides_or_lengths_disagree(movie, tmp_path):
+    """A sidecar's voltage beside a name giving another, and a sidecar's px_per_mm 30 % off the
+    command line's, were used without a word; so one batch held body lengths of 5.28 and 3.70
+    mm, unflagged. Each is warned of (the sidecar's value is still used)."""
+    from flutterswim.tracking.batch import find_trials
+
+    folder = _trials(tmp_path / "t", movie, ("80V_sample1.tif", "85V_sample2.tif"))
+    (folder / "85V_sample2.json").write_text(json.dumps({"voltage_V": 90, "sample": "2",
+                                                        "px_per_mm": 1.3 * movie.px_per_mm}))
+    with pytest.warns(UserWarning, match="gives voltage 90, its name '85'"):
+        trials = find_trials(folder)
+    assert [t.voltage_V for t in trials] == [80.0, 90.0]
+    with pytest.warns(UserWarning) as got:
+        _, rows, failed = track_batch(folder, tmp_path / "o.csv", px_per_mm=movie.px_per_mm, fps=FPS, n_last=3)
+    said = " ".join(str(w.message) for w in got)
+    assert not failed and "its sidecar's px_per_mm" in said and "body length more than 10 %" in said
+    assert rows[1]["body_length_mm"] == pytest.approx(rows[0]["body_length_mm"] / 1.3, rel=0.02)

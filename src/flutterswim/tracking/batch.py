@@ -38,6 +38,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
+import numpy as np
+
 from .._validate import ParameterError, direction_deg, finite, positive, positive_int
 from .io import FRAME_SUFFIXES, MOVIE_SUFFIXES, STACK_SUFFIXES, parse_roi
 
@@ -144,6 +146,24 @@ def _voltage(m: re.Match) -> str:
     return v
 
 
+#: a trial whose tracked body length is this far (relative) from the batch's median is warned of
+_LENGTH_SPREAD = 0.1
+
+
+def _warn_disagreeing(p: Path, cand: Path, pairs) -> None:
+    """A sidecar's voltage or sample that the trial's name contradicts: the sidecar's is used
+    (it was, without a word: 90 V beside 85V_sample1.tif)."""
+    for what, given, named in pairs:
+        try:
+            same = math.isclose(float(given), float(named), rel_tol=1e-9) if what == "voltage" else (
+                str(given).strip() == str(named).strip())
+        except (TypeError, ValueError):
+            continue
+        if not same:
+            warnings.warn(f"trial {str(p)!r}: its sidecar {cand.name!r} gives {what} {given!r}, its name {named!r}; the "
+                          "sidecar's is used", UserWarning, stacklevel=3)
+
+
 def find_trials(folder: str | os.PathLike, pattern: str = DEFAULT_PATTERN) -> list[Trial]:
     """Trials of ``folder`` (sorted by name) with their voltage and sample; the sidecars'
     options are checked here (a bad one is a ParameterError naming its file). A trial without
@@ -174,6 +194,8 @@ def find_trials(folder: str | os.PathLike, pattern: str = DEFAULT_PATTERN) -> li
                 # a sidecar of options only (px_per_mm, field_angle_deg ...): the name gives the rest
                 v = _voltage(m) if v is None else v
                 smp = m.group("sample") if smp is None else smp
+            elif m is not None:
+                _warn_disagreeing(p, cand, (("voltage", v, _voltage(m)), ("sample", smp, m.group("sample"))))
             if v is None or smp is None:
                 out.append(Trial(p, math.nan, str(smp), opts, f"{where} needs the keys voltage_V and sample (or a "
                                  f"name that the pattern {pattern!r} matches)"))
@@ -259,6 +281,11 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
     for tr_ in trials:
         if tr_.options.get("px_per_mm", px_per_mm) is None:
             raise ParameterError(f"px_per_mm is needed for trial {str(tr_.path)!r}: give px_per_mm or put it in the sidecar")
+        own = tr_.options.get("px_per_mm")
+        if own is not None and px_per_mm is not None and abs(own / px_per_mm - 1.0) > 0.01:
+            # (it overrode a command line 43 % off without a word)
+            warnings.warn(f"trial {str(tr_.path)!r}: its sidecar's px_per_mm={own:g} is used, not px_per_mm="
+                          f"{px_per_mm:g}", UserWarning, stacklevel=2)
     rows: list[dict] = []
     it = trials
     if progress:
@@ -307,6 +334,14 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
             "body_length_mm": tk.length, "body_length_spread": m["length_spread"], "n_frames": m["n_frames"],
             "n_failed_frames": m["n_failed"], "trial": str(tr_.path), "tracked_by": f"flutterswim {__version__}",
         })
+    lengths = np.array([r["body_length_mm"] for r in rows], float)
+    if np.count_nonzero(np.isfinite(lengths)) >= 2:
+        med = float(np.nanmedian(lengths))
+        odd = [(r["trial"], r["body_length_mm"]) for r, L in zip(rows, lengths) if abs(L / med - 1.0) > _LENGTH_SPREAD]
+        if odd:  # (5.28 and 3.70 mm in one batch, from a sidecar's scale 43 % off, went unflagged)
+            warnings.warn(f"{len(odd)} trial(s) measure a body length more than {100 * _LENGTH_SPREAD:g} % from the "
+                          f"batch's median {med:.4g} mm (" + ", ".join(f"{Path(t).name}: {L:.4g} mm" for t, L in odd[:4])
+                          + "): another sample, or a wrong px_per_mm (a sidecar's?)", UserWarning, stacklevel=2)
     failed.sort(key=lambda f: f[0])  # in the trials' order (by name), as the rows
     if as_typed is not None:
         failed = [(trial, as_typed(why)) for trial, why in failed]
