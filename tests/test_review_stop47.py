@@ -251,3 +251,30 @@ def test_descriptors_in_the_wrong_unit_are_warned_of(tmp_path, column, value, wo
     p.write_text(",".join(row) + "\n" + ",".join(str(v) for v in row.values()) + "\n")
     with pytest.warns(UserWarning, match=words):
         read_trials(p)
+
+
+def test_an_uneven_background_is_named_when_it_breaks_tracking():
+    """A bright hump of illumination (3 times the background) broke most frames into
+    "crossing" and "gap", and nothing said the background might be the cause."""
+    import math
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from flutterswim.tracking import render, track
+
+    r = fs.simulate(fs.PAPER, 10.0, n_segments=24, frame_dt=1 / 50, field=math.radians(37))
+    sl = slice(r.t.size - 40, r.t.size)
+    mv = render(SimpleNamespace(t=r.t[sl], x=r.x[sl], y=r.y[sl]), um_per_px=14.0, snr=4.0, seed=3)
+    T, H, W = mv.frames.shape
+    yy, xx = np.mgrid[0:H, 0:W]
+    hump = 3 * float(np.median(mv.frames[0])) * np.exp(-((xx - 0.5 * W) ** 2 + (yy - 0.3 * H) ** 2) / (2 * 60 ** 2))
+    with pytest.warns(UserWarning, match="background that is not a plane"):
+        tr = track(mv.frames + hump[None].astype(np.float32), px_per_mm=mv.px_per_mm, fps=50)
+    reasons = [m.split(":")[0] for m in tr.meta["frames"]["reason"] if m]
+    assert reasons.count("crossing") + reasons.count("gap") > T // 2
+    import warnings
+
+    with warnings.catch_warnings():  # the clean movie: no such warning
+        warnings.filterwarnings("error", message=".*background that is not a plane")
+        track(mv.frames, px_per_mm=mv.px_per_mm, fps=50)

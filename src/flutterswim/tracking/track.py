@@ -813,11 +813,18 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
         temporal["periodic"] = pinfo["reason"]
         temporal["periodic_info"] = {k: v for k, v in pinfo.items() if k != "reason"}
     n_ok = int(np.count_nonzero(ok))
+    counts: dict[str, int] = {}
+    for rsn in reason:
+        key = rsn.split(":")[0]
+        counts[key] = counts.get(key, 0) + 1
+    # (a bright hump of illumination read as 127 crossings and 19 gaps: no word named it)
+    branched = ("most frames show a body branching or broken: a crossing filament, or a background that is not a "
+                "plane (uneven illumination, a bright patch) taken for part of the body: flatten the frames' "
+                "background first, or give roi (--roi) around the swimmer"
+                if counts.get("crossing", 0) + counts.get("gap", 0) > T // 2 else "")
+    if n_ok >= 2 and branched:
+        warnings.warn(f"input={frames.source!r}: {n_ok} of {T} frames were tracked; {branched}", stacklevel=2)
     if n_ok < 2:
-        counts: dict[str, int] = {}
-        for rsn in reason:
-            key = rsn.split(":")[0]
-            counts[key] = counts.get(key, 0) + 1
         why = ", ".join(f"{k} ({v})" for k, v in counts.items() if k)
         hint = ""
         if counts.get("lost contrast", 0) > T // 2:
@@ -828,6 +835,8 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
             hint = (f"{level} if the filament is brighter than its background, leave out dark_line (--dark-line)"
                     if dark_line else f"{level} if the filament is darker than its background, give dark_line=True "
                     "(--dark-line)")
+        elif branched:
+            hint = f"; {branched}"
         raise ParameterError(f"input={frames.source!r}: {n_ok} of {T} frames were tracked; at least 2 are required "
                              f"(failures: {why or 'none'}){hint}")
     Lgood = length[ok]
