@@ -479,3 +479,25 @@ def test_batch_warns_where_a_sidecar_overrides_or_lengths_disagree(movie, tmp_pa
     said = " ".join(str(w.message) for w in got)
     assert not failed and "its sidecar's px_per_mm" in said and "body length more than 10 %" in said
     assert rows[1]["body_length_mm"] == pytest.approx(rows[0]["body_length_mm"] / 1.3, rel=0.02)
+
+
+def test_an_interrupted_batch_keeps_the_trials_tracked(movie, tmp_path, monkeypatch):
+    """Interrupted after 2 of 3 trials, a batch kept nothing: every trial was tracked again. The
+    trials tracked are written (CSV, signed) before the interrupt goes on, which says so."""
+    from flutterswim._paths import is_ours
+
+    real = trk.track
+    calls = []
+
+    def stop_at_third(source, **kw):
+        calls.append(source)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return real(source, **kw)
+
+    monkeypatch.setattr(trk, "track", stop_at_third)
+    folder = _trials(tmp_path / "t", movie, ("80V_sample1.tif", "85V_sample2.tif", "90V_sample3.tif"))
+    out = tmp_path / "o.csv"
+    with pytest.raises(KeyboardInterrupt, match=r"after 2 of 3 trials \(2 tracked\)"):
+        track_batch(folder, out, px_per_mm=movie.px_per_mm, fps=FPS, n_last=3)
+    assert [r["sample"] for r in _rows(out)] == ["1", "2"] and is_ours(out)

@@ -249,6 +249,55 @@ def _recorded_fps(path: Path) -> float | None:
         return None
 
 
+def _one_trial(tr_: Trial, rows: list, failed: list, *, px_per_mm, fps, track_kwargs: dict, n_last: int) -> None:
+    """Track and describe one trial: its row appended to ``rows``, or its failure to ``failed``."""
+    from .. import __version__
+    from ..analysis.descriptors import _ALONG_FIELD_COS, describe
+    from .track import NO_FRAME_RATE, track
+
+    o = dict(tr_.options)
+    ppm = o.pop("px_per_mm", px_per_mm)
+    # a trial's own times set its frame rate, and so does its movie's recorded rate (the
+    # batch's fps is for trials without them: it had overridden a 40 fps AVI, period 20 % off)
+    f = o.pop("fps", None if "times" in o else fps)
+    if f is not None and "fps" not in tr_.options:
+        rec = _recorded_fps(tr_.path)
+        if rec is not None:
+            if abs(f / rec - 1.0) > 0.01:
+                warnings.warn(f"trial {str(tr_.path)!r} records {rec:g} fps, used; the batch's fps={f:g} is for "
+                              "trials that record none (a high-speed camera's playback rate? put fps in the "
+                              "trial's sidecar)", stacklevel=3)
+            f = None
+    kw = dict(track_kwargs)
+    if "field_angle_deg" in o:
+        kw["field_angle"] = direction_deg("field_angle_deg", o.pop("field_angle_deg"))
+    kw.update(o)
+    try:
+        tk = track(tr_.path, px_per_mm=ppm, fps=f, **kw)
+        d = describe(tk, n_last=n_last)
+    except Exception as exc:  # noqa: BLE001 - one trial's failure, with its reason; the batch goes on
+        why = " ".join(str(exc).split()).replace(NO_FRAME_RATE, "give fps, or fps or times in the trial's sidecar")
+        failed.append((str(tr_.path), why if isinstance(exc, ParameterError) else
+                       f"{type(exc).__name__}: {why}" if why else type(exc).__name__))
+        return
+    if abs(math.cos(math.radians(d.direction_to_field_deg))) < _ALONG_FIELD_COS:
+        # the stroke swims along the field's line: this far off it, the field's direction is wrong
+        warnings.warn(f"trial {str(tr_.path)!r} swims at {d.direction_to_field_deg:.0f} deg to the field, taken "
+                      f"at {d.field_direction_deg:.0f} deg in the image; advance_mm is the advance along it. "
+                      "Give the field's direction: --field-angle-deg, or field_angle_deg in the trial's sidecar",
+                      stacklevel=3)
+    m = tk.meta
+    rows.append({
+        "voltage_V": tr_.voltage_V, "sample": tr_.sample, "period_s": d.period_s,
+        "advance_mm": abs(d.advance_per_cycle_mm), "lateral_mm": d.trailing_lateral_p2p_mm,
+        "leading_lateral_mm": d.leading_lateral_p2p_mm, "lateral_se_mm": d.trailing_lateral_p2p_se_mm,
+        "leading_lateral_se_mm": d.leading_lateral_p2p_se_mm, "period_std_s": d.period_std_s,
+        "advance_std_mm": d.advance_per_cycle_std_mm, "n_cycles": d.n_cycles_used,
+        "body_length_mm": tk.length, "body_length_spread": m["length_spread"], "n_frames": m["n_frames"],
+        "n_failed_frames": m["n_failed"], "trial": str(tr_.path), "tracked_by": f"flutterswim {__version__}",
+    })
+
+
 def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm: float | None = None,
                 fps: float | None = None, pattern: str = DEFAULT_PATTERN, n_last: int = 5, plot: str | None = None,
                 progress: bool = False, as_typed: Callable[[str], str] | None = None,
@@ -258,10 +307,8 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
     failures [(trial, reason)]); the CSV is written only if a trial was tracked. The reasons name this function's parameters ("give fps");
     ``as_typed(reason)`` says them as the caller's user typed them (the command line's
     options: :func:`flutterswim.cli.as_typed`)."""
-    from .. import __version__
     from .._paths import atomic_write_text, check_output_file, is_ours, row_signature
-    from ..analysis.descriptors import _ALONG_FIELD_COS, describe
-    from .track import NO_FRAME_RATE, check_options, track
+    from .track import check_options
 
     # every input checked before the first trial is tracked
     out_p = check_output_file(out, (".csv",), what="out")
@@ -292,48 +339,16 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
         from tqdm.auto import tqdm
 
         it = tqdm(trials, unit="trial", desc="track-batch")
-    for tr_ in it:
-        o = dict(tr_.options)
-        ppm = o.pop("px_per_mm", px_per_mm)
-        # a trial's own times set its frame rate, and so does its movie's recorded rate (the
-        # batch's fps is for trials without them: it had overridden a 40 fps AVI, period 20 % off)
-        f = o.pop("fps", None if "times" in o else fps)
-        if f is not None and "fps" not in tr_.options:
-            rec = _recorded_fps(tr_.path)
-            if rec is not None:
-                if abs(f / rec - 1.0) > 0.01:
-                    warnings.warn(f"trial {str(tr_.path)!r} records {rec:g} fps, used; the batch's fps={f:g} is for "
-                                  "trials that record none (a high-speed camera's playback rate? put fps in the "
-                                  "trial's sidecar)", stacklevel=2)
-                f = None
-        kw = dict(track_kwargs)
-        if "field_angle_deg" in o:
-            kw["field_angle"] = direction_deg("field_angle_deg", o.pop("field_angle_deg"))
-        kw.update(o)
-        try:
-            tk = track(tr_.path, px_per_mm=ppm, fps=f, **kw)
-            d = describe(tk, n_last=n_last)
-        except Exception as exc:  # noqa: BLE001 - one trial's failure, with its reason; the batch goes on
-            why = " ".join(str(exc).split()).replace(NO_FRAME_RATE, "give fps, or fps or times in the trial's sidecar")
-            failed.append((str(tr_.path), why if isinstance(exc, ParameterError) else
-                           f"{type(exc).__name__}: {why}" if why else type(exc).__name__))
-            continue
-        if abs(math.cos(math.radians(d.direction_to_field_deg))) < _ALONG_FIELD_COS:
-            # the stroke swims along the field's line: this far off it, the field's direction is wrong
-            warnings.warn(f"trial {str(tr_.path)!r} swims at {d.direction_to_field_deg:.0f} deg to the field, taken "
-                          f"at {d.field_direction_deg:.0f} deg in the image; advance_mm is the advance along it. "
-                          "Give the field's direction: --field-angle-deg, or field_angle_deg in the trial's sidecar",
-                          stacklevel=2)
-        m = tk.meta
-        rows.append({
-            "voltage_V": tr_.voltage_V, "sample": tr_.sample, "period_s": d.period_s,
-            "advance_mm": abs(d.advance_per_cycle_mm), "lateral_mm": d.trailing_lateral_p2p_mm,
-            "leading_lateral_mm": d.leading_lateral_p2p_mm, "lateral_se_mm": d.trailing_lateral_p2p_se_mm,
-            "leading_lateral_se_mm": d.leading_lateral_p2p_se_mm, "period_std_s": d.period_std_s,
-            "advance_std_mm": d.advance_per_cycle_std_mm, "n_cycles": d.n_cycles_used,
-            "body_length_mm": tk.length, "body_length_spread": m["length_spread"], "n_frames": m["n_frames"],
-            "n_failed_frames": m["n_failed"], "trial": str(tr_.path), "tracked_by": f"flutterswim {__version__}",
-        })
+    stopped, n_refused = None, len(failed)  # (trials refused before tracking: no voltage ...)
+    try:
+        for tr_ in it:
+            _one_trial(tr_, rows, failed, px_per_mm=px_per_mm, fps=fps, track_kwargs=track_kwargs, n_last=n_last)
+    except KeyboardInterrupt as exc:
+        # the trials tracked so far are written before the interrupt goes on (an interrupt after
+        # 2 of 3 trials had kept nothing)
+        stopped = exc
+        if bar_close := getattr(it, "close", None):
+            bar_close()
     lengths = np.array([r["body_length_mm"] for r in rows], float)
     if np.count_nonzero(np.isfinite(lengths)) >= 2:
         med = float(np.nanmedian(lengths))
@@ -360,8 +375,12 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
         fw.writerow(FAILED_COLUMNS)
         fw.writerows([(a, b, row_signature([a, b])) for a, b in failed])
         atomic_write_text(failed_p, fb.getvalue())
-    elif failed_p.is_file() and is_ours(failed_p):
+    elif failed_p.is_file() and is_ours(failed_p) and stopped is None:
         failed_p.unlink()  # our failures of an earlier run: none of them failed now
+    if stopped is not None:
+        kept = f": their descriptors are in {str(out_p)!r}" if rows else ""
+        raise KeyboardInterrupt(f"interrupted after {len(rows) + len(failed) - n_refused} of {len(trials)} trials ({len(rows)} "
+                                f"tracked){kept}; a rerun tracks every trial again") from None
     if plot is not None and rows:
         from ..fitting.data import plot_trials, read_trials, summarise
 
