@@ -448,3 +448,25 @@ def test_a_store_is_not_resumed_by_other_code(tmp_path):
     del g.attrs["code"]
     ds = sweep(axes, out=out, backend="serial", point_fn=_once, progress=False)
     assert list(ds["a"].values) == [1.0, 2.0, 3.0, 4.0]
+
+
+def test_a_full_disk_says_what_is_saved(tmp_path, monkeypatch):
+    """A sweep that filled the disk exited with "[Errno 28] No space left on device" alone; the
+    points saved and the resume are now said (the error is still an OSError with its errno)."""
+    import importlib
+
+    st = importlib.import_module("flutterswim.sweep.store")
+    real = st.SweepStore.write_point
+    n = []
+
+    def write(self, k, *a, **kw):
+        n.append(k)
+        if len(n) == 3:
+            raise OSError(28, "No space left on device")
+        return real(self, k, *a, **kw)
+
+    monkeypatch.setattr(st.SweepStore, "write_point", write)
+    with pytest.raises(OSError, match=r"No space left on device: 2 of 4 points are saved in .*resume") as e:
+        sweep({"chi": [1.0, 2.0, 3.0, 4.0]}, out=str(tmp_path / "s.zarr"), backend="serial", point_fn=point,
+              progress=False)
+    assert e.value.errno == 28

@@ -235,6 +235,12 @@ def _run(store: SweepStore, spec: SweepSpec, fn, variables, *, backend, workers,
         resume = "" if temporary else "; rerun the same command to resume"
         raise SweepInterrupted(f"interrupted: {counts['saved']} of {spec.n_points} points are saved "
                                f"{where}{resume}") from None
+    except OSError as exc:
+        if temporary:
+            raise
+        # (a full disk said only "[Errno 28] No space left on device": not what was kept)
+        raise OSError(exc.errno, f"{exc.strerror or exc}: {counts['saved']} of {spec.n_points} points are saved in "
+                                 f"{str(store.path)!r}; rerun the same command to resume (after freeing space)") from exc
     finally:
         if bar is not None:
             bar.close()
