@@ -401,11 +401,18 @@ def test_fit_figure_draws_the_trials_as_fig3e_and_the_model_at_the_fitted_voltag
             np.testing.assert_allclose(mark.get_xdata(), [85.0])
             np.testing.assert_allclose(mark.get_ydata(), [res.model[k]])
             # the residual the panel shows is the fit's: model against the mean it fitted
-            text = next(t.get_text() for t in ax.texts if t.get_text().startswith("model - mean"))
+            text = ax.get_title()
+            assert text.startswith("model - mean")
             rel = float(text.split(": ")[1].split(" %")[0])
             assert rel == pytest.approx(100 * (res.model[k] / mean[k] - 1), abs=0.006)
-        # the lateral axis names the end fitted, the title the voltage
+        # the lateral axis names the end fitted, the title the voltage; the first panel's trial
+        # counts lie apart from its residual (it had overlapped them), which is above the panel
         assert f"{res.settings['tip']} end" in fig.axes[2].get_ylabel() and "85 V" in fig._suptitle.get_text()
+        counts = [t for t in fig.axes[0].texts if t.get_text().startswith("n=")]
+        assert counts and all(0 <= t.get_position()[1] < 0.1 for t in counts)
+        fig.canvas.draw()
+        title_box = fig.axes[0].title.get_window_extent()
+        assert all(t.get_window_extent().y1 < title_box.y0 for t in counts)
         import matplotlib.pyplot as plt
 
         plt.close(fig)

@@ -39,9 +39,8 @@ def plot_fit(res, summary, trials, path=None, *, voltage: float | None = None):
                     label="model at the fit (kappa_E ~ V)")
         else:
             ax.plot([voltage], [res.model[k]], "s", mfc="none", color="k", ms=8, label="model at the fit")
-            ax.text(0.97, 0.03, _residual(res, k), ha="right", va="bottom", fontsize=8, transform=ax.transAxes)
-    tip = res.settings.get("tip", "trailing")
-    axs[0, 2].set_ylabel(f"lateral peak-to-peak, {tip} end [mm]")
+            # (above the panel: inside it, it overlapped the n= labels and the trials)
+            ax.set_title(_residual(res, k), fontsize=8)
     axs[0, 0].legend(fontsize=8)
     names = (("B", 1e6, "B [N mm$^2$]"), ("tau", 1.0, r"$\tau$ [s]"), ("kappa_E", 1e-3, r"$\kappa_E$ [1/mm]"))
     best = (res.B, res.tau, res.kappa_E)
