@@ -42,6 +42,22 @@ def environment() -> list[tuple[str, str]]:
     return env
 
 
+def _mode_matters(t) -> bool:
+    """Whether a target's build depends on --quick / --full (its inputs differ): a figure of data
+    alone (fig3e from trials) was still labelled "Quick build: coarse resolution"."""
+    from .catalog import TARGETS
+    from .targets import Settings
+
+    by_name = {x.name: x for x in TARGETS}
+    try:
+        if t.params(Settings("quick")) != t.params(Settings("full")):
+            return True
+    except Exception:  # noqa: BLE001 - unknown: said as before
+        return True
+    # (a figure drawn from another target's outputs, e.g. fig4c from paper_run's run, is as coarse)
+    return any(_mode_matters(by_name[d]) for d in t.deps if d in by_name)
+
+
 def write_report(out: Path, records: dict, mode: str, *, name: str = "report.html") -> Path:
     """``mode``: this run's; the report gives the folder's (mixed when its targets differ) and
     labels each quick build."""
@@ -65,6 +81,7 @@ def write_report(out: Path, records: dict, mode: str, *, name: str = "report.htm
         ours = [c for c in comps if not c.from_paper and c.ok is not None]
         title = rec.outcome.values.get("title", t.title) if isinstance(rec.outcome.values, dict) else t.title
         rows.append({"name": t.name, "title": title, "caption": t.caption, "status": rec.status, "mode": rec.mode,
+                     "mode_matters": _mode_matters(t),
                      "reran": rec.reran, "wall_time": rec.wall_time, "error": rec.error, "images": imgs,
                      "videos": [v for v in t.videos if (out / v).is_file()], "rows": comps,
                      "notes": list(rec.outcome.notes), "files": sorted(rec.outputs.items()),
