@@ -278,3 +278,55 @@ def test_an_uneven_background_is_named_when_it_breaks_tracking():
     with warnings.catch_warnings():  # the clean movie: no such warning
         warnings.filterwarnings("error", message=".*background that is not a plane")
         track(mv.frames, px_per_mm=mv.px_per_mm, fps=50)
+
+
+def _wave_body(t, x0, y0, U, L=60.0, period=25.0):
+    """A 60 px travelling-wave body (head first) at frame t, its centre moving U px per frame."""
+    import numpy as np
+
+    s = np.linspace(0, L, 400)
+    lat = (2.0 + 8.0 * (s / L) ** 2) * np.sin(2 * np.pi * s / (0.9 * L) - 2 * np.pi * t / period)
+    bx, by = -s - (-s).mean(), lat - lat.mean()
+    return np.stack([x0 + U * t + bx, y0 + by], 1)
+
+
+def _line_frames(curves, shape=(200, 320), seed=1):
+    """Frames of bright lines (PSF sigma 1.5 px, peak 60 over a background of 100, noise 4)."""
+    import numpy as np
+    from scipy.ndimage import gaussian_filter
+
+    rng = np.random.default_rng(seed)
+    out = np.empty((len(curves), *shape), np.float32)
+    for i, objs in enumerate(curves):
+        img = np.zeros(shape)
+        for pts, f in objs:
+            if f:
+                xi, yi = np.rint(pts[:, 0]).astype(int), np.rint(pts[:, 1]).astype(int)
+                np.add.at(img, (np.clip(yi, 0, shape[0] - 1), np.clip(xi, 0, shape[1] - 1)), 0.15 * f)
+        out[i] = 100 + gaussian_filter(img, 1.5) * 60 * np.sqrt(2 * np.pi) * 1.5 + rng.normal(0, 4, shape)
+    return out
+
+
+def test_a_second_ribbon_is_not_taken_after_a_few_lost_frames():
+    """Diff review: with the jump tolerance per lost frame, a second, dimmer ribbon one body
+    length away was taken after 3 lost frames and followed for the rest of the movie. The
+    swimmer's travel across lost frames is bounded (SWIM_PER_FRAME): the frames after the gap
+    are on the swimmer again."""
+    import numpy as np
+
+    from flutterswim.tracking import track
+
+    T, g0, gap = 110, 60, 7
+    curves, truth = [], []
+    for i in range(T):
+        b = _wave_body(i, 60.0, 100.0, 0.6)
+        truth.append(b)
+        curves.append([(b, 0.0 if g0 <= i < g0 + gap else 1.0), (_wave_body(0.7 * i + 7, 60.0, 160.0, 0.3), 0.8)])
+    tr = track(_line_frames(curves), px_per_mm=16.0, fps=50.0)
+    f = tr.meta["frames"]
+    ok = np.asarray(f["ok"])
+    for i in np.nonzero(ok)[0]:
+        P = np.stack([f["x_px"][i], f["y_px"][i]], 1)
+        ends = [truth[i][0], truth[i][-1]]
+        assert min(np.hypot(*(P[0] - e)) for e in ends) < 5, i  # on the swimmer, not the other ribbon
+    assert ok[g0 + gap:].all() and not ok[g0:g0 + gap].any()

@@ -22,7 +22,8 @@ the raw pixels). A frame is flagged, never kept, when:
 - tips not found: the ridge's intensity along the curve and its extension does not fall to
   half its plateau at both ends, or the half-maximum tips lie closer than the shortest body;
 - tip not found: the line-end fit failed at an end;
-- jump: the centreline moved more than ``jump_tol`` body lengths per frame since the last good frame,
+- jump: the centreline moved more than ``jump_tol`` body lengths since the last good frame (and
+  ``SWIM_PER_FRAME`` more for each frame lost in between),
   or head and tail cannot be told apart (both assignments about equally close, by the whole
   curves and by the two ends alone: after lost frames a strongly bending body can change too
   much for the curves, while its ends have moved far less than their distance apart), or,
@@ -548,6 +549,11 @@ def check_options(**options: Any) -> dict[str, Any]:
 #: how far a movie's recorded frame rate may be from the rate of the times given (--times)
 #: before they are refused as in another unit (a camera's nominal rate against its clock: < 1 %)
 _TIMES_FPS_TOLERANCE = 0.1
+#: the most a swimmer travels per frame [body lengths] in the jump check across lost frames
+SWIM_PER_FRAME = 0.05
+#: after more lost frames than this, a frame whose ends the last good frame cannot order is kept
+#: and ordered by the shape check across the gap (_unlinked); after fewer it is flagged
+UNTOLD_AFTER = 10
 
 
 def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any = None,
@@ -696,11 +702,16 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
                     # swims on (after 45 lost frames every later frame was refused as a jump from
                     # the frame before them, 78 px back, and the movie was lost from there on);
                     # head and tail across such a run are checked after the loop (_unlinked)
+                    # the stroke's change is bounded (jump_tol) and the swimmer's travel grows by at most
+                    # SWIM_PER_FRAME body lengths a frame (9 times the paper's swimmer at 50 fps): a
+                    # tolerance of jump_tol per frame took a second ribbon one body length away after
+                    # 3 lost frames, and followed it for the rest of the movie
                     since = (i - ref_i) if pos is None else max(float(pos[i] - pos[ref_i]), 1.0)
-                    if d_best > jump_tol * Lr * since:
+                    tol = jump_tol + SWIM_PER_FRAME * (since - 1.0)
+                    if d_best > tol * Lr:
                         r["ok"], r["reason"] = False, (f"jump: the body moved {d_best:.1f} px since the last good "
-                                                       f"frame (> {jump_tol:g} body lengths per frame)")
-                    elif d_other < 2.0 * d_best and since <= 1.5:
+                                                       f"frame, {since:g} frame(s) before (> {tol:.3g} body lengths)")
+                    elif d_other < 2.0 * d_best and since <= UNTOLD_AFTER:
                         r["ok"], r["reason"] = False, "jump: head and tail cannot be told apart from the last good frame"
                 if r["ok"] and ref is not None:
                     gap = (i - ref_i) if pos is None else float(pos[i] - pos[ref_i])
