@@ -330,3 +330,27 @@ def test_a_second_ribbon_is_not_taken_after_a_few_lost_frames():
         ends = [truth[i][0], truth[i][-1]]
         assert min(np.hypot(*(P[0] - e)) for e in ends) < 5, i  # on the swimmer, not the other ribbon
     assert ok[g0 + gap:].all() and not ok[g0:g0 + gap].any()
+
+
+def test_the_body_length_check_takes_the_trials_fitted(tmp_path, monkeypatch, capsys):
+    """Diff review: the check pooled every trial of the CSV, so another sample of 4.4 mm at 95 V
+    refused a fit at 85 V of a sample matching the model's l."""
+    import importlib
+
+    from flutterswim.cli import main
+    from flutterswim.fitting.model import OutsideModel
+
+    ff = importlib.import_module("flutterswim.fitting.fit")
+
+    def stop(mean, sem, **kw):
+        raise OutsideModel("stopped by the test")
+
+    monkeypatch.setattr(ff, "fit", stop)
+    a = _trials_csv(tmp_path / "a.csv", 3.7, volts=(85.0,)).read_text().splitlines()
+    b = _trials_csv(tmp_path / "b.csv", 4.4, volts=(95.0, 96.0, 97.0), rows=3).read_text().splitlines()[1:]
+    csv = tmp_path / "mix.csv"
+    csv.write_text("\n".join(a + b) + "\n")
+    assert main(["fit", str(csv), "--voltage", "85", "--out", str(tmp_path / "f.json")]) == 1  # (fitted)
+    assert "body length" not in capsys.readouterr().err
+    assert main(["fit", str(csv), "--voltage", "95", "--out", str(tmp_path / "f.json")]) == 2
+    assert "at 95 V, 4.4 mm" in capsys.readouterr().err

@@ -483,7 +483,8 @@ def test_batch_warns_where_a_sidecar_overrides_or_lengths_disagree(movie, tmp_pa
 
 def test_an_interrupted_batch_keeps_the_trials_tracked(movie, tmp_path, monkeypatch):
     """Interrupted after 2 of 3 trials, a batch kept nothing: every trial was tracked again. The
-    trials tracked are written (CSV, signed) before the interrupt goes on, which says so."""
+    trials tracked are written (CSV, signed) beside the batch's CSV, never over it (a complete CSV
+    of an earlier run is kept as it was), before the interrupt goes on, which says so."""
     from flutterswim._paths import is_ours
 
     real = trk.track
@@ -495,9 +496,13 @@ def test_an_interrupted_batch_keeps_the_trials_tracked(movie, tmp_path, monkeypa
             raise KeyboardInterrupt
         return real(source, **kw)
 
-    monkeypatch.setattr(trk, "track", stop_at_third)
     folder = _trials(tmp_path / "t", movie, ("80V_sample1.tif", "85V_sample2.tif", "90V_sample3.tif"))
     out = tmp_path / "o.csv"
-    with pytest.raises(KeyboardInterrupt, match=r"after 2 of 3 trials \(2 tracked\)"):
+    track_batch(folder, out, px_per_mm=movie.px_per_mm, fps=FPS, n_last=3)  # a complete batch first
+    before = out.read_bytes()
+    monkeypatch.setattr(trk, "track", stop_at_third)
+    with pytest.raises(KeyboardInterrupt, match=r"after 2 of 3 trials \(2 tracked\).*o_interrupted.csv"):
         track_batch(folder, out, px_per_mm=movie.px_per_mm, fps=FPS, n_last=3)
-    assert [r["sample"] for r in _rows(out)] == ["1", "2"] and is_ours(out)
+    part = tmp_path / "o_interrupted.csv"
+    assert [r["sample"] for r in _rows(part)] == ["1", "2"] and is_ours(part)
+    assert out.read_bytes() == before

@@ -92,13 +92,13 @@ def _cmd_fit(args) -> int:
     trials = read_trials(args.trials)
     from .data import check_geometry
 
-    geometry_note = check_geometry(trials, base)
-    if geometry_note:
-        print(f"flutterswim fit: note: {geometry_note}", file=sys.stderr)
     summary = summarise(trials)
     if args.joint:
+        fitted = summary.voltage_V[np.all(np.isfinite(summary.sem), axis=1)]
+        _geometry_note(check_geometry(trials, base, fitted))
         return _joint(args, base, trials, summary, out)
     v = args.voltage if args.voltage is not None else float(summary.voltage_V[np.argmax(summary.n)])
+    _geometry_note(check_geometry(trials, base, [v]))
     mean, sem = summary.at(v)
     if not args.paper_cost:
         check_spread(trials, summary, [summary.voltage_V[np.isclose(summary.voltage_V, v)][0]])
@@ -185,6 +185,13 @@ def _cmd_fit(args) -> int:
               "(without --paper-cost the fit is unbounded)", file=sys.stderr)
     _plot(args, res, summary, trials, v)
     return _verdict(res)
+
+
+def _geometry_note(note: str) -> None:
+    if note:
+        import sys
+
+        print(f"flutterswim fit: note: {note}", file=sys.stderr)
 
 
 def _geometry(args, base):

@@ -139,18 +139,24 @@ def read_trials(path: str | Path) -> Trials:
     return Trials(volt, np.array([r["sample"] for r in rows]), vals, str(p), body)
 
 
-def check_geometry(trials: Trials, base) -> str:
+def check_geometry(trials: Trials, base, voltages=None) -> str:
     """The tracked body length (the CSV's ``body_length_mm``, where given) against the model's
     l: a ParameterError beyond :data:`BODY_LENGTH_REFUSE`, a note (returned, else "") beyond
     :data:`BODY_LENGTH_NOTE`. A fit with the paper's geometry of a 3 mm ribbon returned B 187 %
     off, 7-160 sigma from the truth, without a word."""
-    if trials.body_length_mm is None or not np.any(np.isfinite(trials.body_length_mm)):
+    if trials.body_length_mm is None:
         return ""
-    measured = float(np.nanmedian(trials.body_length_mm))
+    body = np.asarray(trials.body_length_mm, float)
+    if voltages is not None:  # the trials fitted only (another sample at another voltage is not checked)
+        body = body[np.any(np.isclose(trials.voltage_V[:, None], np.atleast_1d(voltages)[None, :]), axis=1)]
+    if not np.any(np.isfinite(body)):
+        return ""
+    measured = float(np.nanmedian(body))
     l_mm = base.l * 1e3
     off = measured / l_mm - 1.0
-    what = (f"the trials' tracked body length, {measured:.4g} mm (median of "
-            f"{int(np.count_nonzero(np.isfinite(trials.body_length_mm)))}), is {100 * abs(off):.2g} % "
+    where = "" if voltages is None else " at " + ", ".join(f"{v:g} V" for v in np.atleast_1d(voltages))
+    what = (f"the trials' tracked body length{where}, {measured:.4g} mm (median of "
+            f"{int(np.count_nonzero(np.isfinite(body)))}), is {100 * abs(off):.2g} % "
             f"{'longer' if off > 0 else 'shorter'} than the model's l = {l_mm:.4g} mm")
     advice = ("give the sample's geometry (--length-mm, --width-mm, --thickness-mm), or check the movies' scale "
               "(--px-per-mm)")

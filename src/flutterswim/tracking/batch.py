@@ -249,6 +249,19 @@ def _recorded_fps(path: Path) -> float | None:
         return None
 
 
+def _write_rows(path: Path, rows: list) -> None:
+    """The CSV of descriptors, each row signed (atomically)."""
+    from .._paths import atomic_write_text, row_signature
+
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(CSV_COLUMNS)
+    for r in rows:
+        fields = [_fmt(r[c]) for c in CSV_COLUMNS[:-1]]
+        w.writerow(fields + [row_signature(fields)])
+    atomic_write_text(path, buf.getvalue())
+
+
 def _one_trial(tr_: Trial, rows: list, failed: list, *, px_per_mm, fps, track_kwargs: dict, n_last: int) -> None:
     """Track and describe one trial: its row appended to ``rows``, or its failure to ``failed``."""
     from .. import __version__
@@ -360,14 +373,18 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
     failed.sort(key=lambda f: f[0])  # in the trials' order (by name), as the rows
     if as_typed is not None:
         failed = [(trial, as_typed(why)) for trial, why in failed]
+    if stopped is not None:
+        # (written beside, never over, the CSV: an interrupted rerun had replaced a complete batch's
+        # CSV with its first trials, which fit then read as the batch)
+        part = out_p.with_name(out_p.stem + "_interrupted.csv")
+        kept = ""
+        if rows and not (part.exists() and not is_ours(part)):
+            _write_rows(part, rows)
+            kept = f": their descriptors are in {str(part)!r} ({str(out_p)!r} is as it was)"
+        raise KeyboardInterrupt(f"interrupted after {len(rows) + len(failed) - n_refused} of {len(trials)} trials "
+                                f"({len(rows)} tracked){kept}; a rerun tracks every trial again") from None
     if rows:  # (none tracked: no CSV of descriptors, a header alone read as a batch of none)
-        buf = io.StringIO()
-        w = csv.writer(buf, lineterminator="\n")
-        w.writerow(CSV_COLUMNS)
-        for r in rows:
-            fields = [_fmt(r[c]) for c in CSV_COLUMNS[:-1]]
-            w.writerow(fields + [row_signature(fields)])
-        atomic_write_text(out_p, buf.getvalue())
+        _write_rows(out_p, rows)
     if failed:
         check_output_file(failed_p, (".csv",), what="failures file")
         fb = io.StringIO()
@@ -375,12 +392,8 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
         fw.writerow(FAILED_COLUMNS)
         fw.writerows([(a, b, row_signature([a, b])) for a, b in failed])
         atomic_write_text(failed_p, fb.getvalue())
-    elif failed_p.is_file() and is_ours(failed_p) and stopped is None:
+    elif failed_p.is_file() and is_ours(failed_p):
         failed_p.unlink()  # our failures of an earlier run: none of them failed now
-    if stopped is not None:
-        kept = f": their descriptors are in {str(out_p)!r}" if rows else ""
-        raise KeyboardInterrupt(f"interrupted after {len(rows) + len(failed) - n_refused} of {len(trials)} trials ({len(rows)} "
-                                f"tracked){kept}; a rerun tracks every trial again") from None
     if plot is not None and rows:
         from ..fitting.data import plot_trials, read_trials, summarise
 
