@@ -470,3 +470,29 @@ def test_a_full_disk_says_what_is_saved(tmp_path, monkeypatch):
         sweep({"chi": [1.0, 2.0, 3.0, 4.0]}, out=str(tmp_path / "s.zarr"), backend="serial", point_fn=point,
               progress=False)
     assert e.value.errno == 28
+
+
+def test_an_overwritten_store_goes_once_the_new_one_holds_a_point(tmp_path):
+    """Diff review: the store overwrite set aside stayed until the run ended (twice the disk),
+    and one a killed run left stayed hidden for good. It goes with the new store's first point;
+    a remnant is put back where no store is, else removed, by the next run."""
+    import shutil
+
+    out = tmp_path / "s.zarr"
+    sweep({"chi": [1.0, 2.0]}, out=str(out), backend="serial", point_fn=point, progress=False)
+    seen = []
+
+    def watching(task):
+        seen.append(sorted(p.name for p in tmp_path.iterdir() if "replaced" in p.name))
+        return point(task)
+
+    watching.variables = point.variables
+    sweep({"chi": [3.0, 4.0, 5.0]}, out=str(out), backend="serial", point_fn=watching, progress=False, overwrite=True)
+    assert len(seen[0]) == 1 and seen[1:] == [[], []]  # gone after the first point
+    # a remnant a killed run left: put back where no store is; removed beside one
+    shutil.copytree(out, tmp_path / ".s.zarr.replaced-99999")
+    sweep({"chi": [3.0, 4.0, 5.0]}, out=str(out), backend="serial", point_fn=watching, progress=False)
+    assert not (tmp_path / ".s.zarr.replaced-99999").exists()
+    shutil.move(str(out), str(tmp_path / ".s.zarr.replaced-99999"))
+    ds = sweep({"chi": [3.0, 4.0, 5.0]}, out=str(out), backend="serial", point_fn=watching, progress=False)
+    assert bool(ds["done"].all()) and not (tmp_path / ".s.zarr.replaced-99999").exists()

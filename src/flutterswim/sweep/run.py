@@ -204,6 +204,8 @@ def _run(store: SweepStore, spec: SweepSpec, fn, variables, *, backend, workers,
                               state=None if err else state)
             counts["failed"] += bool(err)
             counts["saved"] += 1
+            if store.replaced is not None:  # the new store holds a point: the old one overwrite set aside goes
+                store.settle_replaced(keep_new=True)
         if bar is not None:
             bar.update(1)
             if counts["failed"] or counts["lost"]:

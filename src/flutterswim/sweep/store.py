@@ -231,6 +231,19 @@ def _acquire(path: Path):
                    then="rerun the same command to resume")
 
 
+def _settle_remnants(path: Path) -> None:
+    """Stores that ``overwrite`` set aside (``.<name>.replaced-<pid>``) and a killed run left (under
+    the lock: no run is using them): put back where no store is, else deleted (the store there
+    replaced it, as asked)."""
+    for old in sorted(path.parent.glob(f".{path.name}.replaced-*")):
+        if not (old.is_dir() and has_marker(old)):
+            continue
+        if not path.exists():
+            os.replace(old, path)
+        else:
+            remove_own_store(old, kind="sweep")
+
+
 def code_identity(fn) -> dict:
     """What computes a sweep's points: the flutterswim version, the point function's name and a
     hash of its source (None where it has none to read), and a hash of the package's sources."""
@@ -322,6 +335,7 @@ class SweepStore:
 
     @classmethod
     def _open(cls, path: Path, spec, variables, n_state, *, overwrite, code=None):
+        _settle_remnants(path)
         if path.exists() and has_marker(path):
             if overwrite:
                 _refuse_foreign(path)  # again, under the lock
