@@ -354,3 +354,30 @@ def test_the_body_length_check_takes_the_trials_fitted(tmp_path, monkeypatch, ca
     assert "body length" not in capsys.readouterr().err
     assert main(["fit", str(csv), "--voltage", "95", "--out", str(tmp_path / "f.json")]) == 2
     assert "at 95 V, 4.4 mm" in capsys.readouterr().err
+
+
+def test_a_large_netcdf_is_written_by_hdf5_after_a_check_that_it_fits(tmp_path, monkeypatch):
+    """Diff review: built in memory, a NetCDF needed about twice its size again (+808 MB for a
+    400 MB run). Above IN_MEMORY_NETCDF_BYTES it is written by HDF5 directly, after a check of the
+    free space (HDF5 meeting a full disk crashes the interpreter): refused as an OSError there."""
+    import errno
+    import importlib
+    from collections import namedtuple
+
+    import xarray as xr
+
+    from flutterswim._paths import is_ours
+
+    paths = importlib.import_module("flutterswim._paths")
+    run = fs.simulate(fs.PAPER, 0.5, n_segments=8)
+    monkeypatch.setattr(paths, "IN_MEMORY_NETCDF_BYTES", 0)
+    p = run.save(tmp_path / "big.nc")
+    assert is_ours(p)
+    with xr.open_dataset(p, engine="h5netcdf") as ds:
+        assert ds["x"].shape == run.x.shape
+    usage = namedtuple("usage", "total used free")
+    monkeypatch.setattr(paths.shutil, "disk_usage", lambda _: usage(10 ** 9, 10 ** 9 - 1000, 1000))
+    with pytest.raises(OSError) as e:
+        run.save(tmp_path / "full.nc")
+    assert e.value.errno == errno.ENOSPC and not (tmp_path / "full.nc").exists()
+    assert sorted(q.name for q in tmp_path.iterdir()) == ["big.nc"]

@@ -106,6 +106,15 @@ def write_netcdf(ds, path: str | os.PathLike, **kwargs) -> Path:
     import h5py
 
     p = Path(os.fspath(path))
+    if ds.nbytes > IN_MEMORY_NETCDF_BYTES:
+        # (in memory a file needs about twice its size again: +808 MB for a 400 MB run) written by
+        # HDF5, after a check that it fits: HDF5 meeting a full disk crashes the interpreter
+        _check_room(p, int(1.05 * ds.nbytes) + (1 << 20))
+        with atomic_path(p) as tmp:
+            ds.to_netcdf(tmp, engine="h5netcdf", **kwargs)
+            with h5py.File(tmp, "r+") as h:
+                h.attrs[FINGERPRINT] = _h5_fingerprint(h)
+        return p
     # built in memory, written by Python: HDF5 writing a file onto a full disk (or past a file
     # size limit) crashed the interpreter (a segmentation fault, a notebook's kernel lost) after
     # the OSError; Python's own write raises it and the temporary file is removed
@@ -115,6 +124,27 @@ def write_netcdf(ds, path: str | os.PathLike, **kwargs) -> Path:
     with atomic_path(p) as tmp:
         _write_bytes(tmp, buf.getbuffer())
     return p
+
+
+#: a dataset up to this size is written to NetCDF in memory first (safe on a full disk), a larger
+#: one by HDF5 directly after a check that it fits
+IN_MEMORY_NETCDF_BYTES = 256 << 20
+
+
+def _check_room(p: Path, need: int) -> None:
+    """OSError (ENOSPC / EFBIG) before writing ``need`` bytes beside ``p``, where the disk or
+    the process's file size limit has no room for them."""
+    import errno
+    import resource
+
+    free = shutil.disk_usage(p.parent if str(p.parent) else ".").free
+    if need > free:
+        raise OSError(errno.ENOSPC, f"No space left on device for {str(p)!r}: about {need / 1e6:.0f} MB needed, "
+                                    f"{free / 1e6:.0f} MB free")
+    soft, _ = resource.getrlimit(resource.RLIMIT_FSIZE)
+    if soft != resource.RLIM_INFINITY and need > soft:
+        raise OSError(errno.EFBIG, f"File too large: {str(p)!r} needs about {need / 1e6:.0f} MB, over the file size "
+                                   f"limit of {soft / 1e6:.0f} MB (ulimit -f)")
 
 
 def _write_bytes(path: Path, data) -> None:
