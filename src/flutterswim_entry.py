@@ -30,15 +30,17 @@ def _on_sigterm(signum, frame) -> None:
     raise KeyboardInterrupt("terminated (SIGTERM)")
 
 
-def handle_sigterm() -> None:
+def handle_sigterm():
     """SIGTERM (kill, timeout, a batch system's time limit, docker stop) ends the command as
     Ctrl-C does: partial files removed, one line. It had killed the process at once and left
-    hidden partial files (31 MB of a run) that no later run removed."""
+    hidden partial files (31 MB of a run) that no later run removed. Returns the handler it
+    replaced (None: none replaced, outside the main thread)."""
     import signal
     import threading
 
     if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGTERM, _on_sigterm)
+        return signal.signal(signal.SIGTERM, _on_sigterm)
+    return None
 
 
 def main() -> int:

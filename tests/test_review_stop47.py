@@ -92,10 +92,15 @@ def test_a_bad_matplotlib_backend_in_the_environment_is_bad_input(tmp_path):
     import sys
 
     env = {**os.environ, "MPLBACKEND": "nosuch"}
-    r = subprocess.run([sys.executable, "-m", "flutterswim", "plot", str(tmp_path / "none.nc"), "--out",
+    run = fs.simulate(fs.PAPER, 3.0, n_segments=8).save(tmp_path / "r.nc")
+    r = subprocess.run([sys.executable, "-m", "flutterswim", "plot", str(run), "--out",
                         str(tmp_path / "f.png")], capture_output=True, text=True, env=env, timeout=120)
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
-    assert "MPLBACKEND='nosuch'" in r.stderr
+    assert "MPLBACKEND='nosuch'" in r.stderr and not (tmp_path / "f.png").exists()
+    # a command that draws nothing runs whatever it says (a review: describe had been refused)
+    r = subprocess.run([sys.executable, "-m", "flutterswim", "describe", str(run)], capture_output=True, text=True,
+                       env=env, timeout=120)
+    assert "MPLBACKEND" not in r.stderr and "Traceback" not in r.stderr
 
 
 def test_the_kernel_cache_falls_back_to_a_temporary_folder(tmp_path, monkeypatch):
@@ -381,3 +386,26 @@ def test_a_large_netcdf_is_written_by_hdf5_after_a_check_that_it_fits(tmp_path, 
         run.save(tmp_path / "full.nc")
     assert e.value.errno == errno.ENOSPC and not (tmp_path / "full.nc").exists()
     assert sorted(q.name for q in tmp_path.iterdir()) == ["big.nc"]
+
+
+def test_main_called_by_a_program_leaves_its_sigterm_handler(monkeypatch):
+    """Diff review: cli.main() without arguments, called by a program, replaced the program's
+    SIGTERM handler for good (a later SIGTERM raised KeyboardInterrupt in the program)."""
+    import signal
+    import sys
+
+    from flutterswim.cli import main
+
+    def mine(signum, frame):
+        pass
+
+    old = signal.signal(signal.SIGTERM, mine)
+    try:
+        monkeypatch.setattr(sys, "argv", ["flutterswim", "--version"])
+        try:
+            main()
+        except SystemExit:
+            pass
+        assert signal.getsignal(signal.SIGTERM) is mine
+    finally:
+        signal.signal(signal.SIGTERM, old)

@@ -359,21 +359,17 @@ _NEEDS = {"simulate": ("xarray", "h5netcdf"), "branch": ("xarray", "h5netcdf"), 
           "reproduce": ("jinja2", "matplotlib", "xarray", "h5netcdf")}
 
 
-def _check_environment() -> None:
-    """A matplotlib backend named in the environment that matplotlib refuses is bad input
-    (exit 2, naming the variable); it failed as "ValueError: Key backend ..." (exit 1)."""
+def _bad_backend(exc: BaseException) -> str:
+    """The line for matplotlib refusing the backend named in the environment (bad input, exit 2;
+    it failed as "ValueError: Key backend ...", exit 1), else "". Only a command that draws meets
+    it: one that draws nothing runs whatever MPLBACKEND says."""
     import os
 
     name = os.environ.get("MPLBACKEND")
-    if not name:
-        return
-    try:
-        import matplotlib  # noqa: F401  (it checks MPLBACKEND on import)
-    except ValueError:
-        from ._validate import ParameterError
-
-        raise ParameterError(f"MPLBACKEND={name!r} (environment) is not a matplotlib backend; unset it, or set one "
-                             "such as Agg (the commands write their figures to files)") from None
+    if name and isinstance(exc, ValueError) and "Key backend" in str(exc):
+        return (f"MPLBACKEND={name!r} (environment) is not a matplotlib backend; unset it, or set one such as Agg "
+                "(the commands write their figures to files)")
+    return ""
 
 
 def _check_optional(args: argparse.Namespace) -> None:
@@ -509,10 +505,21 @@ def _interrupt_status() -> int:
 
 def main(argv: list[str] | None = None) -> int:
     program = argv is None  # (run as the command, not called in a process that goes on)
-    if program:
-        from flutterswim_entry import handle_sigterm
+    if not program:
+        return _main(argv, program)
+    import signal
 
-        handle_sigterm()  # (python -m flutterswim too)
+    from flutterswim_entry import handle_sigterm
+
+    previous = handle_sigterm()  # (python -m flutterswim too)
+    try:
+        return _main(argv, program)
+    finally:  # (a program calling main() keeps its own handler afterwards)
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _main(argv: list[str] | None, program: bool) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
     if debug:
@@ -536,7 +543,6 @@ def main(argv: list[str] | None = None) -> int:
 
     first_write = write_mark()
     try:
-        _check_environment()
         _check_optional(args)
         return int(args.func(args) or 0)
     except KeyboardInterrupt as exc:
@@ -561,6 +567,9 @@ def main(argv: list[str] | None = None) -> int:
             import traceback
 
             traceback.print_exc()
+        if _bad_backend(exc):
+            print(f"flutterswim {args.command}: {_bad_backend(exc)}", file=sys.stderr)
+            return 2
         status, msg = _describe_error(exc, ap.commands.choices.get(args.command))
         hint = "" if status == 2 or debug else " (rerun with --debug for the traceback)"
         print(f"flutterswim {args.command}: {msg}{hint}", file=sys.stderr)
