@@ -496,3 +496,37 @@ def test_an_overwritten_store_goes_once_the_new_one_holds_a_point(tmp_path):
     shutil.move(str(out), str(tmp_path / ".s.zarr.replaced-99999"))
     ds = sweep({"chi": [3.0, 4.0, 5.0]}, out=str(out), backend="serial", point_fn=watching, progress=False)
     assert bool(ds["done"].all()) and not (tmp_path / ".s.zarr.replaced-99999").exists()
+
+
+def _scaled(task, scale=1.0):
+    return {"a": scale * task["values"]["chi"]}
+
+
+class _Scaled:
+    variables = ["a"]
+
+    def __init__(self, scale):
+        self.scale = scale
+
+    def __call__(self, task):
+        return {"a": self.scale * task["values"]["chi"]}
+
+
+def test_partials_and_callable_objects_are_told_apart(tmp_path):
+    """Diff review: partial(f, scale=1) then partial(f, scale=2), or two objects of one class,
+    passed as the same point function and mixed in one store."""
+    import functools
+
+    from flutterswim.sweep import SweepDefinitionError
+
+    axes = {"chi": [1.0, 2.0, 3.0]}
+    for k, (a, b) in enumerate(((functools.partial(_scaled, scale=1.0), functools.partial(_scaled, scale=2.0)),
+                                (_Scaled(1.0), _Scaled(2.0)))):
+        for f in (a, b):
+            f.variables = ["a"]
+        out = str(tmp_path / f"s{k}.zarr")
+        sweep(axes, out=out, backend="serial", point_fn=a, progress=False, max_points=1)
+        with pytest.raises(SweepDefinitionError, match="point function's source"):
+            sweep(axes, out=out, backend="serial", point_fn=b, progress=False)
+        ds = sweep(axes, out=out, backend="serial", point_fn=a, progress=False)  # the same: resumed
+        assert list(ds["a"].values) == [1.0, 2.0, 3.0]

@@ -247,13 +247,22 @@ def _settle_remnants(path: Path) -> None:
 def code_identity(fn) -> dict:
     """What computes a sweep's points: the flutterswim version, the point function's name and a
     hash of its source (None where it has none to read), and a hash of the package's sources."""
+    import functools
     import hashlib
     import inspect
 
     from .. import __version__
 
+    # a partial or a callable object: its function or class, with its arguments or state (two
+    # partials of one function, or two objects of one class, had passed as the same function)
+    target, state = fn, ""
+    if isinstance(fn, functools.partial):
+        target, state = fn.func, repr((fn.args, sorted(fn.keywords.items())))
+    elif callable(fn) and not (inspect.isfunction(fn) or inspect.ismethod(fn) or inspect.isbuiltin(fn)):
+        target, state = type(fn), repr(sorted(vars(fn).items())) if hasattr(fn, "__dict__") else repr(fn)
     try:
-        src = hashlib.sha256(inspect.getsource(fn).encode()).hexdigest()[:16]
+        src = None if " at 0x" in state else hashlib.sha256(
+            (inspect.getsource(target) + state).encode()).hexdigest()[:16]  # (an address differs each run)
     except (OSError, TypeError):
         src = None
     h = hashlib.sha256()
@@ -262,7 +271,7 @@ def code_identity(fn) -> dict:
         h.update(str(f.relative_to(root)).encode())
         h.update(f.read_bytes())
     return {"flutterswim": __version__,
-            "point_fn": f"{getattr(fn, '__module__', '?')}:{getattr(fn, '__qualname__', type(fn).__name__)}",
+            "point_fn": f"{getattr(target, '__module__', '?')}:{getattr(target, '__qualname__', type(target).__name__)}",
             "point_fn_source": src, "package_source": h.hexdigest()[:16]}
 
 
