@@ -176,12 +176,15 @@ def test_two_reproduce_runs_do_not_write_one_folder_at_once(tmp_path):
     from flutterswim.reproduce import reproduce
 
     out = tmp_path / "rr"
-    with acquire(out, kind="reproduce", noun="folder"):
+    reproduce(out, targets=["table1"])
+    before = sorted(p.name for p in out.iterdir())
+    with acquire(out, kind="reproduce", noun="folder", inside=True):
         with pytest.raises(fs.ParameterError, match="another reproduce process"):
-            reproduce(out, targets=["table1"])
-    assert not out.exists()
-    res = reproduce(out, targets=["table1"])  # (the lock is gone with its holder)
+            reproduce(out, targets=["table1"], force=True)
+    assert sorted(p.name for p in out.iterdir()) == before
+    res = reproduce(out, targets=["table1"], force=True)  # (the lock is gone with its holder)
     assert res.report.is_file() and sorted(p.name for p in tmp_path.iterdir()) == ["rr"]
+    assert not (out / ".lock").exists()
 
 
 def _trials_csv(path, body_mm, volts=(85.0,), rows=3):

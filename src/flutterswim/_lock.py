@@ -47,10 +47,11 @@ def _same_file(f, path: Path) -> bool:
 
 
 def acquire(path: str | os.PathLike, *, kind: str, noun: str, error: type[Exception] = ParameterError,
-            then: str = "rerun the same command") -> _Lock:
+            then: str = "rerun the same command", inside: bool = False) -> _Lock:
     """Lock ``path`` (a store or folder, made or not; its parent exists) for this process;
     ``error`` (naming the ``kind`` of process, the ``noun`` and what to do ``then``) if another
-    process holds it."""
+    process holds it. ``inside``: the lock file is ``.lock`` in the folder ``path`` (which
+    exists), for a folder whose parent may not be writable."""
     import fcntl
 
     path = Path(os.fspath(path))
@@ -58,11 +59,14 @@ def acquire(path: str | os.PathLike, *, kind: str, noun: str, error: type[Except
     # next to the store itself: a run through a symbolic link to it took another lock, and two
     # processes wrote one store at once
     real = Path(os.path.realpath(path))
-    lock_path = real.parent / f".{real.name}.lock"
+    lock_path = real / ".lock" if inside else real.parent / f".{real.name}.lock"
     for _ in range(100):
         created = True
         try:
             f = open(lock_path, "x")  # Python opens files non-inheritable (O_CLOEXEC)
+        except PermissionError:
+            raise error(f"the lock file {str(lock_path)!r} of the {noun} {str(path)!r} cannot be made (permission "
+                        "denied): give a writable folder") from None
         except FileExistsError:
             created = False
             try:

@@ -94,9 +94,10 @@ def reproduce(out: str | os.PathLike, *, mode: str = "quick", trials: str | os.P
 
     # one run at a time in a folder: each keeps its manifest in memory, and two at once lost each
     # other's records (a full build recorded as quick)
-    with acquire(folder, kind="reproduce", noun="folder"):
-        folder.mkdir(parents=True, exist_ok=True)
-        write_marker(folder, STORE_KIND)
+    folder.mkdir(parents=True, exist_ok=True)
+    write_marker(folder, STORE_KIND)  # (first: a folder holding a lock file alone would read as foreign)
+    # (inside the folder: beside it, the folder's parent had to be writable, which it need not be)
+    with acquire(folder, kind="reproduce", noun="folder", inside=True):
         from ..simulate import single_blas_thread
 
         from ..plotting._common import offscreen
