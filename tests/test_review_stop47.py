@@ -412,3 +412,57 @@ def test_main_called_by_a_program_leaves_its_sigterm_handler(monkeypatch):
         assert signal.getsignal(signal.SIGTERM) is mine
     finally:
         signal.signal(signal.SIGTERM, old)
+
+
+def test_the_kernel_cache_does_not_use_a_folder_of_another_user(tmp_path, monkeypatch):
+    """Diff review: the temporary fallback took $TMPDIR/flutterswim-<uid> whoever owned it (numba
+    unpickles its cache index there). Another user's folder is left alone: no cache then."""
+    pytest.importorskip("numba")
+    import os
+    import tempfile
+
+    from numba.core import config
+
+    from flutterswim import _jit
+
+    home = tmp_path / "home"
+    home.write_text("not a folder")
+    monkeypatch.setenv("HOME", str(home))
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    monkeypatch.delenv("XDG_CACHE_HOME", raising=False)
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
+    planted = tmp_path / "tmp" / f"flutterswim-{os.getuid()}"
+    planted.mkdir(parents=True, mode=0o777)
+    os.chmod(planted, 0o777)
+    monkeypatch.setattr(config, "CACHE_DIR", config.CACHE_DIR)
+    monkeypatch.setattr(_jit, "_CACHE", True)
+    real = os.lstat
+
+    class Other:  # the planted folder as another user's
+        def __init__(self, st):
+            self._st = st
+
+        def __getattr__(self, name):
+            return getattr(self._st, name)
+
+        st_uid = os.getuid() + 1
+
+    monkeypatch.setattr(os, "lstat", lambda p, *a, **k: Other(real(p)) if str(p) == str(planted) else real(p, *a, **k))
+    before = config.CACHE_DIR
+    _jit._set_cache_dir()
+    assert config.CACHE_DIR == before and _jit._CACHE is False
+    assert (os.stat(planted).st_mode & 0o777) == 0o777  # not changed
+
+
+def test_figures_are_not_written_into_a_folder_inside_a_store(tmp_path):
+    """Diff review: demo --out s.zarr/demo wrote three files into a sweep store (its --overwrite
+    then refused it as holding files it did not write)."""
+    from flutterswim._paths import MARKER, check_output_dir
+
+    store = tmp_path / "s.zarr"
+    store.mkdir()
+    (store / MARKER).write_text('{"kind": "sweep"}')
+    for out in (store, store / "demo"):
+        with pytest.raises(fs.ParameterError, match="flutterswim sweep folder"):
+            check_output_dir(out)
+    assert check_output_dir(tmp_path / "plain") == tmp_path / "plain"

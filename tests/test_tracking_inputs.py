@@ -474,6 +474,11 @@ def test_batch_warns_where_a_sidecar_overrides_or_lengths_disagree(movie, tmp_pa
     with pytest.warns(UserWarning, match="gives voltage 90, its name '85'"):
         trials = find_trials(folder)
     assert [t.voltage_V for t in trials] == [80.0, 90.0]
+    (folder / "85V_sample2.json").write_text(json.dumps({"voltage_V": 90}))  # the voltage alone
+    with pytest.warns(UserWarning, match="gives voltage 90, its name '85'"):
+        find_trials(folder)
+    (folder / "85V_sample2.json").write_text(json.dumps({"voltage_V": 90, "sample": "2",
+                                                        "px_per_mm": 1.3 * movie.px_per_mm}))
     with pytest.warns(UserWarning) as got:
         _, rows, failed = track_batch(folder, tmp_path / "o.csv", px_per_mm=movie.px_per_mm, fps=FPS, n_last=3)
     said = " ".join(str(w.message) for w in got)

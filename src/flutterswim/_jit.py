@@ -91,6 +91,22 @@ def prune_kernel_caches(base, keep, *, max_age_days: float = STALE_DAYS, now: fl
 _CACHE = True
 
 
+def _private(folder) -> bool:
+    """A folder of this user's that no one else may write (numba unpickles its cache index: a
+    shared temporary folder another user made, or may write into, is not used)."""
+    import os
+    import stat
+
+    try:
+        if os.lstat(folder).st_uid != os.getuid() or os.path.islink(folder):
+            return False  # (never changed: not ours)
+        os.chmod(folder, 0o700)
+        st = os.lstat(folder)
+    except OSError:
+        return False
+    return st.st_uid == os.getuid() and not st.st_mode & (stat.S_IWGRP | stat.S_IWOTH)
+
+
 def _set_cache_dir() -> None:
     """Point numba's cache at a directory keyed by :func:`_source_hash` (under the user's
     NUMBA_CACHE_DIR if set, else the user cache directory); left as it is if that cannot be
@@ -115,7 +131,7 @@ def _set_cache_dir() -> None:
             path.mkdir(parents=True, exist_ok=True)
         except OSError:
             continue
-        if os.access(path, os.W_OK | os.X_OK):
+        if os.access(path, os.W_OK | os.X_OK) and (root == Path(base) or _private(root)):
             break
     else:
         global _CACHE

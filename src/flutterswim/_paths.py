@@ -429,13 +429,16 @@ def check_output_dir(path: str | os.PathLike, *, what: str = "out") -> Path:
     p = Path(os.fspath(path))
     if p.exists() and not p.is_dir():
         raise ParameterError(f"{what}={str(p)!r} exists and is not a directory; give a folder")
-    if p.is_dir() and has_marker(p):
-        try:
-            found = json.loads((p / MARKER).read_text()).get("kind") or "store"
-        except (OSError, ValueError, AttributeError):
-            found = "store"
-        raise ParameterError(f"{what}={str(p)!r} is a flutterswim {found} folder; it is written only by its own "
-                             "command. Give another folder")
+    # the folder or one it lies in (demo --out s.zarr/demo wrote into a sweep store)
+    for q in (p, *p.resolve().parents) if p.exists() or p.parent.exists() else (p,):
+        if q.is_dir() and has_marker(q):
+            try:
+                found = json.loads((q / MARKER).read_text()).get("kind") or "store"
+            except (OSError, ValueError, AttributeError):
+                found = "store"
+            inside = "" if q == p else f" lies in {str(q)!r}, which"
+            raise ParameterError(f"{what}={str(p)!r}{inside} is a flutterswim {found} folder; it is written only by "
+                                 "its own command. Give another folder")
     _writable_dir(p, what, p, may_create=True)
     return p
 

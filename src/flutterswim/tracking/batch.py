@@ -190,12 +190,13 @@ def find_trials(folder: str | os.PathLike, pattern: str = DEFAULT_PATTERN) -> li
             smp = meta.get("sample")
             opts = _sidecar_options(meta, cand)
             where = f"sidecar={str(cand)!r}"
+            if m is not None:  # (what the sidecar gives, against the name: one key alone was not checked)
+                _warn_disagreeing(p, cand, tuple((what, given, named) for what, given, named in (
+                    ("voltage", v, _voltage(m)), ("sample", smp, m.group("sample"))) if given is not None))
             if (v is None or smp is None) and m is not None:
                 # a sidecar of options only (px_per_mm, field_angle_deg ...): the name gives the rest
                 v = _voltage(m) if v is None else v
                 smp = m.group("sample") if smp is None else smp
-            elif m is not None:
-                _warn_disagreeing(p, cand, (("voltage", v, _voltage(m)), ("sample", smp, m.group("sample"))))
             if v is None or smp is None:
                 out.append(Trial(p, math.nan, str(smp), opts, f"{where} needs the keys voltage_V and sample (or a "
                                  f"name that the pattern {pattern!r} matches)"))
