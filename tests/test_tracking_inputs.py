@@ -511,3 +511,6 @@ def test_an_interrupted_batch_keeps_the_trials_tracked(movie, tmp_path, monkeypa
     part = tmp_path / "o_interrupted.csv"
     assert [r["sample"] for r in _rows(part)] == ["1", "2"] and is_ours(part)
     assert out.read_bytes() == before
+    monkeypatch.setattr(trk, "track", real)
+    track_batch(folder, out, px_per_mm=movie.px_per_mm, fps=FPS, n_last=3)  # complete: the partial CSV goes
+    assert not part.exists()

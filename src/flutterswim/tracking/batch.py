@@ -374,10 +374,12 @@ def track_batch(folder: str | os.PathLike, out: str | os.PathLike, *, px_per_mm:
     failed.sort(key=lambda f: f[0])  # in the trials' order (by name), as the rows
     if as_typed is not None:
         failed = [(trial, as_typed(why)) for trial, why in failed]
+    part = out_p.with_name(out_p.stem + "_interrupted.csv")
+    if stopped is None and part.is_file() and not part.is_symlink() and is_ours(part):
+        part.unlink()  # (an earlier interrupted run's trials: this run tracked them all)
     if stopped is not None:
         # (written beside, never over, the CSV: an interrupted rerun had replaced a complete batch's
         # CSV with its first trials, which fit then read as the batch)
-        part = out_p.with_name(out_p.stem + "_interrupted.csv")
         kept = ""
         if rows and not (part.exists() and not is_ours(part)):
             _write_rows(part, rows)
