@@ -39,6 +39,7 @@ def handle_sigterm():
     import threading
 
     if threading.current_thread() is threading.main_thread():
+        TERMINATED.clear()  # (a program's earlier run that was terminated: not this one)
         return signal.signal(signal.SIGTERM, _on_sigterm)
     return None
 
