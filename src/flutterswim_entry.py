@@ -27,6 +27,9 @@ TERMINATED = []
 
 def _on_sigterm(signum, frame) -> None:
     TERMINATED.append(signum)
+    # (raised inside a callback, numba's compiler among them, the interrupt is printed as "Exception
+    # ignored ..." with its traceback: the command's one line says it)
+    sys.unraisablehook = lambda unraisable: None
     raise KeyboardInterrupt("terminated (SIGTERM)")
 
 

@@ -558,10 +558,15 @@ def _main(argv: list[str] | None, program: bool) -> int:
     except BrokenPipeError:
         return 1
     except Exception as exc:  # noqa: BLE001 - every error becomes one line (traceback with --debug)
-        if interrupted(exc):  # Ctrl-C inside a compiled kernel surfaces as its SystemError
+        from flutterswim_entry import TERMINATED
+
+        # Ctrl-C inside a compiled kernel surfaces as its SystemError; a SIGTERM while numba
+        # compiles is swallowed by its callback, and what fails next fails because of it
+        if interrupted(exc) or TERMINATED:
             if not debug and program:
                 _quiet_unraisable()
-            print(f"flutterswim {args.command}: interrupted", file=sys.stderr)
+            print(f"flutterswim {args.command}: {'terminated (SIGTERM)' if TERMINATED else 'interrupted'}",
+                  file=sys.stderr)
             return _interrupt_status()
         if debug:
             import traceback
