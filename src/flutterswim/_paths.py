@@ -134,7 +134,6 @@ IN_MEMORY_NETCDF_BYTES = 256 << 20
 def _check_room(p: Path, need: int) -> None:
     """OSError (ENOSPC / EFBIG) before writing ``need`` bytes beside ``p``, where the disk or
     the process's file size limit has no room for them."""
-    import errno
     import resource
 
     free = shutil.disk_usage(p.parent if str(p.parent) else ".").free
@@ -430,7 +429,7 @@ def check_output_dir(path: str | os.PathLike, *, what: str = "out") -> Path:
     if p.exists() and not p.is_dir():
         raise ParameterError(f"{what}={str(p)!r} exists and is not a directory; give a folder")
     # the folder or one it lies in (demo --out s.zarr/demo wrote into a sweep store)
-    for q in (p, *p.resolve().parents) if p.exists() or p.parent.exists() else (p,):
+    for q in (p, *p.resolve().parents):
         if q.is_dir() and has_marker(q):
             try:
                 found = json.loads((q / MARKER).read_text()).get("kind") or "store"

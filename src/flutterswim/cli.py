@@ -572,8 +572,9 @@ def _main(argv: list[str] | None, program: bool) -> int:
             import traceback
 
             traceback.print_exc()
-        if _bad_backend(exc):
-            print(f"flutterswim {args.command}: {_bad_backend(exc)}", file=sys.stderr)
+        backend = _bad_backend(exc)
+        if backend:
+            print(f"flutterswim {args.command}: {backend}", file=sys.stderr)
             return 2
         status, msg = _describe_error(exc, ap.commands.choices.get(args.command))
         hint = "" if status == 2 or debug else " (rerun with --debug for the traceback)"

@@ -169,13 +169,13 @@ def _cmd_fit(args) -> int:
               f"{st.get('no_stroke_at_start', 0)} without a stroke at the start; {others} other parameter set(s) "
               "fit as well" + ("" if others else " (which does not show that the fit is unique: the search finds "
                                "a second solution in some cases only)"), file=sys.stderr)
+    r, pair = _strongest_correlation(res)
     if res.at_fold:
         print(f"flutterswim fit: note: {res.fold_note}", file=sys.stderr)
     elif res.weakly_determined:
         print(f"flutterswim fit: note: {res.weakly_determined}", file=sys.stderr)
-    elif not args.profiles and _strongest_correlation(res)[0] > STRONG_CORRELATION:
+    elif not args.profiles and r > STRONG_CORRELATION:
         # (the +-20 % hid a second exact solution 60-73 % away, which the profiles showed)
-        r, pair = _strongest_correlation(res)
         print(f"flutterswim fit: note: {pair} are correlated by {r:.2f}: the 1-sigma is the cost's curvature at the "
               "fit, and along that direction the data may allow far more (or another exact solution); --profiles "
               "gives the range, --starts searches for other solutions", file=sys.stderr)

@@ -698,14 +698,12 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
                             d_best = float(np.mean(np.hypot(x - ref[0], y - ref[1])))
                             d_other = math.inf
                     match[i] = d_best
-                    # per frame since the last good one: over a run of lost frames the swimmer
-                    # swims on (after 45 lost frames every later frame was refused as a jump from
-                    # the frame before them, 78 px back, and the movie was lost from there on);
-                    # head and tail across such a run are checked after the loop (_unlinked)
-                    # the stroke's change is bounded (jump_tol) and the swimmer's travel grows by at most
-                    # SWIM_PER_FRAME body lengths a frame (9 times the paper's swimmer at 50 fps): a
-                    # tolerance of jump_tol per frame took a second ribbon one body length away after
-                    # 3 lost frames, and followed it for the rest of the movie
+                    # the stroke's change is bounded (jump_tol) and, across lost frames, the
+                    # swimmer's travel grows by at most SWIM_PER_FRAME body lengths a frame (9
+                    # times the paper's swimmer at 50 fps): a fixed tolerance lost every frame
+                    # after 45 lost frames (the body 78 px on), one of jump_tol per frame took a
+                    # second ribbon a body length away after 3; head and tail across a long run
+                    # are checked after the loop (_unlinked)
                     since = (i - ref_i) if pos is None else max(float(pos[i] - pos[ref_i]), 1.0)
                     tol = jump_tol + SWIM_PER_FRAME * (since - 1.0)
                     if d_best > tol * Lr:
@@ -713,13 +711,12 @@ def track(source: Any, *, px_per_mm: float, fps: float | None = None, roi: Any =
                                                        f"frame, {since:g} frame(s) before (> {tol:.3g} body lengths)")
                     elif d_other < 2.0 * d_best and since <= UNTOLD_AFTER:
                         r["ok"], r["reason"] = False, "jump: head and tail cannot be told apart from the last good frame"
-                if r["ok"] and ref is not None:
-                    gap = (i - ref_i) if pos is None else float(pos[i] - pos[ref_i])
-                    if gap > 1.5:  # across lost frames: checked once the stroke's period is known
-                        # (an order the last good frame does not tell is checked whatever the
-                        # run's length: after 70 lost frames the swimmer had swum 1.5 body
-                        # lengths on, and every later frame was refused as not told apart)
-                        links.append((i, gap, d_other < 2.0 * d_best))
+                if r["ok"] and ref is not None and since > 1.5:
+                    # across lost frames: checked once the stroke's period is known (an order the
+                    # last good frame did not tell, kept after more than UNTOLD_AFTER lost frames,
+                    # whatever the run's length: after 70 the swimmer had swum 1.5 body lengths on,
+                    # and every later frame had been refused as not told apart)
+                    links.append((i, since, d_other < 2.0 * d_best))
                 if r["ok"]:
                     X[i], Y[i], length[i] = x, y, r["length"]
                     ref, ref_i = (x, y), i
