@@ -466,3 +466,14 @@ def test_figures_are_not_written_into_a_folder_inside_a_store(tmp_path):
         with pytest.raises(fs.ParameterError, match="flutterswim sweep folder"):
             check_output_dir(out)
     assert check_output_dir(tmp_path / "plain") == tmp_path / "plain"
+
+
+def test_a_sample_geometry_the_model_refuses_names_the_options(tmp_path, capsys):
+    """--width-mm 5 with the paper's 3.7 mm length was refused as "b=0.0025 m ...", naming
+    neither the option nor its unit."""
+    from flutterswim.cli import main
+
+    csv = _trials_csv(tmp_path / "t.csv", 3.7)
+    assert main(["fit", str(csv), "--out", str(tmp_path / "f.json"), "--width-mm", "5"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--width-mm=5.0" in err and not (tmp_path / "f.json").exists()

@@ -204,7 +204,16 @@ def _geometry(args, base):
         v = getattr(args, opt)
         if v is not None:
             change[name] = positive(f"--{opt.replace('_', '-')}", v) * factor
-    return base.replace(**change) if change else base
+    if not change:
+        return base
+    from .._validate import ParameterError
+
+    try:
+        return base.replace(**change)
+    except ParameterError as exc:  # (it named b in metres, not the option typed)
+        given = ", ".join(f"--{o.replace('_', '-')}={getattr(args, o)!r}" for o in
+                          ("length_mm", "width_mm", "thickness_mm", "viscosity") if getattr(args, o) is not None)
+        raise ParameterError(f"{given}: {exc} (b is half the width, a half the thickness)") from None
 
 
 #: a correlation beyond this, without profiles, is noted (the 1-sigma is local along it)
