@@ -595,7 +595,10 @@ def set_aside_own_store(path: str | os.PathLike, kind: str | None = None, tag: s
         raise ParameterError(f"{str(p)!r} is not a flutterswim store; it is never deleted")
     _check_kind(p, kind, "store")
     aside = p.parent / f".{p.name}.{tag}-{os.getpid()}"
-    if aside.exists():  # (a remnant of a run with this process id: ours, by its name)
+    if aside.exists():  # a remnant of a run with this process id: removed only if it is a store of ours
+        if aside.is_symlink() or not (aside.is_dir() and has_marker(aside)):
+            raise ParameterError(f"{str(aside)!r} is in the way of setting {str(p)!r} aside and is not a flutterswim "
+                                 "store; move it away")
         shutil.rmtree(aside)
     os.replace(p, aside)
     return aside
